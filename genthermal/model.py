@@ -1,0 +1,327 @@
+r"""ThermalModel: one network + one parameter set → CasADi functions every consumer shares.
+
+Assembly (thesis eq. 4.44): for the internal nodes, :math:`C\dot\theta = G\theta + G_b\theta_b + q`.
+Splitting into capacitive states :math:`x` and massless nodes :math:`z` (air, intermediate),
+
+.. math::
+    C_x\dot x = G_{xx}x + G_{xz}z + G_{xb}b + q_x, \qquad 0 = G_{zx}x + G_{zz}z + G_{zb}b + q_z,
+
+the massless nodes are eliminated exactly (Schur complement):
+:math:`z = -G_{zz}^{-1}(G_{zx}x + G_{zb}b + q_z)`, so the steady state of the reduced model is the
+steady state of the full network. Everything is symbolic in the parameters :math:`p`, so the
+Jacobians with respect to :math:`x`, :math:`u` and :math:`p` are exact (CasADi AD).
+
+The discrete step (see :mod:`genthermal.discretise`) is exact zero-order hold for the linear design
+model and a second-order exponential integrator for the nonlinear model.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import casadi as ca
+import numpy as np
+import sympy
+
+from .errors import InputError, ParameterError
+from .losses import INPUT_NAMES, input_symbol
+from .network import Network
+from .parameters import ParameterSet
+
+_CASADI_FUNCTIONS = {"log": ca.log, "exp": ca.exp, "sqrt": ca.sqrt, "Abs": ca.fabs,
+                     "Max": ca.fmax, "Min": ca.fmin, "Heaviside": lambda v: ca.if_else(v >= 0, 1, 0)}
+
+
+def to_casadi(expressions, symbols, values):
+    """Evaluate sympy ``expressions`` with ``symbols`` replaced by CasADi ``values``.
+
+    Parameters
+    ----------
+    expressions : list of sympy.Expr
+    symbols : list of sympy.Symbol
+    values : list of casadi.SX
+        Same length as ``symbols``.
+
+    Returns
+    -------
+    list of casadi.SX
+    """
+    function = sympy.lambdify(symbols, list(expressions), modules=[_CASADI_FUNCTIONS, "math"])
+    return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in function(*values)]
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelSpec:
+    """What a ThermalModel needs beyond network and parameters.
+
+    Attributes
+    ----------
+    name : str
+        Machine name (``"genco_rf201a"``).
+    sensors : dict
+        Output name → node name (``{"T_winding": "stator_winding"}``).
+    boundary_inputs : dict
+        Boundary node → input name (``{"coolant_inlet": "T_inlet"}``).
+    outlet_node : str or None
+        Air node leaving through the outlet, reported as ``T_outlet``.
+    rated_current_A : float
+        Rated RMS phase current.
+    variant : str
+        ``"nonlinear"`` (simulation model) or ``"linear"`` (design model).
+    """
+
+    name: str
+    sensors: dict
+    boundary_inputs: dict
+    outlet_node: str | None = None
+    rated_current_A: float = 7.0
+    variant: str = "nonlinear"
+
+
+class ThermalModel:
+    """A thermal network with numeric parameters, compiled to CasADi functions.
+
+    Parameters
+    ----------
+    network : Network
+        Nodes, links, air streams, heat sources (sympy).
+    parameters : ParameterSet
+        Values (with provenance) of every symbol the network uses.
+    spec : ModelSpec
+        Sensors, boundary inputs and variant.
+
+    Notes
+    -----
+    States :math:`x` are the capacitive node temperatures in °C (``state_names``); inputs
+    :math:`u` are ``INPUT_NAMES`` (A RMS, A, °C, °C); parameters :math:`p` are the values of
+    ``parameters`` in order (``parameter_names``). Building the model checks every resistance,
+    capacitance and mass flow for physical values and the reduced system for stability.
+    """
+
+    def __init__(self, network: Network, parameters: ParameterSet, spec: ModelSpec):
+        self.network = network
+        self.parameters = parameters
+        self.spec = spec
+        self.state_names = network.state_names
+        self.massless_names = network.names("massless")
+        self.boundary_names = network.names("boundary")
+        self.input_names = INPUT_NAMES
+        self.parameter_names = list(parameters)
+        self.output_names = list(spec.sensors)
+        self._discrete: dict = {}
+        for output, node in spec.sensors.items():
+            network.node(node)
+        for node, name in spec.boundary_inputs.items():
+            if network.node(node).kind != "boundary" or name not in INPUT_NAMES:
+                raise InputError(f"boundary_inputs[{node!r}]", name, "must map a boundary node to an input")
+        missing = set(self.boundary_names) - set(spec.boundary_inputs)
+        if missing:
+            raise InputError("boundary_inputs", sorted(missing), "boundary nodes without an input")
+        self._check_physical()
+        self._check_stable()
+
+    # --- construction helpers --------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        """Machine name and variant, e.g. ``genco_rf201a (nonlinear)``."""
+        return f"{self.spec.name} ({self.spec.variant})"
+
+    @property
+    def n_states(self) -> int:
+        """Number of states (capacitive nodes)."""
+        return len(self.state_names)
+
+    @functools.cached_property
+    def p0(self) -> np.ndarray:
+        """Parameter values in ``parameter_names`` order."""
+        return np.array([self.parameters.value(n) for n in self.parameter_names])
+
+    def _numeric(self, expressions) -> np.ndarray:
+        symbols = [self.parameters[n].symbol for n in self.parameter_names]
+        function = sympy.lambdify(symbols, list(expressions), modules=["numpy"])
+        return np.asarray(function(*self.p0), dtype=float)
+
+    def _check_physical(self) -> None:
+        net = self.network
+        labelled = [(f"capacitance of node {n.name}", n.capacitance) for n in net.nodes if n.kind == "capacitive"]
+        labelled += [(f"resistance of link {l.a}--{l.b} ({l.label})", l.resistance) for l in net.links]
+        labelled += [(f"resistance of air stream {s.upstream}->{s.downstream} ({s.label})", s.resistance)
+                     for s in net.air_streams]
+        values = self._numeric([expr for _, expr in labelled])
+        for (what, expr), value in zip(labelled, values):
+            if not (np.isfinite(value) and value > 0):
+                names = sorted(str(s) for s in expr.free_symbols)
+                raise ParameterError(what, float(value),
+                                     f"not physical (must be > 0); it depends on {', '.join(names)}")
+
+    def _check_stable(self) -> None:
+        A = self.jacobian_x(np.zeros(self.n_states), np.zeros(len(INPUT_NAMES)))
+        worst = float(np.max(np.linalg.eigvals(A).real))
+        if worst >= 0:
+            raise ParameterError("network", worst, "the reduced system is not stable (largest eigenvalue "
+                                 "real part >= 0): check the links to the boundaries")
+
+    @functools.cached_property
+    def _symbolic(self) -> dict:
+        """SX expressions of the reduced model (built once per model)."""
+        net = self.network
+        x = ca.SX.sym("x", self.n_states)
+        u = ca.SX.sym("u", len(INPUT_NAMES))
+        p = ca.SX.sym("p", len(self.parameter_names))
+        internal = self.state_names + self.massless_names
+        index = {name: i for i, name in enumerate(internal)}
+        b_index = {name: i for i, name in enumerate(self.boundary_names)}
+        theta_internal = ca.SX.sym("theta", len(internal))  # placeholder for all internal temps
+        symbols = [self.parameters[n].symbol for n in self.parameter_names]
+        symbols += [input_symbol(n) for n in INPUT_NAMES]
+        symbols += [net.temperature_symbol(n) for n in internal]
+        values = [p[i] for i in range(p.numel())] + [u[i] for i in range(u.numel())]
+        values += [theta_internal[i] for i in range(len(internal))]
+        link_R = to_casadi([l.resistance for l in net.links], symbols, values)
+        stream_R = to_casadi([s.resistance for s in net.air_streams], symbols, values)
+        caps = to_casadi([net.node(n).capacitance for n in self.state_names], symbols, values)
+        powers = to_casadi([s.power for s in net.heat_sources], symbols, values)
+
+        n_int, n_b = len(internal), len(self.boundary_names)
+        G = ca.SX.zeros(n_int, n_int)
+        Gb = ca.SX.zeros(n_int, n_b)
+        for link, R in zip(net.links, link_R):
+            g = 1 / R
+            for me, other in ((link.a, link.b), (link.b, link.a)):
+                if me in index:
+                    G[index[me], index[me]] -= g
+                    if other in index:
+                        G[index[me], index[other]] += g
+                    else:
+                        Gb[index[me], b_index[other]] += g
+        for stream, R in zip(net.air_streams, stream_R):
+            g = 1 / R
+            down = index[stream.downstream]
+            G[down, down] -= g
+            if stream.upstream in index:
+                G[down, index[stream.upstream]] += g
+            else:
+                Gb[down, b_index[stream.upstream]] += g
+        q = ca.SX.zeros(n_int)
+        for source, power in zip(net.heat_sources, powers):
+            q[index[source.node]] += power
+        boundary = ca.vertcat(*[u[INPUT_NAMES.index(self.spec.boundary_inputs[b])] for b in self.boundary_names])
+
+        nx = self.n_states
+        # heat sources may depend on state temperatures only (massless temperatures are not known
+        # before the elimination); substitute the placeholder of every massless node by zero and
+        # check that nothing depended on it
+        q = ca.substitute(q, theta_internal, ca.vertcat(x, ca.SX.zeros(n_int - nx)))
+        if ca.depends_on(q, theta_internal):
+            raise InputError("heat_sources", "theta of a massless node", "heat sources may depend on "
+                             "capacitive node temperatures only")
+        Gxx, Gxz, Gzx, Gzz = G[:nx, :nx], G[:nx, nx:], G[nx:, :nx], G[nx:, nx:]
+        rhs_z = ca.horzcat(Gzx, Gb[nx:, :], q[nx:])
+        elim = ca.solve(Gzz, rhs_z)  # G_zz^{-1} [G_zx, G_zb, q_z]
+        z = -(elim[:, :nx] @ x + elim[:, nx:nx + n_b] @ boundary + elim[:, -1])
+        power_balance = Gxx @ x + Gxz @ z + Gb[:nx, :] @ boundary + q[:nx]
+        xdot = power_balance / ca.vertcat(*caps)
+        nodes = ca.vertcat(x, z)
+        sensor_idx = [index[self.spec.sensors[o]] for o in self.output_names]
+        return {"x": x, "u": u, "p": p, "xdot": xdot, "nodes": nodes,
+                "y": nodes[sensor_idx], "heat": ca.sum1(q), "internal": internal}
+
+    # --- CasADi functions ------------------------------------------------------------------
+    @functools.cached_property
+    def functions(self) -> dict[str, ca.Function]:
+        """CasADi functions of the continuous model, all of ``(x, u, p)``.
+
+        ``rhs`` → dx/dt (K/s); ``jac_x``, ``jac_u``, ``jac_p`` → its exact Jacobians;
+        ``nodes`` → temperatures of all internal nodes (states then massless, °C); ``outputs`` →
+        sensor temperatures (°C); ``heat`` → total heat injected by the sources (W).
+        """
+        s = self._symbolic
+        args, names = [s["x"], s["u"], s["p"]], ["x", "u", "p"]
+        f = {
+            "rhs": ca.Function("rhs", args, [s["xdot"]], names, ["xdot"]),
+            "jac_x": ca.Function("jac_x", args, [ca.jacobian(s["xdot"], s["x"])], names, ["dxdot_dx"]),
+            "jac_u": ca.Function("jac_u", args, [ca.jacobian(s["xdot"], s["u"])], names, ["dxdot_du"]),
+            "jac_p": ca.Function("jac_p", args, [ca.jacobian(s["xdot"], s["p"])], names, ["dxdot_dp"]),
+            "nodes": ca.Function("nodes", args, [s["nodes"]], names, ["theta"]),
+            "outputs": ca.Function("outputs", args, [s["y"]], names, ["y"]),
+            "heat": ca.Function("heat", args, [s["heat"]], names, ["power"]),
+        }
+        return f
+
+    @property
+    def node_order(self) -> list[str]:
+        """Names of the values returned by ``functions["nodes"]``."""
+        return self._symbolic["internal"]
+
+    def _call(self, name, x, u, p=None) -> np.ndarray:
+        p = self.p0 if p is None else p
+        return np.asarray(self.functions[name](x, u, p))
+
+    def rhs(self, x, u, p=None) -> np.ndarray:
+        """dx/dt in K/s at state ``x`` (°C) and input ``u``; ``p`` defaults to the model's values."""
+        return self._call("rhs", x, u, p).ravel()
+
+    def jacobian_x(self, x, u, p=None) -> np.ndarray:
+        """Exact ∂(dx/dt)/∂x, shape (n_states, n_states), 1/s."""
+        return self._call("jac_x", x, u, p)
+
+    def node_temperatures(self, x, u, p=None) -> dict[str, float]:
+        """Temperatures (°C) of every internal node, massless ones included."""
+        return dict(zip(self.node_order, self._call("nodes", x, u, p).ravel()))
+
+    def outputs(self, x, u, p=None) -> np.ndarray:
+        """Sensor temperatures (°C) in ``output_names`` order."""
+        return self._call("outputs", x, u, p).ravel()
+
+    @functools.cached_property
+    def is_affine(self) -> bool:
+        """True when dx/dt is affine in (x, u): the linear design model."""
+        s = self._symbolic
+        J = ca.jacobian(s["xdot"], ca.vertcat(s["x"], s["u"]))
+        return not ca.depends_on(J, ca.vertcat(s["x"], s["u"]))
+
+    def steady_state(self, u, p=None, tol: float = 1e-12) -> np.ndarray:
+        """Steady state x (°C) for constant input ``u``, by Newton's method on dx/dt = 0.
+
+        Raises
+        ------
+        InputError
+            If Newton's method does not converge in 50 iterations.
+        """
+        u = np.asarray(u, dtype=float)
+        x = np.full(self.n_states, float(u[INPUT_NAMES.index("T_ambient")]))
+        for _ in range(50):
+            step = np.linalg.solve(self.jacobian_x(x, u, p), self.rhs(x, u, p))
+            x = x - step
+            if np.max(np.abs(step)) < tol * max(1.0, np.max(np.abs(x))):
+                return x
+        raise InputError("u", u.tolist(), "no steady state found (Newton did not converge)")
+
+    def discretise(self, dt_s: float):
+        """The :class:`~genthermal.discretise.DiscreteModel` for step ``dt_s`` (s), cached."""
+        from .discretise import discretise  # discretise builds on this module
+
+        key = float(dt_s)
+        if key not in self._discrete:
+            self._discrete[key] = discretise(self, key)
+        return self._discrete[key]
+
+    # --- variants --------------------------------------------------------------------------
+    def with_parameters(self, provenance: str = "fitted", source: str = "", **values) -> "ThermalModel":
+        """Return the same model with new parameter values (checked for physical values)."""
+        return ThermalModel(self.network, self.parameters.with_values(provenance, source, **values), self.spec)
+
+    def with_network(self, network: Network, parameters: ParameterSet | None = None,
+                     **spec_changes) -> "ThermalModel":
+        """Return a model on a transformed network (how effects and variants are made)."""
+        return ThermalModel(network, parameters or self.parameters,
+                            dataclasses.replace(self.spec, **spec_changes))
+
+    def input_vector(self, I_u=0.0, I_v=0.0, I_w=0.0, I_exc=0.0, T_inlet=20.0, T_ambient=20.0) -> np.ndarray:
+        """Build an input vector u in ``INPUT_NAMES`` order (A RMS, A, °C, °C)."""
+        return np.array([I_u, I_v, I_w, I_exc, T_inlet, T_ambient], dtype=float)
+
+    def __repr__(self) -> str:
+        return (f"ThermalModel({self.name}: {self.n_states} states, {len(self.massless_names)} massless "
+                f"nodes eliminated, {len(self.parameter_names)} parameters)")
