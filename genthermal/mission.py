@@ -1,0 +1,402 @@
+"""Missions as data: ordered load actions built from the load conditions of thesis Table 3.2.
+
+A :class:`Mission` is a list of :class:`Action` objects, each a load condition (thesis Table 3.2,
+see :mod:`genthermal.conditions`) or a constant load in % (for step tests) held for a duration.
+:meth:`Mission.to_inputs` turns it into the input time series of a thermal model.
+
+Missions are stored as YAML under ``scenarios/`` at the top of the repository::
+
+    name: thesis_fig_3_2                 # required, text
+    description: Example flight ...      # optional, text
+    rated_current_A: 7.0                 # optional, > 0, A RMS per phase (default 7)
+    T_inlet_C: 20.0                      # optional, -60..100 degC (default 20)
+    T_ambient_C: 20.0                    # optional, -60..100 degC (default 20)
+    actions:                             # required, non-empty
+      - {condition: 1, duration_min: 15}            # number 1..7 or name (loading_preparation)
+      - {load_percent: 100, duration_min: 60}       # constant load, 0..120 % of rated
+      - {condition: cruise, duration_min: 45, phase_share: [1.1, 1.0, 0.9]}
+    extensions: {}                       # optional mapping: free-form data, not checked
+    faults: ...                          # reserved for fault scenarios, kept unchecked
+    generators: ...                      # reserved for multi-generator missions, kept unchecked
+
+Any other key is an error. Every problem is reported as :class:`~genthermal.errors.InputError`
+whose field is a path into the document (``actions[3].duration_min``).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import difflib
+import math
+import os
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
+from .errors import InputError
+
+__all__ = [
+    "Action",
+    "LoadCondition",
+    "Mission",
+    "available_scenarios",
+    "excitation_current",
+    "load_mission",
+]
+
+#: Directory of the shipped scenario files (the package is installed in editable mode).
+SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
+#: Columns of :meth:`Mission.to_inputs`: s, A RMS (three phases), A (field), degC, degC.
+INPUT_COLUMNS = ("time_s", "I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
+#: Accepted range of inlet and ambient temperatures, degC.
+TEMPERATURE_RANGE_C = (-60.0, 100.0)
+#: Top-level keys kept unchecked in :attr:`Mission.extras`.
+EXTRA_KEYS = ("extensions", "faults", "generators")
+#: No-load field current of the assumed exciter, A.
+EXCITATION_NO_LOAD_A = 0.45
+#: Rise of the field current per ampere of phase current of the assumed exciter, A/A.
+EXCITATION_GAIN_A_PER_A = 0.08
+
+_MISSION_KEYS = ("name", "description", "rated_current_A", "T_inlet_C", "T_ambient_C", "actions") + EXTRA_KEYS
+
+
+def excitation_current(I_phase_mean_A):
+    """Field (excitation) current needed to carry a given phase current.
+
+    Assumed, not measured: the thesis gives no field-current data, so a small brushless exciter is
+    assumed whose field current rises linearly from its no-load value,
+    ``I_exc = 0.45 A + 0.08 A/A * I_phase_mean``.
+
+    Parameters
+    ----------
+    I_phase_mean_A : float or array_like
+        Mean of the three RMS phase currents, A (>= 0).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        Field current, A; same shape as the input.
+    """
+    current = np.asarray(I_phase_mean_A, dtype=float)
+    if np.any(~(current >= 0)):
+        raise InputError("I_phase_mean_A", I_phase_mean_A, "phase current must be a number >= 0 A")
+    field_current = EXCITATION_NO_LOAD_A + EXCITATION_GAIN_A_PER_A * current
+    return float(field_current) if field_current.ndim == 0 else field_current
+
+
+@dataclasses.dataclass(frozen=True)
+class Mission:
+    """An ordered list of load actions with the conditions the generator runs in.
+
+    Parameters
+    ----------
+    name : str
+        Mission name.
+    actions : sequence of Action
+        The actions in flight order (stored as a tuple); at least one.
+    rated_current_A : float
+        Rated RMS phase current, A; load percentages refer to it (thesis generator: 7 A).
+    T_inlet_C : float
+        Coolant inlet temperature, degC, constant over the mission.
+    T_ambient_C : float
+        Ambient temperature around the machine, degC, constant over the mission.
+    description : str
+        Free text: where the mission comes from and what was assumed.
+    extras : dict
+        Unchecked top-level ``extensions``, ``faults`` and ``generators`` data of a scenario file.
+    """
+
+    name: str
+    actions: tuple[Action, ...]
+    rated_current_A: float = 7.0
+    T_inlet_C: float = 20.0
+    T_ambient_C: float = 20.0
+    description: str = ""
+    extras: dict[str, Any] = dataclasses.field(default_factory=dict, hash=False)
+
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.strip():
+            raise InputError("name", self.name, "required: a non-empty text naming the mission")
+        if not isinstance(self.description, str):
+            raise InputError("description", self.description, "must be text")
+        if not isinstance(self.actions, (list, tuple)) or not self.actions:
+            raise InputError("actions", self.actions, "a mission needs a non-empty list of actions")
+        for index, action in enumerate(self.actions):
+            if not isinstance(action, Action):
+                raise InputError(f"actions[{index}]", action,
+                                 "must be an Action (use Mission.from_dict for plain data)")
+        object.__setattr__(self, "actions", tuple(self.actions))
+        rated = checked_number(self.rated_current_A, "rated_current_A", "a positive number of amperes")
+        if rated <= 0:
+            raise InputError("rated_current_A", self.rated_current_A,
+                             "must be a positive current, A (thesis generator: 7)")
+        object.__setattr__(self, "rated_current_A", rated)
+        low, high = TEMPERATURE_RANGE_C
+        for field in ("T_inlet_C", "T_ambient_C"):
+            temperature = checked_number(getattr(self, field), field, "a temperature in degC")
+            if not low <= temperature <= high:
+                raise InputError(field, getattr(self, field), f"must lie in {low:g}..{high:g} degC")
+            object.__setattr__(self, field, temperature)
+        if not isinstance(self.extras, Mapping) or not set(self.extras) <= set(EXTRA_KEYS):
+            raise InputError("extras", self.extras,
+                             f"must be a mapping with keys among {', '.join(EXTRA_KEYS)}")
+        if not isinstance(self.extras.get("extensions", {}), Mapping):
+            raise InputError("extensions", self.extras["extensions"], "must be a mapping of your own keys")
+        object.__setattr__(self, "extras", dict(self.extras))
+
+    # --- time axis ------------------------------------------------------------------------------
+    @property
+    def duration_s(self) -> float:
+        """Total mission duration, s."""
+        return float(sum(action.duration_s for action in self.actions))
+
+    def action_boundaries_s(self) -> np.ndarray:
+        """Return the start times of all actions followed by the mission end, s (length n + 1)."""
+        return np.concatenate(([0.0], np.cumsum([action.duration_s for action in self.actions])))
+
+    def _load_segments(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Start times (s), loads (% of rated) and phase shares (n x 3) of the constant pieces."""
+        starts, percents, shares = [], [], []
+        for action, action_start in zip(self.actions, self.action_boundaries_s()):
+            for offset, percent in action.load_steps():
+                starts.append(action_start + offset)
+                percents.append(percent)
+                shares.append(action.phase_share)
+        return np.array(starts), np.array(percents), np.array(shares)
+
+    def _load_at(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """Load (% of rated) and phase shares (... x 3) in force at times ``t_s`` (s)."""
+        times = np.asarray(t_s, dtype=float)
+        end = self.duration_s
+        outside = ~((times >= 0.0) & (times <= end * (1.0 + 1e-12)))
+        if np.any(outside):
+            raise InputError("t_s", times[outside].flat[0], f"time must lie in the mission, 0..{end:g} s")
+        starts, percents, shares = self._load_segments()
+        index = np.searchsorted(starts, times, side="right") - 1
+        return percents[index], shares[index]
+
+    # --- load ----------------------------------------------------------------------------------
+    def phase_current(self, t_s):
+        """Balanced RMS phase current at times ``t_s``.
+
+        Piecewise constant and right-continuous: at an action boundary the new action's value
+        applies. A condition action runs at its start-up level for its first 300 s and at its
+        continuous level after; at the mission end the last level is held. ``phase_share`` is not
+        applied (see :meth:`phase_currents`).
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times since the mission start, s, within ``0..duration_s``.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            Phase current, A RMS; same shape as ``t_s``.
+        """
+        percent, _ = self._load_at(t_s)
+        current = percent / 100.0 * self.rated_current_A
+        return float(current) if current.ndim == 0 else current
+
+    def phase_currents(self, t_s) -> np.ndarray:
+        """RMS currents of phases u, v, w at times ``t_s``, with each action's ``phase_share``.
+
+        Parameters
+        ----------
+        t_s : float or array_like
+            Times since the mission start, s, within ``0..duration_s``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Currents, A RMS, shape ``np.shape(t_s) + (3,)``.
+        """
+        percent, shares = self._load_at(t_s)
+        return (percent / 100.0 * self.rated_current_A)[..., np.newaxis] * shares
+
+    def to_inputs(self, dt_s: float) -> pd.DataFrame:
+        """Sample the mission as model inputs with a zero-order hold.
+
+        Samples lie at ``0, dt, 2 dt, ...`` up to the mission end (included when the duration is a
+        multiple of ``dt_s``). Row k holds the inputs applied over ``[t_k, t_k + dt)``, i.e. their
+        value at ``t_k``; a load change that falls strictly inside a step therefore takes effect
+        at the next sample (choose ``dt_s`` dividing 300 s to avoid this).
+
+        Parameters
+        ----------
+        dt_s : float
+            Sample period, s (> 0).
+
+        Returns
+        -------
+        pandas.DataFrame
+            Float columns ``time_s`` (s), ``I_u, I_v, I_w`` (A RMS), ``I_exc`` (A, from
+            :func:`excitation_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
+        """
+        step = checked_number(dt_s, "dt_s", "a positive number of seconds")
+        if step <= 0:
+            raise InputError("dt_s", dt_s, "the sample period must be positive, s")
+        n_steps = int(math.floor(self.duration_s / step + 1e-9))
+        times = np.arange(n_steps + 1, dtype=float) * step
+        currents = self.phase_currents(np.minimum(times, self.duration_s))
+        columns = {
+            "time_s": times,
+            "I_u": currents[:, 0],
+            "I_v": currents[:, 1],
+            "I_w": currents[:, 2],
+            "I_exc": excitation_current(currents.mean(axis=1)),
+            "T_inlet": np.full(times.shape, self.T_inlet_C),
+            "T_ambient": np.full(times.shape, self.T_ambient_C),
+        }
+        return pd.DataFrame(columns, columns=list(INPUT_COLUMNS), dtype=float)
+
+    # --- plain data ----------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Return the mission as a scenario document (the inverse of :meth:`from_dict`)."""
+        document: dict[str, Any] = {
+            "name": self.name,
+            "description": self.description,
+            "rated_current_A": self.rated_current_A,
+            "T_inlet_C": self.T_inlet_C,
+            "T_ambient_C": self.T_ambient_C,
+            "actions": [action.to_dict() for action in self.actions],
+        }
+        document.update(copy.deepcopy(self.extras))
+        return document
+
+    @classmethod
+    def from_dict(cls, document: Mapping[str, Any], source: str = "<dict>") -> "Mission":
+        """Build a mission from a scenario document (the schema is in the module docstring).
+
+        Parameters
+        ----------
+        document : mapping
+            Parsed scenario, e.g. from YAML.
+        source : str
+            Where the document came from; appended to error messages.
+
+        Raises
+        ------
+        InputError
+            For any problem; the field is a path into the document (``actions[2].condition``).
+        """
+        try:
+            return _mission_from_document(document, source)
+        except InputError as error:
+            where = "" if source == "<dict>" else f" (in {source})"
+            raise InputError(error.field, error.value, f"{error.reason}{where}") from None
+
+    @classmethod
+    def from_yaml(cls, path: str | os.PathLike) -> "Mission":
+        """Read a mission from a YAML scenario file.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Scenario file (schema in the module docstring).
+
+        Returns
+        -------
+        Mission
+
+        Raises
+        ------
+        InputError
+            If the file is missing (field ``scenario``), is not valid YAML (field = the path, the
+            reason gives the line) or does not follow the schema.
+        """
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise InputError("scenario", str(path), f"file not found; {_available_text()}") from None
+        except (OSError, UnicodeDecodeError) as error:
+            raise InputError("scenario", str(path), f"cannot read the file: {error}") from None
+        try:
+            document = yaml.safe_load(text)
+        except yaml.YAMLError as error:
+            raise _yaml_syntax_error(path, text, error) from None
+        return cls.from_dict(document, source=str(path))
+
+
+def _yaml_syntax_error(path: Path, text: str, error: yaml.YAMLError) -> InputError:
+    """InputError for a YAML syntax error: field = file, value = offending line, reason with line."""
+    problem = getattr(error, "problem", None) or str(error)
+    marks = [getattr(error, "problem_mark", None), getattr(error, "context_mark", None)]
+    marks = [mark for mark in marks if mark is not None]
+    if not marks:
+        return InputError(str(path), None, f"YAML syntax error: {problem}")
+    lines = text.splitlines()
+    shown = next((mark for mark in marks if mark.line < len(lines) and lines[mark.line].strip()), marks[0])
+    line_text = lines[shown.line].strip() if shown.line < len(lines) else ""
+    where = f"line {marks[0].line + 1}, column {marks[0].column + 1}"
+    context = f" ({error.context} at line {marks[1].line + 1})" if len(marks) > 1 else ""
+    return InputError(str(path), line_text, f"YAML syntax error at {where}: {problem}{context}; "
+                      "check indentation, colons and brackets")
+
+
+def _mission_from_document(document: Any, source: str) -> Mission:
+    if not isinstance(document, Mapping):
+        raise InputError(source, document, "a scenario must be a mapping with at least 'name' and 'actions'")
+    reject_unknown_keys(document, _MISSION_KEYS, prefix="")
+    for key in ("name", "actions"):
+        if key not in document:
+            raise InputError(key, None, f"missing required key {key!r}")
+    entries = document["actions"]
+    if not isinstance(entries, list) or not entries:
+        raise InputError("actions", entries,
+                         "must be a non-empty list such as [{condition: 1, duration_min: 15}]")
+    actions = tuple(Action.from_dict(entry, f"actions[{index}]") for index, entry in enumerate(entries))
+    settings = {key: document[key] for key in ("description", "rated_current_A", "T_inlet_C", "T_ambient_C")
+                if key in document}
+    extras = {key: copy.deepcopy(document[key]) for key in EXTRA_KEYS if key in document}
+    return Mission(name=document["name"], actions=actions, extras=extras, **settings)
+
+
+def available_scenarios() -> list[str]:
+    """Return the names of the shipped scenario files in :data:`SCENARIO_DIR`, sorted."""
+    return sorted(path.stem for path in SCENARIO_DIR.glob("*.yaml"))
+
+
+def _available_text() -> str:
+    return f"available scenarios: {', '.join(available_scenarios()) or '(none)'}"
+
+
+def load_mission(name_or_path: str | os.PathLike) -> Mission:
+    """Load a shipped scenario by name, or any scenario file by path.
+
+    Parameters
+    ----------
+    name_or_path : str or os.PathLike
+        A bare name such as ``"thesis_fig_7_7"`` (looked up as ``scenarios/<name>.yaml``), or a
+        path to a YAML file (anything with a directory part or a ``.yaml``/``.yml`` suffix).
+
+    Returns
+    -------
+    Mission
+
+    Raises
+    ------
+    InputError
+        If no such scenario exists (field ``scenario``; the message lists the available names), or
+        if the file is not a valid scenario.
+    """
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise InputError("scenario", name_or_path,
+                         f"must be a scenario name or a file path; {_available_text()}")
+    text = os.fspath(name_or_path)
+    looks_like_path = isinstance(name_or_path, os.PathLike) or any(sep in text for sep in ("/", os.sep))
+    if looks_like_path or text.endswith((".yaml", ".yml")):
+        return Mission.from_yaml(text)
+    path = SCENARIO_DIR / f"{text}.yaml"
+    if not path.is_file():
+        close = difflib.get_close_matches(text, available_scenarios(), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise InputError("scenario", text, f"no shipped scenario of that name; {hint}{_available_text()}; "
+                         "or give the path to a YAML file")
+    return Mission.from_yaml(path)
