@@ -1,0 +1,18 @@
+"""Shared fixtures: the thesis generator models are built once per test session."""
+
+import pytest
+
+from genthermal.design import linear_design_model
+from genthermal.machines import build_model
+
+
+@pytest.fixture(scope="session")
+def plant_model():
+    """Nonlinear simulation model of the thesis generator with its default parameters."""
+    return build_model()
+
+
+@pytest.fixture(scope="session")
+def design_model(plant_model):
+    """Linear design model (thesis 5.2) derived from the same network."""
+    return linear_design_model(plant_model)
