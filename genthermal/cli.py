@@ -18,6 +18,7 @@ from .errors import GenthermalError
 COMMAND_MODULES = (
     "demo",
     "simulate",
+    "describe",
     "codegen",
     "synth",
     "estimate",

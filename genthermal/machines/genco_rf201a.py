@@ -96,17 +96,16 @@ def default_parameters() -> ParameterSet:
            "share of the fan flow through the air gap and slot openings; the 1 mm gap alone is "
            "3 % of the top-air annulus, rotor pumping adds more", upper=1.0),
         _p("h_ambient", 10.0, "W/(m^2 K)", "assumed", "H_f: natural convection outside the frame (5-25)"),
-        _p("h_top_air", 22.0, "W/(m^2 K)", "assumed", "H_tar: forced convection in the top-air duct; "
-           "with h_end_air set for 102 °C winding / 82 °C iron at rated load, 20 °C inlet"),
-        _p("h_end_air", 17.5, "W/(m^2 K)", "assumed",
-           "H_tar2 and end-air surfaces: low-velocity convection in the end regions; set with "
-           "h_top_air for 102 °C winding / 82 °C iron at rated load, 20 °C inlet"),
+        _p("h_top_air", 15.5, "W/(m^2 K)", "assumed", "H_tar: low-velocity forced convection in the "
+           "top-air duct (~1-3 m/s); with h_end_air, set for a 102 °C winding at rated load, 20 °C inlet"),
+        _p("h_end_air", 15.5, "W/(m^2 K)", "assumed", "H_tar2 and end-air surfaces: as h_top_air"),
         _p("h_air_gap", 60.0, "W/(m^2 K)", "assumed", "air gap: rotating-gap convection, 1500 rpm"),
         # losses
         _p("R0", 1.2, "ohm", "assumed",
            "phase resistance at 0 °C: 1.67 ohm at 100 °C gives 245 W copper loss at 7 A, ~5 % of 5 kVA"),
-        _p("P_iron", 90.0, "W", "assumed", "iron loss at rated voltage: ~2 % of 5 kVA (no-load test "
-           "values are not printed in the thesis)", lower_inclusive=True),
+        _p("P_iron", 40.0, "W", "assumed", "iron loss at rated voltage: ~10 kg of stator steel (Table 4.2) "
+           "at 3-5 W/kg, 50 Hz, 1.5 T; the thesis's no-load test values are not printed",
+           lower_inclusive=True),
     ])
 
 

@@ -1,0 +1,42 @@
+"""``genthermal describe``: the model's nodes, element formulas (plain or LaTeX) and parameters
+with their provenance."""
+
+from __future__ import annotations
+
+import sympy
+
+from ._common import add_model_arguments, model_from_args
+
+
+def register(subparsers) -> None:
+    """Add the ``describe`` sub-command."""
+    parser = subparsers.add_parser("describe", help="list nodes, element formulas and parameters with provenance")
+    parser.add_argument("--latex", action="store_true", help="print the element formulas as LaTeX")
+    add_model_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Print the description."""
+    model = model_from_args(args)
+    net = model.network
+    show = sympy.latex if args.latex else sympy.sstr
+    stages = net.reduction_stages()
+    print(f"{model!r}\nnodes: {stages['all_nodes']} -> {stages['without_intermediate']} without intermediate "
+          f"nodes -> {stages['states']} states")
+    print("\nstates (capacitive nodes) and heat capacities [J/K]:")
+    for name in model.state_names:
+        print(f"  {name:22s} C = {show(net.node(name).capacitance)}")
+    print("\nlinks, resistance [K/W]:")
+    for link in net.links:
+        print(f"  {link.a} -- {link.b}  [{link.label}]\n      R = {show(link.resistance)}")
+    print("\nair streams, resistance 1/(c_air m_dot) [K/W]:")
+    for stream in net.air_streams:
+        print(f"  {stream.upstream} -> {stream.downstream}: R = {show(stream.resistance)}")
+    print("\nheat sources [W]:")
+    for source in net.heat_sources:
+        print(f"  {source.node} ({source.label}): {show(source.power)}")
+    print("\nparameters:")
+    for row in model.parameters.table():
+        print(f"  {row['name']:20s} {row['value']:<12.6g} {row['unit']:12s} {row['provenance']:10s} {row['source']}")
+    return 0

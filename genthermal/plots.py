@@ -1,0 +1,85 @@
+"""Matplotlib figures of simulations. Functions return the figure and save it when given a path."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files, not windows: the CLI and the tests run headless
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+
+LIMIT_C = 110.0
+
+
+def _finish(fig, path):
+    fig.tight_layout()
+    if path is not None:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+    return fig
+
+
+def plot_simulation(result: pd.DataFrame, title: str = "", path=None, limit_C: float | None = LIMIT_C):
+    """Phase currents and node temperatures of a simulation result over time.
+
+    Parameters
+    ----------
+    result : pandas.DataFrame
+        Output of :func:`genthermal.simulate.simulate`.
+    title : str
+        Figure title.
+    path : path-like, optional
+        Where to save the PNG.
+    limit_C : float or None
+        Temperature limit drawn as a dashed line (thesis: 110 °C).
+    """
+    hours = result["time_s"] / 3600.0
+    fig, (ax_i, ax_t) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True,
+                                     gridspec_kw={"height_ratios": [1, 2.4]})
+    for phase in ("I_u", "I_v", "I_w"):
+        ax_i.plot(hours, result[phase], label=phase, lw=1.2)
+    ax_i.set_ylabel("phase current [A RMS]")
+    ax_i.legend(loc="lower right", ncol=3, fontsize=8)
+    ax_i.grid(alpha=0.3)
+    nodes = [c for c in result.columns if c.startswith("T_") and c not in
+             ("T_inlet", "T_ambient", "T_winding", "T_iron")]
+    for column in nodes:
+        emphasis = column in ("T_stator_winding", "T_stator_iron")
+        ax_t.plot(hours, result[column], lw=2.0 if emphasis else 1.0, alpha=1.0 if emphasis else 0.7,
+                  label=column[2:].replace("_", " "))
+    ax_t.plot(hours, result["T_inlet"], "k:", lw=1, label="inlet")
+    if limit_C is not None:
+        ax_t.axhline(limit_C, color="red", ls="--", lw=1, label=f"limit {limit_C:g} °C")
+    ax_t.set_xlabel("time [h]")
+    ax_t.set_ylabel("temperature [°C]")
+    ax_t.legend(loc="upper left", fontsize=7, ncol=3)
+    ax_t.grid(alpha=0.3)
+    if title:
+        ax_i.set_title(title)
+    return _finish(fig, path)
+
+
+def plot_comparison(results: dict[str, pd.DataFrame], columns=("T_winding", "T_iron"), title: str = "",
+                    path=None):
+    """Overlay the sensor temperatures of several runs (e.g. nonlinear vs linear vs C).
+
+    Parameters
+    ----------
+    results : dict
+        Label → result frame with ``time_s`` and ``columns``.
+    columns : tuple of str
+        Columns to overlay, one panel each.
+    """
+    fig, axes = plt.subplots(len(columns), 1, figsize=(9, 3.2 * len(columns)), sharex=True, squeeze=False)
+    for ax, column in zip(axes[:, 0], columns):
+        for label, frame in results.items():
+            ax.plot(frame["time_s"] / 3600.0, frame[column], label=label, lw=1.3)
+        ax.set_ylabel(f"{column} [°C]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[-1, 0].set_xlabel("time [h]")
+    if title:
+        axes[0, 0].set_title(title)
+    return _finish(fig, path)
