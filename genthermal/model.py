@@ -69,6 +69,12 @@ class ModelSpec:
         Rated RMS phase current.
     variant : str
         ``"nonlinear"`` (simulation model) or ``"linear"`` (design model).
+    roles : dict
+        What the machine's nodes and links are, for effects that must find them:
+        ``"end_windings"`` and ``"iron"`` (tuples of nodes), ``"winding_insulation"`` and
+        ``"frame_to_ambient"`` (tuples of (node, node) links).
+    effects : tuple of str
+        Names of the effects applied to this model, in order.
     """
 
     name: str
@@ -77,6 +83,8 @@ class ModelSpec:
     outlet_node: str | None = None
     rated_current_A: float = 7.0
     variant: str = "nonlinear"
+    roles: dict = dataclasses.field(default_factory=dict)
+    effects: tuple = ()
 
 
 class ThermalModel:
@@ -322,6 +330,21 @@ class ThermalModel:
         """Build an input vector u in ``INPUT_NAMES`` order (A RMS, A, °C, °C)."""
         return np.array([I_u, I_v, I_w, I_exc, T_inlet, T_ambient], dtype=float)
 
+    def with_effect(self, effect, **values) -> "ThermalModel":
+        """Return this model with a catalogue effect added (see :mod:`genthermal.effects`).
+
+        Parameters
+        ----------
+        effect : str or Effect
+            Effect name (``"coolant_flow_reduction"``) or object.
+        **values : float
+            Values of the effect's parameters; defaults are the effect's neutral values.
+        """
+        from .effects import apply_effect  # effects build on this module
+
+        return apply_effect(self, effect, **values)
+
     def __repr__(self) -> str:
+        effects = f", effects: {', '.join(self.spec.effects)}" if self.spec.effects else ""
         return (f"ThermalModel({self.name}: {self.n_states} states, {len(self.massless_names)} massless "
-                f"nodes eliminated, {len(self.parameter_names)} parameters)")
+                f"nodes eliminated, {len(self.parameter_names)} parameters{effects})")

@@ -75,8 +75,10 @@ class Parameter:
 
     @property
     def symbol(self) -> sympy.Symbol:
-        """The sympy symbol of this parameter (positive real)."""
-        return sympy.Symbol(self.name, positive=True)
+        """The sympy symbol of this parameter: positive when its range is, else real."""
+        if self.lower >= 0:
+            return sympy.Symbol(self.name, positive=True)
+        return sympy.Symbol(self.name, real=True)
 
     def replace(self, **changes) -> "Parameter":
         """Return a copy with ``changes`` applied (bounds re-checked)."""
@@ -104,6 +106,9 @@ class ParameterSet(Mapping[str, Parameter]):
             return self._items[name]
         except KeyError:
             raise ParameterError("parameter", name, self._unknown_hint(name)) from None
+
+    def __contains__(self, name) -> bool:
+        return name in self._items
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._items)

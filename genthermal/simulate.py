@@ -54,7 +54,7 @@ def initial_state(model: ThermalModel, u0: np.ndarray, x0=None) -> np.ndarray:
     return x0
 
 
-def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None) -> pd.DataFrame:
+def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=()) -> pd.DataFrame:
     """Simulate ``model`` over the input time series.
 
     Parameters
@@ -65,6 +65,10 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None) -> pd.DataFrame
         ``time_s`` (uniform) and the model inputs (A RMS, A, °C, °C).
     x0 : array_like or float, optional
         Initial state temperatures (°C); default: every node at the first ambient temperature.
+    switches : sequence of (float, ThermalModel)
+        Models that take over at an onset time in s (a fault, an effect with an onset): from the
+        first sample at or after the onset, the state is propagated by that model. All models must
+        have the same states.
 
     Returns
     -------
@@ -75,12 +79,37 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None) -> pd.DataFrame
     U = input_matrix(inputs)
     dt = uniform_step(time_s)
     x0 = initial_state(model, U[:, 0], x0)
+    segments = _segments(model, time_s, switches)
     n = U.shape[1]
     X = np.empty((model.n_states, n))
     X[:, 0] = x0
-    if n > 1:
-        X[:, 1:] = np.asarray(model.discretise(dt).simulator(n - 1)(x0, U[:, :-1]))
-    return results_frame(model, time_s, U, X)
+    for segment_model, start, end in segments:  # its steps start..end-1 give states start+1..end
+        last = min(end, n - 1)
+        if last > start:
+            X[:, start + 1:last + 1] = np.asarray(
+                segment_model.discretise(dt).simulator(last - start)(X[:, start], U[:, start:last]))
+    frames = [results_frame(m, time_s[a:b], U[:, a:b], X[:, a:b]) for m, a, b in segments]
+    return pd.concat(frames, ignore_index=True)
+
+
+def _segments(model: ThermalModel, time_s: np.ndarray, switches) -> list[tuple[ThermalModel, int, int]]:
+    """Split the sample indices into (model, first index, end index) runs at the switch times."""
+    bounds, models = [0], [model]
+    for k, (onset, new_model) in enumerate(sorted(switches, key=lambda item: item[0])):
+        if new_model.state_names != model.state_names:
+            raise InputError(f"switches[{k}]", new_model.name, "the switched-to model must have the same states")
+        if not np.isfinite(onset) or onset < time_s[0]:
+            raise InputError(f"switches[{k}].onset_s", onset, f"must be a time >= {time_s[0]:g} s")
+        index = int(np.searchsorted(time_s, onset - 1e-9))
+        if index >= len(time_s):
+            continue  # after the end of the run: never takes over
+        if index == bounds[-1]:
+            models[-1] = new_model
+        else:
+            bounds.append(index)
+            models.append(new_model)
+    bounds.append(len(time_s))
+    return [(models[i], bounds[i], bounds[i + 1]) for i in range(len(models))]
 
 
 def results_frame(model: ThermalModel, time_s: np.ndarray, U: np.ndarray, X: np.ndarray) -> pd.DataFrame:

@@ -32,5 +32,5 @@ def build_model(machine: str = genco_rf201a.NAME, parameters: ParameterSet | Non
     parameters = parameters if parameters is not None else module.default_parameters()
     spec = ModelSpec(name=module.NAME, sensors=dict(module.SENSORS),
                      boundary_inputs=dict(module.BOUNDARY_INPUTS), outlet_node=module.OUTLET_NODE,
-                     rated_current_A=module.RATED_CURRENT_A)
+                     rated_current_A=module.RATED_CURRENT_A, roles=dict(module.ROLES))
     return ThermalModel(module.build_network(parameters), parameters, spec)

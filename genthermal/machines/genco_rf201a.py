@@ -30,6 +30,15 @@ SENSORS = {"T_winding": "stator_winding", "T_iron": "stator_iron"}
 BOUNDARY_INPUTS = {"coolant_inlet": "T_inlet", "ambient": "T_ambient"}
 WINDING_NODES = ("stator_winding", "end_winding_in", "end_winding_out")
 IRON_NODES = ("stator_iron", "stator_teeth")
+#: Where effects find the machine's parts (see genthermal.effects).
+ROLES = {
+    "slot_winding": "stator_winding",
+    "end_windings": ("end_winding_in", "end_winding_out"),
+    "iron": IRON_NODES,
+    "winding_insulation": (("stator_winding_radial", "yoke_teeth_interface"),
+                           ("stator_winding_radial", "stator_teeth_radial")),
+    "frame_to_ambient": (("frame", "ambient"),),
+}
 #: Air node whose temperature leaves through the outlet duct (``T_outlet``).
 OUTLET_NODE = "end_air_out"
 #: Rated RMS phase current, A (thesis Table 3.3).

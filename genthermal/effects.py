@@ -1,0 +1,278 @@
+r"""The effect catalogue: physical effects as small, named transformations of a model.
+
+An :class:`Effect` takes a model's network (and the machine's ``roles``: which nodes are the end
+windings, which links are the winding insulation ...) and returns a modified network, with one or
+two new named parameters. Because the result is an ordinary :class:`~genthermal.model.ThermalModel`,
+every consumer (simulation, Kalman filter, scheduler, code generation, calibration) uses it as is.
+Each parameter has a *neutral* value at which the effect vanishes. Effects that start during a
+run (a blockage at 1.1 h) are applied from an onset time by :func:`genthermal.simulate.simulate`
+with ``switches``.
+
+A user-defined effect is a few lines::
+
+    from genthermal.effects import Effect, EffectParameter, register_effect
+    from genthermal.losses import input_symbol
+    from genthermal.network import HeatSource
+
+    def rotor_loss(network, roles, k):
+        return network.with_heat_sources([HeatSource("rotor", k * input_symbol("I_exc") ** 2, "rotor")])
+
+    register_effect(Effect("rotor_copper_loss", "rotor field loss k I_exc^2", r"q_r = k I_{exc}^2",
+                           (EffectParameter("k_rotor", 0.0, "W/A^2", 0.0, 100.0),), rotor_loss))
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+from typing import Callable
+
+import sympy
+
+from .errors import InputError
+from .losses import PHASE_CURRENTS, input_symbol, mass_shares
+from .network import HeatSource, Network
+from .parameters import Parameter
+
+
+@dataclasses.dataclass(frozen=True)
+class EffectParameter:
+    """A parameter an effect adds to the model.
+
+    Attributes
+    ----------
+    name : str
+        Unique parameter name (``"k_flow"``).
+    neutral : float
+        Value at which the effect vanishes (the model is unchanged).
+    unit : str
+    lower, upper : float
+        Physical bounds (inclusive), also the bounds used when the parameter is fitted.
+    typical : float or None
+        A clearly-active value, used to start a fit and in examples.
+    """
+
+    name: str
+    neutral: float
+    unit: str
+    lower: float
+    upper: float
+    typical: float | None = None
+
+    def as_parameter(self, value: float, effect: str, provenance: str, source: str) -> Parameter:
+        """The :class:`~genthermal.parameters.Parameter` carrying ``value`` for ``effect``."""
+        if not (self.lower <= value <= self.upper):
+            raise InputError(f"{effect}.{self.name}", value,
+                             f"must lie in [{self.lower:g}, {self.upper:g}] {self.unit}")
+        return Parameter(self.name, value, self.unit, provenance, source or f"effect {effect}",
+                         lower=self.lower, upper=self.upper, lower_inclusive=True)
+
+
+@dataclasses.dataclass(frozen=True)
+class Effect:
+    """A physical effect as a transformation of a model's network.
+
+    Attributes
+    ----------
+    name : str
+    summary : str
+        One line in plain language.
+    latex : str
+        The effect's equation.
+    parameters : tuple of EffectParameter
+    transform : callable
+        ``transform(network, roles, *symbols) -> Network`` with one sympy symbol per parameter.
+    signature : str
+        The residual pattern the effect explains, for diagnosis reports.
+    requires : callable or None
+        ``requires(model) -> str | None``: why the effect cannot apply to ``model`` (None if it can).
+    """
+
+    name: str
+    summary: str
+    latex: str
+    parameters: tuple[EffectParameter, ...]
+    transform: Callable[..., Network]
+    signature: str = ""
+    requires: Callable | None = None
+
+    def unavailable_reason(self, model) -> str | None:
+        """Why this effect cannot be added to ``model``, or None when it can."""
+        if self.name in model.spec.effects:
+            return "already applied"
+        clash = [p.name for p in self.parameters if p.name in model.parameters]
+        if clash:
+            return f"parameter {clash[0]} already in the model"
+        return self.requires(model) if self.requires else None
+
+
+CATALOGUE: dict[str, Effect] = {}
+
+
+def register_effect(effect: Effect) -> Effect:
+    """Add ``effect`` to the catalogue (names must be unique) and return it."""
+    if effect.name in CATALOGUE:
+        raise InputError("effect", effect.name, "an effect of this name is already registered")
+    CATALOGUE[effect.name] = effect
+    return effect
+
+
+def get_effect(name: str) -> Effect:
+    """Return the catalogue effect called ``name`` or raise InputError suggesting the closest."""
+    try:
+        return CATALOGUE[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, list(CATALOGUE), n=2)
+        hint = f"did you mean {', '.join(close)}? " if close else ""
+        raise InputError("effect", name, f"unknown effect; {hint}known: {', '.join(CATALOGUE)}") from None
+
+
+def apply_effect(model, effect, provenance: str = "assumed", source: str = "", **values):
+    """Return ``model`` with ``effect`` applied at parameter ``values`` (neutral by default).
+
+    Parameters
+    ----------
+    model : ThermalModel
+    effect : str or Effect
+    provenance, source : str
+        Recorded on the effect's parameters (``"fitted"`` after a diagnosis).
+    **values : float
+        Parameter values by name.
+    """
+    effect = get_effect(effect) if isinstance(effect, str) else effect
+    reason = effect.unavailable_reason(model)
+    if reason:
+        raise InputError("effect", effect.name, f"cannot be added to {model.name}: {reason}")
+    known = {p.name for p in effect.parameters}
+    unknown = set(values) - known
+    if unknown:
+        raise InputError(f"{effect.name} parameter", sorted(unknown)[0],
+                         f"unknown; {effect.name} takes {', '.join(sorted(known)) or 'no parameters'}")
+    new = [p.as_parameter(float(values.get(p.name, p.neutral)), effect.name, provenance, source)
+           for p in effect.parameters]
+    network = effect.transform(model.network, model.spec.roles, *[p.symbol for p in new])
+    return model.with_network(network, model.parameters.with_parameters(*new),
+                              effects=model.spec.effects + (effect.name,))
+
+
+# --- helpers for the transformations ------------------------------------------------------------
+
+def _copper_sources(network: Network) -> list[HeatSource]:
+    return [s for s in network.heat_sources if s.label == "copper"]
+
+
+def _replace_copper(network: Network, rewrite) -> Network:
+    sources = tuple(dataclasses.replace(s, power=rewrite(s)) if s.label == "copper" else s
+                    for s in network.heat_sources)
+    return network.replace(heat_sources=sources)
+
+
+def _needs_symbol(name: str, what: str):
+    def requires(model):
+        if name not in model.parameters:
+            return f"the model has no {name} ({what})"
+        free = set().union(*(s.power.free_symbols for s in _copper_sources(model.network)))
+        if model.parameters[name].symbol not in free:
+            return f"its copper loss does not use {name}: {what} is already modelled"
+        return None
+    return requires
+
+
+def _copper_symbol(network: Network, name: str) -> sympy.Symbol:
+    """The parameter symbol called ``name`` as used in the copper losses (assumptions included)."""
+    for source in _copper_sources(network):
+        for symbol in source.power.free_symbols:
+            if symbol.name == name:
+                return symbol
+    raise InputError("copper loss", name, "the model's copper loss does not use this parameter")
+
+
+def _current_squared():
+    return sum(input_symbol(p) ** 2 for p in PHASE_CURRENTS)
+
+
+# --- the catalogue ---------------------------------------------------------------------------
+
+def _resistance_temperature(network, roles, alpha):
+    theta_ref = _copper_symbol(network, "theta_ref")
+    return _replace_copper(network, lambda s: s.power * (1 + alpha * (network.temperature_symbol(s.node)
+                                                                      - theta_ref)))
+
+
+def _quadratic_copper(network, roles, weight):
+    r"""Blend the linearised loss back to :math:`I^2`: :math:`(1-\lambda)P + \lambda P|_{aI_p \to I_p^2}`."""
+    slope = _copper_symbol(network, "I2_slope")
+    squares = {input_symbol(p): input_symbol(p) ** 2 for p in PHASE_CURRENTS}
+
+    def rewrite(source):
+        per_current = sympy.expand(source.power).coeff(slope)  # the loss per unit slope: c sum_p I_p
+        return (1 - weight) * source.power + weight * per_current.subs(squares, simultaneous=True)
+    return _replace_copper(network, rewrite)
+
+
+def _flow_reduction(network, roles, k_flow):
+    return network.scale_air_streams(k_flow)
+
+
+def _phase_short(network, roles, R_short):
+    return network.with_heat_sources([HeatSource(roles["slot_winding"], R_short * input_symbol("I_u") ** 2,
+                                                 "phase_short_circuit")])
+
+
+def _excitation_iron(network, roles, k_exc):
+    shares = mass_shares(network, roles["iron"])
+    return network.with_heat_sources([HeatSource(n, shares[n] * k_exc * input_symbol("I_exc") ** 2,
+                                                 "excitation_iron_loss") for n in roles["iron"]])
+
+
+def _scale_links(role):
+    def transform(network, roles, k):
+        for a, b in roles[role]:
+            network = network.scale_links(a, b, k)
+        return network
+    return transform
+
+
+def _end_winding_stray(network, roles, R_stray):
+    ends = roles["end_windings"]
+    return network.with_heat_sources([HeatSource(n, R_stray * _current_squared() / len(ends),
+                                                 "end_winding_stray_loss") for n in ends])
+
+
+for _effect in (
+    Effect("copper_resistance_temperature", "winding resistance rises with its own temperature",
+           r"R = R_{ref}\,(1 + \alpha_R(\theta_w - \theta_{ref}))",
+           (EffectParameter("alpha_R", 0.0, "1/K", 0.0, 0.02, 0.0039),), _resistance_temperature,
+           "error grows with winding temperature at constant current: resistance rises with temperature",
+           _needs_symbol("theta_ref", "temperature-dependent resistance")),
+    Effect("quadratic_copper_loss", "copper loss follows I^2 instead of the linearised a I + b",
+           r"P = (1-\lambda)\,R(aI + b) + \lambda\,R I^2",
+           (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0),), _quadratic_copper,
+           "error changes sign between low and high currents: the loss is quadratic in current",
+           _needs_symbol("I2_slope", "the quadratic copper loss")),
+    Effect("coolant_flow_reduction", "fan mass flow reduced by a factor (blockage)",
+           r"\dot m \to k_{flow}\,\dot m",
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),), _flow_reduction,
+           "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow"),
+    Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
+           r"q_{sw} \mathrel{+}= R_{short} I_u^2",
+           (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3),), _phase_short,
+           "winding runs hot after an onset, in proportion to I^2, iron follows: an extra winding loss"),
+    Effect("excitation_iron_loss", "iron loss grows with the excitation current squared",
+           r"q_{iron} \mathrel{+}= k_{exc} I_{exc}^2",
+           (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0),), _excitation_iron,
+           "iron error follows I_exc^2 more than I^2: iron loss depends on excitation"),
+    Effect("winding_insulation_degradation", "winding-to-core conductance multiplied by a factor",
+           r"G_{w,core} \to k_{ins}\,G_{w,core}",
+           (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5),), _scale_links("winding_insulation"),
+           "winding hotter and iron cooler than modelled, more so at high load: winding-to-core path changed"),
+    Effect("end_winding_stray_loss", "extra stray loss R_stray I^2 in the end windings",
+           r"q_{ew} \mathrel{+}= R_{stray} \sum_p I_p^2",
+           (EffectParameter("R_stray", 0.0, "ohm", 0.0, 5.0, 0.2),), _end_winding_stray,
+           "winding error proportional to I^2 from the start, iron barely affected: an extra end-winding loss"),
+    Effect("frame_cooling_change", "frame-to-ambient conductance multiplied by a factor",
+           r"G_{f,amb} \to k_{frame}\,G_{f,amb}",
+           (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0),), _scale_links("frame_to_ambient"),
+           "slow error that follows ambient temperature and the frame: external cooling changed"),
+):
+    register_effect(_effect)
