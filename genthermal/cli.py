@@ -24,6 +24,11 @@ COMMAND_MODULES = (
     "estimate",
     "sysid",
     "compare_models",
+    "compare",
+    "calibrate",
+    "diagnose",
+    "plan",
+    "fly",
 )
 
 
