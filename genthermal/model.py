@@ -107,7 +107,8 @@ class ThermalModel:
     capacitance and mass flow for physical values and the reduced system for stability.
     """
 
-    def __init__(self, network: Network, parameters: ParameterSet, spec: ModelSpec):
+    def __init__(self, network: Network, parameters: ParameterSet, spec: ModelSpec,
+                 _share_from: "ThermalModel | None" = None):
         self.network = network
         self.parameters = parameters
         self.spec = spec
@@ -118,6 +119,11 @@ class ThermalModel:
         self.parameter_names = list(parameters)
         self.output_names = list(spec.sensors)
         self._discrete: dict = {}
+        # the symbolic model depends on network and parameter order only, not on the values:
+        # a model that differs from another only in parameter values shares its CasADi functions
+        same_structure = (_share_from is not None and _share_from.network is network
+                          and _share_from.spec is spec and _share_from.parameter_names == self.parameter_names)
+        self._shared: dict = _share_from._shared if same_structure else {}
         for output, node in spec.sensors.items():
             network.node(node)
         for node, name in spec.boundary_inputs.items():
@@ -145,18 +151,24 @@ class ThermalModel:
         """Parameter values in ``parameter_names`` order."""
         return np.array([self.parameters.value(n) for n in self.parameter_names])
 
-    def _numeric(self, expressions) -> np.ndarray:
-        symbols = [self.parameters[n].symbol for n in self.parameter_names]
-        function = sympy.lambdify(symbols, list(expressions), modules=["numpy"])
-        return np.asarray(function(*self.p0), dtype=float)
+    def _shared_value(self, key: str, build):
+        if key not in self._shared:
+            self._shared[key] = build()
+        return self._shared[key]
 
-    def _check_physical(self) -> None:
+    def _element_values(self):
+        """Labelled capacitance and resistance expressions and a numeric function of p for them."""
         net = self.network
         labelled = [(f"capacitance of node {n.name}", n.capacitance) for n in net.nodes if n.kind == "capacitive"]
         labelled += [(f"resistance of link {l.a}--{l.b} ({l.label})", l.resistance) for l in net.links]
         labelled += [(f"resistance of air stream {s.upstream}->{s.downstream} ({s.label})", s.resistance)
                      for s in net.air_streams]
-        values = self._numeric([expr for _, expr in labelled])
+        symbols = [self.parameters[n].symbol for n in self.parameter_names]
+        return labelled, sympy.lambdify(symbols, [expr for _, expr in labelled], modules=["numpy"])
+
+    def _check_physical(self) -> None:
+        labelled, evaluate = self._shared_value("elements", self._element_values)
+        values = np.asarray(evaluate(*self.p0), dtype=float)
         for (what, expr), value in zip(labelled, values):
             if not (np.isfinite(value) and value > 0):
                 names = sorted(str(s) for s in expr.free_symbols)
@@ -170,9 +182,12 @@ class ThermalModel:
             raise ParameterError("network", worst, "the reduced system is not stable (largest eigenvalue "
                                  "real part >= 0): check the links to the boundaries")
 
-    @functools.cached_property
+    @property
     def _symbolic(self) -> dict:
-        """SX expressions of the reduced model (built once per model)."""
+        """SX expressions of the reduced model (built once per network structure)."""
+        return self._shared_value("symbolic", self._build_symbolic)
+
+    def _build_symbolic(self) -> dict:
         net = self.network
         x = ca.SX.sym("x", self.n_states)
         u = ca.SX.sym("u", len(INPUT_NAMES))
@@ -236,7 +251,7 @@ class ThermalModel:
                 "y": nodes[sensor_idx], "heat": ca.sum1(q), "internal": internal}
 
     # --- CasADi functions ------------------------------------------------------------------
-    @functools.cached_property
+    @property
     def functions(self) -> dict[str, ca.Function]:
         """CasADi functions of the continuous model, all of ``(x, u, p)``.
 
@@ -244,6 +259,9 @@ class ThermalModel:
         ``nodes`` → temperatures of all internal nodes (states then massless, °C); ``outputs`` →
         sensor temperatures (°C); ``heat`` → total heat injected by the sources (W).
         """
+        return self._shared_value("functions", self._build_functions)
+
+    def _build_functions(self) -> dict[str, ca.Function]:
         s = self._symbolic
         args, names = [s["x"], s["u"], s["p"]], ["x", "u", "p"]
         f = {
@@ -318,7 +336,8 @@ class ThermalModel:
     # --- variants --------------------------------------------------------------------------
     def with_parameters(self, provenance: str = "fitted", source: str = "", **values) -> "ThermalModel":
         """Return the same model with new parameter values (checked for physical values)."""
-        return ThermalModel(self.network, self.parameters.with_values(provenance, source, **values), self.spec)
+        return ThermalModel(self.network, self.parameters.with_values(provenance, source, **values), self.spec,
+                            _share_from=self)
 
     def with_network(self, network: Network, parameters: ParameterSet | None = None,
                      **spec_changes) -> "ThermalModel":
