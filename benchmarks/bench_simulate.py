@@ -1,0 +1,191 @@
+"""Side by side: how fast and how close the ways of simulating a 4-hour mission at 1 s are.
+
+Run ``python benchmarks/bench_simulate.py --json bench_simulate.json``; prints JSON and writes it.
+
+Methods, one process, the thesis Fig. 7.7 mission (4 h) sampled every 1 s (14 400 steps), each
+timed as the median of several repeats (inputs prepared beforehand, outputs preallocated where the
+method allows):
+
+* ``c_linear`` / ``c_nonlinear`` -- generated C ``gt_simulate`` through ctypes
+  (:class:`genthermal.ccompile.CompiledModel`), exact zero-order hold / ETD2RK step;
+* ``casadi_linear`` / ``casadi_nonlinear`` -- CasADi in-process, ``DiscreteModel.simulator(N)``;
+* ``scipy_bdf_*`` / ``scipy_rk45_*`` -- ``scipy.integrate.solve_ivp`` on a numpy right-hand side,
+  segment by segment over the constant-input pieces, rtol = atol = 1e-8. Linear model:
+  ``A x + B u + c`` with A, B, c from the model's exact Jacobians. Nonlinear model: the right-hand
+  side is affine in x for a fixed input (copper resistance linear in temperature), so on each
+  piece ``f(x) = J(u) x + f(0, u)`` exactly, with ``J(u)`` and ``f(0, u)`` from the CasADi
+  functions (checked: ``jac_x`` does not depend on x);
+* ``floor_linear`` -- a plain hand-written C loop ``x <- A x + B u + c`` with the same A, B, c as
+  the exact linear step, compiled here with the library's flags: the floor for any 8-state step.
+
+``max_abs_diff_K`` compares every method with the BDF solution of the same model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from genthermal.ccompile import COMPILE_FLAGS, find_compiler
+from genthermal.codegen import model_library
+from genthermal.design import linear_design_model
+from genthermal.machines import build_model
+from genthermal.mission import load_mission
+
+MISSION = "thesis_fig_7_7"
+DT_S = 1.0
+TOLERANCE = 1e-8
+FLOOR_SOURCE = r"""
+#define NX %(nx)d
+#define NU %(nu)d
+void floor_simulate(const double* restrict A, const double* restrict B, const double* restrict c,
+                    const double* restrict x0, const double* restrict U, int n_steps, double* restrict X)
+{
+    int k, i, j;
+    for (k = 0; k < n_steps; ++k) {
+        const double* x = k ? X + (k - 1) * NX : x0;
+        const double* u = U + k * NU;
+        double* next = X + k * NX;
+        for (i = 0; i < NX; ++i) {
+            double sum = c[i];
+            for (j = 0; j < NX; ++j) sum += A[i * NX + j] * x[j];
+            for (j = 0; j < NU; ++j) sum += B[i * NU + j] * u[j];
+            next[i] = sum;
+        }
+    }
+}
+"""
+
+
+def median_time(function, repeats: int) -> float:
+    """Median wall time of ``function()`` over ``repeats`` calls (after one warm-up call), s."""
+    function()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def compile_floor(nx: int, nu: int, directory: Path):
+    """Compile the hand-written loop into a shared library and return its ctypes function."""
+    source = directory / "floor.c"
+    source.write_text(FLOOR_SOURCE % {"nx": nx, "nu": nu})
+    library = directory / "libfloor.so"
+    subprocess.run([*find_compiler(), "-shared", *COMPILE_FLAGS, "-o", str(library), str(source)], check=True)
+    function = ctypes.CDLL(str(library)).floor_simulate
+    function.restype = None
+    function.argtypes = [ctypes.c_void_p] * 5 + [ctypes.c_int, ctypes.c_void_p]
+    return function
+
+
+def constant_pieces(U: np.ndarray) -> list[tuple[int, int]]:
+    """(first, end) step indices of the runs of identical input rows."""
+    changes = np.flatnonzero(np.any(np.diff(U, axis=0) != 0.0, axis=1)) + 1
+    bounds = [0, *changes.tolist(), len(U)]
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+def affine_pieces(model, U: np.ndarray, pieces) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(J, f0) with f(x, u) = J x + f0 on every constant-input piece (exact: checked)."""
+    x = ca.SX.sym("x", model.n_states)
+    if ca.depends_on(model.functions["jac_x"](x, U[0], model.p0), x):
+        raise SystemExit("the right-hand side is not affine in x: use model.rhs for scipy instead")
+    zero = np.zeros(model.n_states)
+    return [(model.jacobian_x(zero, U[a]), model.rhs(zero, U[a])) for a, _ in pieces]
+
+
+def scipy_simulate(method: str, x0, pieces, affine, dt: float) -> np.ndarray:
+    """States after every step, integrating f = J x + f0 piece by piece with ``solve_ivp``."""
+    states, x = [], np.asarray(x0, dtype=float)
+    for (first, end), (J, f0) in zip(pieces, affine):
+        t_eval = np.arange(first + 1, end + 1) * dt
+        options = {"jac": J} if method == "BDF" else {}
+        solution = solve_ivp(lambda t, y, J=J, f0=f0: J @ y + f0, (first * dt, end * dt), x, method=method,
+                             t_eval=t_eval, rtol=TOLERANCE, atol=TOLERANCE, **options)
+        states.append(solution.y.T)
+        x = solution.y[:, -1]
+    return np.vstack(states)
+
+
+def run(repeats: int) -> dict:
+    """Measure every method; return the JSON-ready results."""
+    plant = build_model()
+    models = {"linear": linear_design_model(plant), "nonlinear": plant}
+    inputs = load_mission(MISSION).to_inputs(DT_S)
+    U = np.ascontiguousarray(inputs[list(plant.input_names)].to_numpy()[:-1])
+    n_steps, x0 = len(U), np.full(plant.n_states, U[0, plant.input_names.index("T_ambient")])
+    pieces = constant_pieces(U)
+    median_s, differences, results = {}, {}, {}
+    for variant, model in models.items():
+        compiled = model_library(model, dt_s=DT_S, prefix=f"bench_{variant}")
+        X = np.empty((n_steps, model.n_states))
+        median_s[f"c_{variant}"] = median_time(lambda: compiled.simulate(x0, U, out=X), repeats * 10)
+        results["c"] = X.copy()
+        simulator = model.discretise(DT_S).simulator(n_steps)
+        median_s[f"casadi_{variant}"] = median_time(lambda: simulator(x0, U.T), repeats)
+        results["casadi"] = np.asarray(simulator(x0, U.T)).T
+        affine = affine_pieces(model, U, pieces)
+        for method in ("BDF", "RK45"):
+            key = f"scipy_{method.lower()}"
+            median_s[f"{key}_{variant}"] = median_time(lambda: scipy_simulate(method, x0, pieces, affine, DT_S),
+                                                       max(repeats // 2, 1))
+            results[key] = scipy_simulate(method, x0, pieces, affine, DT_S)
+        if variant == "linear":
+            discrete = model.discretise(DT_S)
+            A, B, c = (np.ascontiguousarray(m) for m in (discrete.A, discrete.B, discrete.c))
+            with tempfile.TemporaryDirectory() as scratch:
+                floor = compile_floor(model.n_states, len(model.input_names), Path(scratch))
+                pointers = [a.ctypes.data for a in (A, B, c, x0, U)]
+                median_s["floor_linear"] = median_time(lambda: floor(*pointers, n_steps, X.ctypes.data),
+                                                       repeats * 10)
+            results["floor"] = X.copy()
+        reference = results.pop("scipy_bdf")
+        differences[variant] = {k: float(np.max(np.abs(v - reference))) for k, v in results.items()}
+        results.clear()
+    ratios = {
+        "c_over_floor": {v: median_s[f"c_{v}"] / median_s["floor_linear"] for v in models},
+        "scipy_bdf_over_c": {v: median_s[f"scipy_bdf_{v}"] / median_s[f"c_{v}"] for v in models},
+        "casadi_over_c": {v: median_s[f"casadi_{v}"] / median_s[f"c_{v}"] for v in models},
+    }
+    worst = max(max(d.values()) for d in differences.values())
+    return {
+        "mission": MISSION, "duration_h": n_steps * DT_S / 3600.0, "dt_s": DT_S, "n_steps": n_steps,
+        "input_pieces": len(pieces), "repeats": repeats, "compiler": find_compiler(),
+        "flags": " ".join(COMPILE_FLAGS),
+        "scipy_rhs": {"linear": "numpy A x + B u + c (exact Jacobians of the design model)",
+                      "nonlinear": "numpy J(u) x + f(0,u) per constant-input piece, exact (f affine in x)"},
+        "median_s": median_s, "ratios": ratios, "max_abs_diff_K": differences,
+        "targets": {"c_linear_within_3x_floor": ratios["c_over_floor"]["linear"] <= 3.0,
+                    "c_nonlinear_within_6x_floor": ratios["c_over_floor"]["nonlinear"] <= 6.0,
+                    "c_at_least_100x_faster_than_scipy_bdf": min(ratios["scipy_bdf_over_c"].values()) >= 100.0,
+                    "methods_agree_within_0.01_K": worst <= 0.01},
+    }
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", required=True, help="file to write the results to")
+    parser.add_argument("--repeats", type=int, default=7, help="repeats of the slow methods (C: 10x)")
+    args = parser.parse_args(argv)
+    results = run(args.repeats)
+    text = json.dumps(results, indent=2)
+    Path(args.json).write_text(text + "\n")
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

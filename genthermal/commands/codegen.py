@@ -1,0 +1,49 @@
+"""``genthermal codegen --out DIR [--variant nonlinear|linear] [--dt 10]``: C code of the model.
+
+Writes the CasADi-generated sources, their header, the ABI layer (``gt.c``, ``gt.h``), the
+example program with its Makefile and ``ABI.md`` into DIR, then compiles ``libgt.so`` there. The
+sources are written before compiling, so without a C compiler they are still there; the command
+then prints why nothing was compiled and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from ..ccompile import compile_library
+from ..codegen import TEMPLATE_DIR, generate_c
+from ._common import add_model_arguments, model_from_args, positive_float
+
+#: Files of ``codegen/`` copied next to the generated sources so that ``make -C DIR`` works.
+COMPANION_FILES = ("example_mission.c", "Makefile", "ABI.md")
+
+
+def register(subparsers) -> None:
+    """Add the ``codegen`` sub-command."""
+    parser = subparsers.add_parser(
+        "codegen", help="generate C code of the model and compile it",
+        description="Write C sources of the model's discrete step, right-hand side, Jacobians and "
+        "outputs behind a stable ABI (see ABI.md), an example program and its Makefile, and compile "
+        "a shared library with the system C compiler.")
+    parser.add_argument("--out", required=True, help="directory to write (created)")
+    parser.add_argument("--dt", default="10", help="step of gt_step and gt_simulate in s (default 10)")
+    add_model_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Generate, copy the companion files, compile; print what was written."""
+    dt = positive_float("--dt", args.dt)
+    model = model_from_args(args)
+    out = Path(args.out)
+    generated = generate_c(model, out, dt_s=dt)
+    companions = [Path(shutil.copyfile(TEMPLATE_DIR / name, out / name)) for name in COMPANION_FILES]
+    step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"
+    print(f"{model.name}: C code with dt = {dt:g} s ({step}) in {out}")
+    for path in (*generated.headers, *generated.sources, *companions):
+        print(f"  wrote {path.name}")
+    library = compile_library(generated, out)
+    print(f"  wrote {library.name} (callers provide {generated.work_size} double(s) of work memory)")
+    print(f"build the example program with: make -C {out}")
+    return 0
