@@ -87,6 +87,39 @@ class ModelSpec:
     effects: tuple = ()
 
 
+def kron_reduce(G: dict, r: dict, massless) -> list:
+    r"""Eliminate massless nodes from the balance ``0 = sum_j G[k][j] theta_j + r[k]`` in place.
+
+    Node by node (fewest couplings first, so the fill-in stays small), row ``k`` gives
+    :math:`\theta_k = -(\sum_{j\ne k} G_{kj}\theta_j + r_k)/G_{kk}`, which is substituted into
+    every row that couples to ``k``. This is the Schur complement computed with the network's
+    sparsity (an 11-node symbolic ``solve`` fills in densely).
+
+    Returns
+    -------
+    list of (k, row, diagonal, remainder)
+        Elimination record for back-substitution, in elimination order.
+    """
+    remaining = set(massless)
+    record = []
+    while remaining:
+        k = min(remaining, key=lambda node: (len(G[node]), node))
+        remaining.remove(k)
+        row = G.pop(k)
+        diagonal = row.pop(k)
+        remainder = r.pop(k)
+        record.append((k, row, diagonal, remainder))
+        for i, coupling in G.items():
+            g_ik = coupling.pop(k, None)
+            if g_ik is None:
+                continue
+            factor = g_ik / diagonal
+            for j, g_kj in row.items():
+                coupling[j] = coupling.get(j, 0) - factor * g_kj
+            r[i] = r[i] - factor * remainder
+    return record
+
+
 class ThermalModel:
     """A thermal network with numeric parameters, compiled to CasADi functions.
 
@@ -206,46 +239,44 @@ class ThermalModel:
         caps = to_casadi([net.node(n).capacitance for n in self.state_names], symbols, values)
         powers = to_casadi([s.power for s in net.heat_sources], symbols, values)
 
-        n_int, n_b = len(internal), len(self.boundary_names)
-        G = ca.SX.zeros(n_int, n_int)
-        Gb = ca.SX.zeros(n_int, n_b)
+        # sparse conductance rows: G[i][j] (W/K) and the remainder r[i] = (G_b b + q)_i (W)
+        G: dict[int, dict[int, ca.SX]] = {i: {} for i in range(len(internal))}
+        r = {i: ca.SX(0) for i in range(len(internal))}
+
+        def couple(row, column, g):
+            if column in index:
+                G[row][index[column]] = G[row].get(index[column], 0) + g
+            else:
+                boundary_input = self.spec.boundary_inputs[column]
+                r[row] = r[row] + g * u[INPUT_NAMES.index(boundary_input)]
+
         for link, R in zip(net.links, link_R):
-            g = 1 / R
             for me, other in ((link.a, link.b), (link.b, link.a)):
                 if me in index:
-                    G[index[me], index[me]] -= g
-                    if other in index:
-                        G[index[me], index[other]] += g
-                    else:
-                        Gb[index[me], b_index[other]] += g
+                    G[index[me]][index[me]] = G[index[me]].get(index[me], 0) - 1 / R
+                    couple(index[me], other, 1 / R)
         for stream, R in zip(net.air_streams, stream_R):
-            g = 1 / R
             down = index[stream.downstream]
-            G[down, down] -= g
-            if stream.upstream in index:
-                G[down, index[stream.upstream]] += g
-            else:
-                Gb[down, b_index[stream.upstream]] += g
-        q = ca.SX.zeros(n_int)
+            G[down][down] = G[down].get(down, 0) - 1 / R
+            couple(down, stream.upstream, 1 / R)
+        nx = self.n_states
+        q = ca.SX.zeros(len(internal))
         for source, power in zip(net.heat_sources, powers):
             q[index[source.node]] += power
-        boundary = ca.vertcat(*[u[INPUT_NAMES.index(self.spec.boundary_inputs[b])] for b in self.boundary_names])
-
-        nx = self.n_states
-        # heat sources may depend on state temperatures only (massless temperatures are not known
-        # before the elimination); substitute the placeholder of every massless node by zero and
-        # check that nothing depended on it
-        q = ca.substitute(q, theta_internal, ca.vertcat(x, ca.SX.zeros(n_int - nx)))
-        if ca.depends_on(q, theta_internal):
+        # heat sources may depend on state temperatures only: massless temperatures are unknown
+        # until the elimination
+        if ca.depends_on(q, theta_internal[nx:]):
             raise InputError("heat_sources", "theta of a massless node", "heat sources may depend on "
                              "capacitive node temperatures only")
-        Gxx, Gxz, Gzx, Gzz = G[:nx, :nx], G[:nx, nx:], G[nx:, :nx], G[nx:, nx:]
-        rhs_z = ca.horzcat(Gzx, Gb[nx:, :], q[nx:])
-        elim = ca.solve(Gzz, rhs_z)  # G_zz^{-1} [G_zx, G_zb, q_z]
-        z = -(elim[:, :nx] @ x + elim[:, nx:nx + n_b] @ boundary + elim[:, -1])
-        power_balance = Gxx @ x + Gxz @ z + Gb[:nx, :] @ boundary + q[:nx]
-        xdot = power_balance / ca.vertcat(*caps)
-        nodes = ca.vertcat(x, z)
+        q = ca.substitute(q, theta_internal[:nx], x)
+        for i in r:
+            r[i] = r[i] + q[i]
+        eliminated = kron_reduce(G, r, range(nx, len(internal)))
+        xdot = ca.vertcat(*[(sum(G[i][j] * x[j] for j in G[i]) + r[i]) / caps[i] for i in range(nx)])
+        theta = {i: x[i] for i in range(nx)}
+        for k, row, diagonal, remainder in reversed(eliminated):
+            theta[k] = -(sum(g * theta[j] for j, g in row.items()) + remainder) / diagonal
+        nodes = ca.vertcat(*[theta[i] for i in range(len(internal))])
         sensor_idx = [index[self.spec.sensors[o]] for o in self.output_names]
         return {"x": x, "u": u, "p": p, "xdot": xdot, "nodes": nodes,
                 "y": nodes[sensor_idx], "heat": ca.sum1(q), "internal": internal}
