@@ -13,7 +13,8 @@ import pandas as pd  # noqa: E402
 LIMIT_C = 110.0
 
 
-def _finish(fig, path):
+def finish_figure(fig, path=None):
+    """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it."""
     fig.tight_layout()
     if path is not None:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -58,7 +59,7 @@ def plot_simulation(result: pd.DataFrame, title: str = "", path=None, limit_C: f
     ax_t.grid(alpha=0.3)
     if title:
         ax_i.set_title(title)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def plot_comparison(results: dict[str, pd.DataFrame], columns=("T_winding", "T_iron"), title: str = "",
@@ -82,4 +83,4 @@ def plot_comparison(results: dict[str, pd.DataFrame], columns=("T_winding", "T_i
     axes[-1, 0].set_xlabel("time [h]")
     if title:
         axes[0, 0].set_title(title)
-    return _finish(fig, path)
+    return finish_figure(fig, path)

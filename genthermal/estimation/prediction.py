@@ -1,0 +1,270 @@
+r"""n-step prediction from the Kalman-filtered state (thesis 6.2.4, 6.3.2).
+
+Up to the start time :math:`T_{pred}` the filter updates the design model's state with the
+measurements; from there the model runs open loop (thesis eqs 6.16-6.17):
+:math:`\hat x_{k+1} = A\hat x_k + Bu_k + c`, :math:`\hat y_k = C\hat x_k + e`, starting from the
+filtered state :math:`\hat x_{k_s}` at the start sample :math:`k_s` (the nearest sample to
+:math:`T_{pred}`). The *open-loop model* is the same design model run from the first sample of
+the record, its state set from the first measured temperatures
+(:func:`~genthermal.estimation.kalman.initial_state_from_measurements`), never updated.
+
+Period of increased accuracy (thesis Fig. 6.10), per start and sensor. With the errors
+:math:`e_p(k) = \hat y_p(k) - y(k)` of the prediction and :math:`e_o(k) = \hat y_o(k) - y(k)` of
+the open-loop model, each smoothed by a trailing mean over ``smoothing_min`` minutes of the samples
+from :math:`k_s` on (missing measurements skipped), written :math:`\bar e_p, \bar e_o`, the period
+ends at the first sample :math:`k \ge k_s` with
+
+.. math::
+    |\bar e_p(k)| \ge |\bar e_o(k)| - \delta,
+
+:math:`\delta` = ``margin_K``: the prediction counts as better only while it beats the open-loop
+model by at least :math:`\delta`. The margin is needed because the prediction converges to the
+open-loop trajectory (both are the same model with the same inputs, and the difference decays as
+:math:`CA^k(\hat x_{k_s} - x^o_{k_s})`): where the open-loop error keeps one sign, as it does for a
+plant whose parameters differ from the model's, :math:`|\bar e_p|` approaches :math:`|\bar e_o|`
+from below and, without a margin, would never reach it. A period that has not ended when the record
+does is reported as its lower bound, the time to the end of the record, and flagged *censored*
+(the thesis discarded its 175 min iron result for this reason).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..measurements import MeasurementData, dataframe_to_measurements, resample
+from ..model import ThermalModel
+from ..simulate import input_matrix
+from .filter_result import FilterResult, rms
+from .kalman import KalmanFilter, initial_state_from_measurements
+
+#: Prediction start times of thesis Fig. 6.10, min from the start of the record.
+THESIS_STARTS_MIN = (50, 75, 100, 125, 150, 175)
+#: Trailing window over which the errors are averaged before they are compared, min.
+DEFAULT_SMOOTHING_MIN = 5.0
+#: Smallest improvement over the open-loop model counted as an improvement, K.
+DEFAULT_MARGIN_K = 0.25
+
+
+def check_start_times(starts_min, duration_min: float, field: str = "starts_min") -> tuple[float, ...]:
+    """Return the start times (min) as floats, or raise InputError naming ``field`` and the value:
+    each must be a finite number, >= 0 and before the end of the record (``duration_min``)."""
+    checked = []
+    for value in starts_min:
+        try:
+            start = float(value)
+        except (TypeError, ValueError):
+            raise InputError(field, value, "a start time must be a number of minutes") from None
+        if not np.isfinite(start) or start < 0:
+            raise InputError(field, value, "a start time must be a finite number of minutes >= 0")
+        if start >= duration_min:
+            raise InputError(field, value, f"beyond the data: the record lasts {duration_min:g} min")
+        checked.append(start)
+    if not checked:
+        raise InputError(field, list(starts_min), "give at least one start time")
+    return tuple(checked)
+
+
+def on_grid(data: MeasurementData, dt_s: float) -> MeasurementData:
+    """``data`` itself if it is sampled every ``dt_s`` already (so its missing samples stay
+    missing), else :func:`genthermal.measurements.resample` of it."""
+    steps = np.diff(data.time_s)
+    if steps.size and np.max(np.abs(steps - dt_s)) <= 1e-6 * dt_s:
+        return data
+    return resample(data, dt_s)
+
+
+def open_loop_outputs(kalman: KalmanFilter, x_start, U: np.ndarray) -> np.ndarray:
+    """Outputs (°C, n × n_outputs) of the design model run open loop from ``x_start`` at sample
+    0 with inputs ``U`` (n_inputs × n): row k is :math:`C x_k + e`."""
+    x = np.asarray(x_start, dtype=float)
+    Y = np.empty((U.shape[1], len(kalman.output_names)))
+    for k in range(U.shape[1]):
+        Y[k] = kalman.C @ x + kalman.e
+        x, _ = kalman.predict(x, None, U[:, k])
+    return Y
+
+
+def improved_period(prediction_error, open_loop_error, window_samples: int,
+                    margin_K: float = DEFAULT_MARGIN_K) -> tuple[int, bool]:
+    """Samples from the start until the prediction stops beating the open loop (module docstring).
+
+    Parameters
+    ----------
+    prediction_error, open_loop_error : array_like
+        Errors (K) from the start sample on, NaN where not measured.
+    window_samples : int
+        Length of the trailing mean.
+    margin_K : float
+        :math:`\\delta`, K.
+
+    Returns
+    -------
+    (int, bool)
+        Number of samples of the period and whether it was censored by the end of the record.
+        A sample whose window holds no measurement is not judged (it does not end the period).
+    """
+    errors = pd.DataFrame({"p": prediction_error, "o": open_loop_error})
+    smooth = errors.rolling(window_samples, min_periods=1).mean()
+    not_better = np.flatnonzero(smooth["p"].abs() >= smooth["o"].abs() - margin_K)
+    if not_better.size == 0:
+        return len(smooth) - 1, True
+    return int(not_better[0]), False
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PredictionStudy:
+    """Filter, open-loop and n-step prediction errors on one record (thesis 6.3).
+
+    Attributes
+    ----------
+    filter_result : FilterResult
+    open_loop : numpy.ndarray
+        Open-loop model outputs, °C (n × n_outputs).
+    predictions : dict of float to numpy.ndarray
+        Start (min) → predicted outputs from the start sample to the end, °C.
+    start_indices : dict of float to int
+        Start (min) → start sample.
+    improved_minutes : dict of float to dict of str to float
+        Start → sensor → period of increased accuracy, min (lower bound when censored).
+    censored : dict of float to list of str
+        Start → sensors whose period had not ended when the record did.
+    smoothing_min, margin_K : float
+        Settings of the period (module docstring).
+    """
+
+    filter_result: FilterResult
+    open_loop: np.ndarray
+    predictions: dict
+    start_indices: dict
+    improved_minutes: dict
+    censored: dict
+    smoothing_min: float
+    margin_K: float
+
+    @property
+    def output_names(self) -> list[str]:
+        """Names of the sensors compared."""
+        return self.filter_result.output_names
+
+    @property
+    def filter_rmse(self) -> dict[str, float]:
+        """RMS of filtered − measured per sensor, K."""
+        return self.filter_result.rmse()
+
+    @property
+    def open_loop_rmse(self) -> dict[str, float]:
+        """RMS of open-loop − measured per sensor, K."""
+        error = self.open_loop - self.filter_result.measured
+        return {name: rms(error[:, i]) for i, name in enumerate(self.output_names)}
+
+    def to_json(self) -> dict:
+        """A JSON-ready dict: ``filter_rmse``, ``open_loop_rmse`` (sensor → K), ``improved_minutes``
+        (start label → sensor → min), plus ``one_step_rmse``, ``improved_minutes_censored``
+        (start label → sensors), ``smoothing_min``, ``margin_K`` and the ``definition``."""
+        label = {start: f"{start:g}" for start in self.improved_minutes}
+        return {
+            "filter_rmse": self.filter_rmse,
+            "one_step_rmse": self.filter_result.rmse(one_step=True),
+            "open_loop_rmse": self.open_loop_rmse,
+            "improved_minutes": {label[s]: dict(v) for s, v in self.improved_minutes.items()},
+            "improved_minutes_censored": {label[s]: list(v) for s, v in self.censored.items() if v},
+            "smoothing_min": self.smoothing_min,
+            "margin_K": self.margin_K,
+            "definition": (f"minutes from the start until the {self.smoothing_min:g}-min trailing mean of the "
+                           "|prediction error| first comes within margin_K of that of the |open-loop error|; "
+                           "censored values are lower bounds (the record ended first)"),
+        }
+
+    def plot(self, path=None):
+        """Prediction errors per sensor against the open-loop and filter errors (thesis Figs 6.8,
+        6.9) and the periods of increased accuracy against the start time (Fig. 6.10)."""
+        from ..plots import finish_figure, plt
+
+        result = self.filter_result
+        minutes = (result.time_s - result.time_s[0]) / 60.0
+        names = self.output_names
+        fig, axes = plt.subplots(len(names) + 1, 1, figsize=(9, 3.2 * (len(names) + 1)))
+        for i, (name, ax) in enumerate(zip(names, axes)):
+            measured = result.measured[:, i]
+            ax.plot(minutes, self.open_loop[:, i] - measured, color="0.4", lw=1, label="open loop")
+            ax.plot(minutes, result.outputs[:, i] - measured, color="k", lw=0.6, label="Kalman filter")
+            for start, predicted in self.predictions.items():
+                k = self.start_indices[start]
+                ax.plot(minutes[k:], predicted[:, i] - measured[k:], lw=1.2, label=f"prediction from {start:g} min")
+            ax.axhline(0, color="0.7", lw=0.5)
+            ax.set(ylabel=f"{name} error [K]", title=f"{name}: model − measured")
+            ax.grid(alpha=0.3)
+        axes[0].legend(fontsize=7, ncol=3)
+        axes[len(names) - 1].set_xlabel("time [min]")
+        starts = list(self.improved_minutes)
+        for name in names:
+            values = [self.improved_minutes[s][name] for s in starts]
+            line, = axes[-1].plot(starts, values, "o-", label=name)
+            censored = [(s, v) for s, v in zip(starts, values) if name in self.censored[s]]
+            if censored:
+                axes[-1].plot(*zip(*censored), "^", color=line.get_color(), ms=9, mfc="none")
+        axes[-1].set(xlabel="prediction start [min]", ylabel="increased accuracy [min]",
+                     title=f"Period of increased accuracy (margin {self.margin_K:g} K; ^ = record ended first)")
+        axes[-1].legend(fontsize=8)
+        axes[-1].grid(alpha=0.3)
+        return finish_figure(fig, path)
+
+
+def prediction_study(design_model: ThermalModel, data, starts_min=THESIS_STARTS_MIN, dt_s: float = 10.0,
+                     kalman: KalmanFilter | None = None, smoothing_min: float = DEFAULT_SMOOTHING_MIN,
+                     margin_K: float = DEFAULT_MARGIN_K, steady_state: bool = False) -> PredictionStudy:
+    """Filter a record, run the open-loop model, and predict from each start (thesis 6.3).
+
+    Parameters
+    ----------
+    design_model : ThermalModel
+        The linear design model.
+    data : MeasurementData or pandas.DataFrame
+        The record (CSV schema of :mod:`genthermal.measurements`), put on the ``dt_s`` grid by
+        :func:`on_grid`.
+    starts_min : sequence of float
+        Prediction start times, min after the first sample (see :func:`check_start_times`).
+    dt_s : float
+        Model and filter step, s.
+    kalman : KalmanFilter, optional
+        The filter to use (its ``dt_s`` must equal ``dt_s``); default ``KalmanFilter(design_model,
+        dt_s)`` with its default Q and R.
+    smoothing_min, margin_K : float
+        Window of the trailing mean (min) and margin :math:`\\delta` (K) of the period of
+        increased accuracy (module docstring).
+    steady_state : bool
+        Filter with the steady-state gain.
+    """
+    data = on_grid(data if isinstance(data, MeasurementData) else dataframe_to_measurements(data), dt_s)
+    kalman = kalman or KalmanFilter(design_model, dt_s)
+    if abs(kalman.dt_s - dt_s) > 1e-9 * dt_s:
+        raise InputError("kalman.dt_s", kalman.dt_s, f"must equal dt_s = {dt_s:g} s")
+    if not (np.isfinite(smoothing_min) and smoothing_min > 0):
+        raise InputError("smoothing_min", smoothing_min, "must be a positive number of minutes")
+    if not (np.isfinite(margin_K) and margin_K >= 0):
+        raise InputError("margin_K", margin_K, "must be a number of kelvin >= 0")
+    time_s = data.time_s
+    starts = check_start_times(starts_min, (time_s[-1] - time_s[0]) / 60.0)
+    inputs = data.frame[["time_s", *design_model.input_names]]
+    result = kalman.run(inputs, data.sensors, steady_state=steady_state)
+    U, Y = input_matrix(inputs), result.measured
+    open_loop = open_loop_outputs(kalman, initial_state_from_measurements(design_model, Y[0], U[:, 0]), U)
+    window = max(1, int(round(smoothing_min * 60.0 / dt_s)))
+    predictions, indices, improved, censored = {}, {}, {}, {}
+    for start in starts:
+        k = int(round(start * 60.0 / dt_s))
+        indices[start] = k
+        predictions[start] = open_loop_outputs(kalman, result.states[k], U[:, k:])
+        improved[start], censored[start] = {}, []
+        for i, name in enumerate(result.output_names):
+            samples, was_censored = improved_period(predictions[start][:, i] - Y[k:, i],
+                                                    open_loop[k:, i] - Y[k:, i], window, margin_K)
+            improved[start][name] = samples * dt_s / 60.0
+            if was_censored:
+                censored[start].append(name)
+    return PredictionStudy(result, open_loop, predictions, indices, improved, censored,
+                           float(smoothing_min), float(margin_K))
