@@ -283,6 +283,9 @@ def test_cli_codegen_writes_sources_library_and_example(libraries, tmp_path, cap
     for name in ("gt.h", "gt.c", "gt_casadi.h", "gt_casadi_step.c", "gt_casadi_jac_p_row.c",
                  "example_mission.c", "Makefile", "ABI.md"):
         assert (tmp_path / name).is_file() and f"wrote {name}" in out
+    header = (tmp_path / "gt.h").read_text()
+    for entry in ("gt_kalman_update", "gt_predict"):  # the filter of the design model comes along
+        assert f"int {entry}(" in header and f"extra entry point {entry}" in out
     library = next(tmp_path.glob("libgt.*"))
     loaded = CompiledModel(library, libraries["nonlinear"][0])
     assert loaded.n_states == 8 and loaded.dt_s == 10.0
@@ -291,6 +294,8 @@ def test_cli_codegen_writes_sources_library_and_example(libraries, tmp_path, cap
 def test_cli_rejects_bad_step(tmp_path, capsys):
     assert main(["codegen", "--out", str(tmp_path), "--dt", "-1"]) == 2
     assert "--dt" in capsys.readouterr().err
+    assert main(["codegen", "--out", str(tmp_path), "--predict-steps", "0"]) == 2
+    assert "--predict-steps" in capsys.readouterr().err
 
 
 def test_compilation_errors_quote_the_compiler(tmp_path):

@@ -13,6 +13,8 @@ from pathlib import Path
 
 from ..ccompile import compile_library
 from ..codegen import TEMPLATE_DIR, generate_c
+from ..design import linear_design_model
+from ..estimation.kalman import embedded_functions
 from ._common import add_model_arguments, model_from_args, positive_float
 
 #: Files of ``codegen/`` copied next to the generated sources so that ``make -C DIR`` works.
@@ -28,6 +30,11 @@ def register(subparsers) -> None:
         "a shared library with the system C compiler.")
     parser.add_argument("--out", required=True, help="directory to write (created)")
     parser.add_argument("--dt", default="10", help="step of gt_step and gt_simulate in s (default 10)")
+    parser.add_argument("--no-kalman", dest="kalman", action="store_false",
+                        help="leave out the Kalman filter update and n-step prediction (on the linear "
+                        "design model of the same machine), included by default")
+    parser.add_argument("--predict-steps", default="180",
+                        help="horizon of <prefix>_predict in steps (default 180: 30 min at 10 s)")
     add_model_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -37,10 +44,17 @@ def run(args) -> int:
     dt = positive_float("--dt", args.dt)
     model = model_from_args(args)
     out = Path(args.out)
-    generated = generate_c(model, out, dt_s=dt)
+    extra = None
+    if args.kalman:
+        steps = positive_float("--predict-steps", args.predict_steps)
+        design = model if model.is_affine else linear_design_model(model)
+        extra = embedded_functions(design, dt_s=dt, predict_steps=steps)
+    generated = generate_c(model, out, dt_s=dt, extra_functions=extra)
     companions = [Path(shutil.copyfile(TEMPLATE_DIR / name, out / name)) for name in COMPANION_FILES]
     step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"
     print(f"{model.name}: C code with dt = {dt:g} s ({step}) in {out}")
+    for signature in generated.extra_functions:
+        print(f"  extra entry point gt_{signature.name}")
     for path in (*generated.headers, *generated.sources, *companions):
         print(f"  wrote {path.name}")
     library = compile_library(generated, out)

@@ -333,3 +333,28 @@ def _covariance(name: str, value, size: int) -> np.ndarray:
     if not np.allclose(matrix, matrix.T) or np.min(np.linalg.eigvalsh(matrix)) < -tolerance:
         raise InputError(name, matrix.tolist(), "a covariance must be symmetric positive semi-definite")
     return matrix
+
+
+def embedded_functions(design_model: ThermalModel, dt_s: float = 10.0, predict_steps: int = 180) -> dict:
+    """The filter's CasADi functions for the generated C library (steady-state gain).
+
+    Parameters
+    ----------
+    design_model : ThermalModel
+        The linear design model the filter runs on.
+    dt_s : float
+        Filter step, s.
+    predict_steps : int
+        Horizon of the n-step prediction, steps (default 180: 30 min at 10 s).
+
+    Returns
+    -------
+    dict
+        ``{"kalman_update": (x_pred, u, y) -> (x_filtered, x_next_pred),
+        "predict": (x, U) -> Y}`` for :func:`genthermal.codegen.generate_c`'s ``extra_functions``.
+    """
+    if int(predict_steps) != predict_steps or predict_steps < 1:
+        raise InputError("predict_steps", predict_steps, "must be a positive whole number of steps")
+    kalman = KalmanFilter(design_model, dt_s=dt_s)
+    return {"kalman_update": kalman.update_function(), "predict": kalman.predict_function(int(predict_steps))}
+
