@@ -1,0 +1,21 @@
+"""The main job, ``genthermal demo``, end to end on the built-in defaults."""
+
+import json
+
+from genthermal.cli import main
+
+
+def test_demo_runs_end_to_end(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path)]) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["model"]["nodes"] == {"all_nodes": 19, "without_intermediate": 12, "states": 8}
+    assert summary["simulation"]["peak_T_winding"] < 110.0
+    assert summary["blockage"]["peak_T_winding"] > 110.0  # the fault the load management must fix
+    if summary["c_library"]["compiled"]:
+        assert summary["c_library"]["max_abs_difference_K"] < 1e-9
+    assert max(summary["estimation"]["filter_rmse"].values()) < 1.0
+    for minutes in summary["estimation"]["improved_minutes"].values():
+        assert min(minutes.values()) >= 20.0
+    for picture in ("mission_healthy.png", "blockage.png", "design_vs_simulation.png", "prediction.png"):
+        assert (tmp_path / picture).stat().st_size > 10_000
+    assert "Kalman filter" in capsys.readouterr().out
