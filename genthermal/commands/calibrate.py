@@ -1,0 +1,50 @@
+"""``genthermal calibrate MODEL DATA.csv --params k_cr,h_end_air --out model.yaml``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..model_file import load_model, save_model
+from .compare import add_model_and_data_arguments, data_step
+
+
+def register(subparsers) -> None:
+    """Add the ``calibrate`` sub-command."""
+    parser = subparsers.add_parser("calibrate", help="fit model parameters to measurements",
+                                   description="Least-squares fit of the named parameters (IPOPT, exact "
+                                   "derivatives, bounds from the parameters' physical ranges) with 95 % "
+                                   "confidence intervals and identifiability warnings.")
+    add_model_and_data_arguments(parser)
+    parser.add_argument("--params", required=True, metavar="NAMES",
+                        help="comma-separated parameter names, e.g. k_cr,h_end_air,R0")
+    parser.add_argument("--out", metavar="FILE", help="write the calibrated model as a YAML model file")
+    parser.add_argument("--json", metavar="FILE", help="write the fit summary as JSON")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Calibrate, print the table and warnings, write the model file."""
+    from ..diagnose.calibrate import calibrate, check_parameter_names
+
+    model = load_model(args.model)
+    names = check_parameter_names(model, args.params.split(","), "--params")
+    result = calibrate(model, args.data, names, data_step(args))
+    summary = result.to_dict()
+    print(f"{model.name}: {len(names)} parameter(s) fitted to {args.data} "
+          f"({'converged' if result.converged else 'NOT converged'})")
+    for row in summary["parameters"]:
+        low, high = row["ci95"]
+        print(f"  {row['name']:>14s} = {row['value']:.6g} {row['unit']}  (start {row['start']:.6g}; "
+              f"95 % CI {low:.6g} .. {high:.6g})")
+    print(f"  RMSE {summary['rmse_before']:.3f} K -> {summary['rmse_after']:.3f} K; "
+          f"condition number {summary['condition_number']:.3g}")
+    for warning in result.warnings:
+        print(f"  warning: {warning}")
+    if args.out:
+        print(f"wrote {save_model(result.model, args.out)}")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(summary, indent=2))
+        print(f"wrote {args.json}")
+    return 0

@@ -1,0 +1,57 @@
+"""``genthermal compare MODEL DATA.csv [--report DIR] [--json FILE] [--dt S]``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..model_file import load_model
+from ._common import positive_float
+
+
+def add_model_and_data_arguments(parser) -> None:
+    """``MODEL`` (built-in name or model file), ``DATA`` (CSV) and ``--dt``."""
+    parser.add_argument("model", metavar="MODEL",
+                        help="genco_rf201a, genco_rf201a:linear or a YAML model file (genthermal calibrate --out)")
+    parser.add_argument("data", metavar="DATA", help="measurements CSV (time_s, I_u, I_v, I_w, I_exc, T_inlet, "
+                        "T_ambient, T_winding_u, T_winding_v, T_winding_w, T_iron)")
+    parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step)")
+
+
+def data_step(args) -> float | None:
+    """The ``--dt`` option as seconds, or None."""
+    return None if args.dt is None else positive_float("--dt", args.dt)
+
+
+def register(subparsers) -> None:
+    """Add the ``compare`` sub-command."""
+    parser = subparsers.add_parser("compare", help="compare a model with measurements",
+                                   description="Simulate MODEL on the measured inputs of DATA from the measured "
+                                   "initial temperatures; report RMSE, MAE, max error, bias and R² per sensor, "
+                                   "split by load band, temperature band, heating/cooling and hour, with plots.")
+    add_model_and_data_arguments(parser)
+    parser.add_argument("--report", metavar="DIR", help="write report.md, metrics.json and plots into DIR")
+    parser.add_argument("--json", metavar="FILE", help="write the metrics as JSON to FILE")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Compare and print the per-sensor metrics."""
+    from ..diagnose.compare import compare
+
+    model = load_model(args.model)
+    comparison = compare(model, args.data, data_step(args))
+    print(f"{model.name} on {comparison.source}: {comparison.metrics['samples']} samples")
+    for name, m in comparison.metrics["overall"].items():
+        r2 = "n/a" if m["r2"] is None else f"{m['r2']:.4f}"
+        print(f"  {name}: RMSE {m['rmse']:.3f} K, MAE {m['mae']:.3f} K, max {m['max_abs']:.3f} K, "
+              f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(comparison.metrics, indent=2))
+        print(f"wrote {args.json}")
+    if args.report:
+        from ..diagnose.report import write_compare_report
+
+        print(f"wrote {write_compare_report(comparison, args.report)}")
+    return 0

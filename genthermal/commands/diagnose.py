@@ -1,0 +1,55 @@
+"""``genthermal diagnose MODEL DATA.csv [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..model_file import load_model, save_model
+from .compare import add_model_and_data_arguments, data_step
+
+
+def register(subparsers) -> None:
+    """Add the ``diagnose`` sub-command."""
+    parser = subparsers.add_parser("diagnose", help="find the physical effect a model lacks",
+                                   description="Fit every catalogue effect the model lacks (parameters and "
+                                   "onset), rank by ΔBIC, and say which one explains the data, or 'none'.")
+    add_model_and_data_arguments(parser)
+    parser.add_argument("--baseline", metavar="HEALTHY", help="healthy measurements: calibrate the uncertain "
+                        "parameters on them first")
+    parser.add_argument("--json", metavar="FILE", help="write the diagnosis (ranked, verdict, ...) as JSON")
+    parser.add_argument("--iterate", action="store_true", help="add the best effect and search again until "
+                        "nothing is significant")
+    parser.add_argument("--report", metavar="DIR", help="write report.md, diagnosis.json and plots into DIR")
+    parser.add_argument("--out", metavar="FILE", help="write the model with the found effects as a model file")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Diagnose and print the ranking and verdict."""
+    from ..diagnose.discover import diagnose
+
+    model = load_model(args.model)
+    result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args))
+    document = result.to_dict()
+    print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
+    for c in document["ranked"]:
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in c["params"].items())
+        print(f"  {c['effect']:>32s}: {params:<22s} onset {c['onset_s'] / 3600:5.2f} h  RMSE "
+              f"{c['rmse_before']:.3f} -> {c['rmse_after']:.3f} K  ΔBIC {c['delta_ic']:9.1f}"
+              f"{'  *' if c['significant'] else ''}")
+    for k, iteration in enumerate(document["iterations"][1:], start=2):
+        print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
+    print(f"verdict: {document['verdict']}")
+    print(document["explanation"])
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(document, indent=2))
+        print(f"wrote {args.json}")
+    if args.report:
+        from ..diagnose.report import write_diagnosis_report
+
+        print(f"wrote {write_diagnosis_report(result, args.report)}")
+    if args.out:
+        print(f"wrote {save_model(result.improved_model(), args.out, {f.effect: f.onset_s for f in result.found})}")
+    return 0

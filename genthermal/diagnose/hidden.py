@@ -1,0 +1,206 @@
+r"""Test data with a hidden physical effect: a known answer for the discovery loop.
+
+A catalogue effect is injected into a mission run of the plant from an onset time (the model
+switches as :func:`genthermal.simulate.simulate` does with ``switches``), and the run is read
+through the rig's noisy sensors by :func:`genthermal.synth.synthesize`. Since the sensor noise is
+additive, the noisy record of the plant *with* the effect is the synthesized record of the plant
+without it plus the noise-free difference the effect makes:
+
+.. math::
+    y^{meas}_{effect} = y^{meas}_{plant} + (y_{plant+effect} - y_{plant}),
+
+which keeps synth's noise model (three winding PT100s, iron PT100, 1 % current noise) exactly.
+
+Random cases draw, from a seeded generator:
+
+* the effect's value in a clearly active range: for a factor (neutral 1)
+  :math:`\theta = \theta_{typ}^{\,u}`, for an additive parameter (neutral 0)
+  :math:`\theta = u\,\theta_{typ}`, :math:`u \sim U(0.6, 1.4)`, clipped to the parameter's bounds;
+* the onset uniformly in 15-60 % of the mission; the two effects that undo a simplification of
+  the linear design model (``copper_resistance_temperature``, ``quadratic_copper_loss``) describe
+  the machine, not a fault, and are present from the start.
+
+The plant is the nonlinear simulation model; effects it cannot take (the two above need the linear
+design model's parameters) are injected into the linear design model instead.
+
+The shipped missions load the three phases equally. With balanced currents an extra loss in
+:math:`I_u^2` (``phase_short_circuit``) and one in :math:`\sum_p I_p^2` (``end_winding_stray_loss``)
+grow alike and differ only in where the heat enters, which the two sensors barely see; the
+``unbalance`` option adds a single-phase load on phase u, switched on and off every
+:data:`UNBALANCE_PERIOD_S` / 2, that tells them apart.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..design import linear_design_model
+from ..effects import CATALOGUE, apply_effect, get_effect
+from ..errors import InputError
+from ..machines import build_model
+from ..mission import load_mission
+from ..model import ThermalModel
+from ..simulate import simulate
+from ..synth import THESIS_NOISE_VARIANCE_K2, synthesize
+
+#: Missions hidden-effect cases are drawn on.
+MISSIONS = ("thesis_fig_7_7", "varying_load")
+#: Effects that are modelling choices of the linear design model: present from the start.
+MODEL_SIMPLIFICATIONS = ("copper_resistance_temperature", "quadratic_copper_loss")
+ONSET_RANGE = (0.15, 0.60)
+#: Period of the single-phase load of the ``unbalance`` option, s (on for the second half).
+UNBALANCE_PERIOD_S = 3600.0
+ACTIVITY_RANGE = (0.6, 1.4)
+
+
+@dataclasses.dataclass(frozen=True)
+class Injection:
+    """One injected effect: catalogue name, parameter values, onset (s from the start)."""
+
+    effect: str
+    values: dict
+    onset_s: float = 0.0
+
+
+@dataclasses.dataclass
+class HiddenEffectCase:
+    """Synthetic measurements with known injected effects.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        The record in the CSV schema of :mod:`genthermal.measurements`.
+    injections : list of Injection
+        The ground truth (empty: a healthy machine).
+    plant : ThermalModel
+        The model the data came from, without the injections.
+    mission : str
+    dt_s : float
+    seed : int
+    noise_var : (float, float)
+        Winding and iron sensor noise variances, K².
+    unbalance : float
+        Extra current of phase u while the single-phase load is on (relative).
+    """
+
+    data: pd.DataFrame
+    injections: list
+    plant: ThermalModel
+    mission: str
+    dt_s: float
+    seed: int
+    noise_var: tuple
+    unbalance: float = 0.0
+
+    @property
+    def noise_std(self) -> float:
+        r"""Noise standard deviation of the compared signals, K: the winding temperature is the mean
+        of three sensors, :math:`\sigma = \sqrt{(\sigma_w^2/3 + \sigma_i^2)/2}`."""
+        winding, iron = self.noise_var
+        return math.sqrt((winding / 3.0 + iron) / 2.0)
+
+    def truth(self) -> dict:
+        """JSON-ready ground truth."""
+        return {"effects": [dataclasses.asdict(i) for i in self.injections], "plant": self.plant.name,
+                "mission": self.mission, "dt_s": self.dt_s, "seed": self.seed, "noise_var_K2": list(self.noise_var),
+                "noise_std_K": self.noise_std, "unbalance": self.unbalance}
+
+
+def plant_for(effect: str | None, nonlinear: ThermalModel | None = None) -> ThermalModel:
+    """The nonlinear model if it can take ``effect``, else its linear design model."""
+    nonlinear = build_model() if nonlinear is None else nonlinear
+    if effect is None or get_effect(effect).unavailable_reason(nonlinear) is None:
+        return nonlinear
+    return linear_design_model(nonlinear)
+
+
+def random_injection(effect: str, duration_s: float, rng: np.random.Generator) -> Injection:
+    """Draw clearly active values and an onset for ``effect`` (see the module docstring)."""
+    values = {}
+    for p in get_effect(effect).parameters:
+        u = rng.uniform(*ACTIVITY_RANGE)
+        typical = p.typical if p.typical is not None else p.upper
+        value = typical ** u if p.neutral == 1.0 else p.neutral + u * (typical - p.neutral)
+        values[p.name] = float(np.clip(value, p.lower, p.upper))
+    onset = 0.0 if effect in MODEL_SIMPLIFICATIONS else float(rng.uniform(*ONSET_RANGE) * duration_s)
+    return Injection(effect, values, onset)
+
+
+def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.DataFrame, seed: int,
+           noise_var=THESIS_NOISE_VARIANCE_K2) -> pd.DataFrame:
+    """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets."""
+    dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
+    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=noise_var)
+    if not injections:
+        return record
+    switches, model = [], plant
+    for injection in sorted(injections, key=lambda i: i.onset_s):
+        model = apply_effect(model, injection.effect, provenance="assumed", source="hidden-effect test data",
+                             **injection.values)
+        switches.append((float(inputs["time_s"].iloc[0] + injection.onset_s), model))
+    healthy = simulate(plant, inputs)
+    faulty = simulate(plant, inputs, switches=switches)
+    changed = record.copy()
+    for column in [c for c in record.columns if c.startswith("T_winding_")]:
+        changed[column] += faulty["T_winding"] - healthy["T_winding"]
+    for column in ("T_iron", "T_outlet"):
+        if column in record and column in faulty:
+            changed[column] += faulty[column] - healthy[column]
+    return changed
+
+
+def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "random",
+                            mission: str = "thesis_fig_7_7", dt_s: float = 10.0, seed: int = 0,
+                            noise_var=THESIS_NOISE_VARIANCE_K2, plant: ThermalModel | None = None,
+                            unbalance: float = 0.0) -> HiddenEffectCase:
+    """Build a hidden-effect test case.
+
+    Parameters
+    ----------
+    effects : "random", None, str, or sequence of str / Injection
+        ``"random"``: one effect drawn from those the nonlinear plant can take; ``None`` or ``[]``:
+        healthy data; names get random values and onsets; Injections are used as given.
+    mission : str
+        Shipped mission name or YAML path (:data:`MISSIONS` are the usual ones).
+    dt_s : float
+        Sample period, s.
+    seed : int
+        Seeds the effect, its values, its onset and the sensor noise.
+    noise_var : (float, float)
+        Winding and iron sensor noise variances, K².
+    plant : ThermalModel, optional
+        The plant; default :func:`plant_for` the (first) effect.
+    unbalance : float
+        Phase u carries ``1 + unbalance`` times its mission current while the single-phase load
+        is on (0: balanced, the missions as written).
+    """
+    rng = np.random.default_rng(seed)
+    nonlinear = build_model() if plant is None else plant
+    if effects == "random":
+        choices = [n for n, e in CATALOGUE.items() if e.unavailable_reason(nonlinear) is None]
+        effects = [choices[int(rng.integers(len(choices)))]]
+    elif effects is None:
+        effects = []
+    elif isinstance(effects, str):
+        effects = [effects]
+    names = [e.effect if isinstance(e, Injection) else e for e in effects]
+    for name in names:
+        get_effect(name)
+    if plant is None:
+        plant = plant_for(names[0] if names else None, nonlinear)
+    inputs = load_mission(mission).to_inputs(dt_s)
+    if unbalance:
+        elapsed = inputs["time_s"] - inputs["time_s"].iloc[0]
+        inputs["I_u"] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
+    duration = float(inputs["time_s"].iloc[-1] - inputs["time_s"].iloc[0])
+    injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng) for e in effects]
+    for injection in injections:
+        if not 0.0 <= injection.onset_s <= duration:
+            raise InputError(f"{injection.effect}.onset_s", injection.onset_s, f"must lie in [0, {duration:g}] s")
+    data = inject(plant, injections, inputs, seed, noise_var)
+    return HiddenEffectCase(data, injections, plant, mission, float(dt_s), seed, tuple(noise_var), unbalance)

@@ -1,0 +1,166 @@
+"""Model files: a built-in machine, its variant, changed parameters and added effects, as YAML.
+
+::
+
+    machine: genco_rf201a
+    variant: nonlinear            # or linear (the design model of thesis 5.2)
+    parameters:                   # only values that differ from the machine's defaults
+      h_end_air: {value: 17.2, provenance: fitted, source: "least squares on rig_2024.csv"}
+    effects:                      # applied in order, after the parameters
+      - name: coolant_flow_reduction
+        parameters: {k_flow: 0.61}
+        provenance: fitted        # optional (default fitted), with source
+        source: "diagnosis on flight_12.csv"
+        onset_s: 3960             # optional, informative: when the effect appeared in the data
+
+:func:`load_model` also takes a built-in name: ``genco_rf201a`` or ``genco_rf201a:linear``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import yaml
+
+from .design import linear_design_model
+from .effects import CATALOGUE, apply_effect
+from .errors import InputError
+from .machines import MACHINES, build_model
+from .model import ThermalModel
+from .parameters import PROVENANCES
+
+VARIANTS = ("nonlinear", "linear")
+_TOP_KEYS = ("machine", "variant", "parameters", "effects")
+#: Parameters the linear design model adds; saved through the variant, not as values.
+_DESIGN_PARAMETERS = ("I2_slope", "I2_intercept", "theta_ref")
+
+
+def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
+    """Build a model from a built-in name (``genco_rf201a[:linear]``) or a YAML model file.
+
+    Raises
+    ------
+    InputError
+        Unknown machine or variant, unreadable file, or a bad entry (the field is named, e.g.
+        ``parameters.h_end_air.value`` or ``effects[0].parameters``).
+    """
+    text = str(spec_or_path)
+    name, _, variant = text.partition(":")
+    if name in MACHINES and not Path(text).is_file():
+        return _build(name, variant or "nonlinear", from_file=False)
+    path = Path(text)
+    if not path.is_file():
+        known = ", ".join(f"{m}, {m}:linear" for m in MACHINES)
+        raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
+    try:
+        document = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise InputError("model file", str(path), f"not valid YAML: {exc}") from None
+    return model_from_document(document, str(path))
+
+
+def _build(machine: str, variant: str, from_file: bool) -> ThermalModel:
+    if machine not in MACHINES:
+        raise InputError("machine" if from_file else "model", machine,
+                         f"unknown machine; built in: {', '.join(MACHINES)}")
+    if variant not in VARIANTS:
+        raise InputError("variant" if from_file else "model variant", variant,
+                         f"must be one of {', '.join(VARIANTS)}")
+    model = build_model(machine)
+    return linear_design_model(model) if variant == "linear" else model
+
+
+def model_from_document(document, source: str = "<document>") -> ThermalModel:
+    """Build a model from the parsed YAML of a model file (see the module docstring)."""
+    if not isinstance(document, dict):
+        raise InputError(source, type(document).__name__, "a model file must be a mapping with a machine")
+    unknown = sorted(set(document) - set(_TOP_KEYS))
+    if unknown:
+        raise InputError(unknown[0], document[unknown[0]], f"unknown key; a model file has {', '.join(_TOP_KEYS)}")
+    if "machine" not in document:
+        raise InputError("machine", None, f"missing in {source}; e.g. machine: genco_rf201a")
+    model = _build(str(document["machine"]), str(document.get("variant", "nonlinear")), from_file=True)
+    parameters = document.get("parameters") or {}
+    if not isinstance(parameters, dict):
+        raise InputError("parameters", parameters, "must map parameter names to {value, provenance, source}")
+    for name, entry in parameters.items():
+        entry = entry if isinstance(entry, dict) else {"value": entry}
+        if name not in model.parameters:
+            raise InputError(f"parameters.{name}", name, f"not a parameter of {model.name}")
+        provenance = str(entry.get("provenance", "assumed"))
+        if provenance not in PROVENANCES:
+            raise InputError(f"parameters.{name}.provenance", provenance, f"must be one of {', '.join(PROVENANCES)}")
+        value = _number(entry.get("value"), f"parameters.{name}.value")
+        model = model.with_parameters(provenance=provenance, source=str(entry.get("source", "")) or
+                                      f"model file {source}", **{name: value})
+    effects = document.get("effects") or []
+    if not isinstance(effects, list):
+        raise InputError("effects", effects, "must be a list of {name, parameters}")
+    for i, entry in enumerate(effects):
+        if not isinstance(entry, dict) or "name" not in entry:
+            raise InputError(f"effects[{i}]", entry, "must be a mapping with a name and parameters")
+        if entry["name"] not in CATALOGUE:
+            raise InputError(f"effects[{i}].name", entry["name"], f"unknown effect; known: {', '.join(CATALOGUE)}")
+        values = entry.get("parameters") or {}
+        if not isinstance(values, dict):
+            raise InputError(f"effects[{i}].parameters", values, "must map parameter names to numbers")
+        values = {k: _number(v, f"effects[{i}].parameters.{k}") for k, v in values.items()}
+        provenance = str(entry.get("provenance", "fitted"))
+        if provenance not in PROVENANCES:
+            raise InputError(f"effects[{i}].provenance", provenance, f"must be one of {', '.join(PROVENANCES)}")
+        try:
+            model = apply_effect(model, entry["name"], provenance=provenance,
+                                 source=str(entry.get("source", "")) or f"model file {source}", **values)
+        except InputError as exc:
+            raise InputError(f"effects[{i}] ({entry['name']})", exc.value, exc.reason) from None
+    return model
+
+
+def _number(value, field: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(field, value, "must be a number") from None
+    return number
+
+
+def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
+    """The YAML document of ``model``: values that differ from the machine's defaults, effects.
+
+    Parameters
+    ----------
+    model : ThermalModel
+    onsets : dict, optional
+        Effect name → onset in s, recorded with the effect (informative).
+    """
+    defaults = build_model(model.spec.name).parameters
+    effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].parameters}
+    parameters = {}
+    for name in model.parameter_names:
+        if name in effect_parameters or name in _DESIGN_PARAMETERS:
+            continue
+        parameter = model.parameters[name]
+        if name not in defaults or parameter.value != defaults.value(name) or \
+                parameter.provenance != defaults[name].provenance:
+            parameters[name] = {"value": parameter.value, "provenance": parameter.provenance,
+                                "source": parameter.source}
+    effects = []
+    for effect in model.spec.effects:
+        names = [p.name for p in CATALOGUE[effect].parameters]
+        first = model.parameters[names[0]] if names else None
+        entry = {"name": effect, "parameters": {n: model.parameters.value(n) for n in names}}
+        if first is not None:
+            entry.update(provenance=first.provenance, source=first.source)
+        if onsets and effect in onsets:
+            entry["onset_s"] = float(onsets[effect])
+        effects.append(entry)
+    return {"machine": model.spec.name, "variant": model.spec.variant, "parameters": parameters, "effects": effects}
+
+
+def save_model(model: ThermalModel, path: str | os.PathLike, onsets: dict | None = None) -> Path:
+    """Write ``model`` as a YAML model file (see :func:`model_document`); return the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(yaml.safe_dump(model_document(model, onsets), sort_keys=False))
+    return path
