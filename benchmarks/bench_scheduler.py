@@ -1,0 +1,176 @@
+"""Closed-loop benchmark of the load schedulers: thesis heuristic vs optimal (IPOPT) vs MILP (HiGHS).
+
+Scenarios: 3 missions × 2 fault onsets × 5 severities = 30 (``--quick``: 1 × 2 × 3 = 6). Every
+scenario is flown closed loop (:func:`genthermal.schedule.closed_loop.fly`) on the true plant, which
+differs from the design model (h_end_air × 0.9, R0 × 1.05), with each scheduler; the optimal
+scheduler is also flown without the back-off (margin 0 K, rise back-off 0) to measure its cost.
+
+Usage::
+
+    python benchmarks/bench_scheduler.py --json bench_scheduler.json [--quick] [--workers 2]
+
+Prints a markdown table, writes the JSON (``scenarios``, ``summary``,
+``rest_ratio_optimal_over_heuristic``, ``margin``) and a plot next to it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+from genthermal.mission import Mission
+from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
+from genthermal.schedule.power_system import PowerSystem
+from genthermal.schedule.report import flight_summary
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+#: Missions: (name, [(condition, minutes), ...], fault onsets in min).
+MISSIONS = (
+    ("fig_7_7", [(1, 15), (2, 15), (3, 15), (4, 21), (5, 54), (6, 60), (5, 40), (7, 20)], (66, 100)),
+    ("fig_3_2", [(1, 15), (2, 15), (3, 15), (4, 15), (5, 45), (6, 30), (5, 45), (7, 15)], (60, 90)),
+    ("long_combat", [(1, 15), (2, 15), (3, 15), (4, 15), (5, 30), (6, 45), (6, 45), (5, 30), (7, 20)], (60, 120)),
+)
+#: Severities of the fault on gen1: (label, coolant flow factor, inlet rise K); k_flow 1 = inlet rise alone.
+SEVERITIES = (
+    ("inlet+16", 1.0, 16.0),
+    ("k0.4+15", 0.4, 15.0),
+    ("k0.3+25", 0.3, 25.0),
+    ("k0.25+31", 0.25, 31.0),
+    ("k0.2+31", 0.2, 31.0),
+)
+QUICK_SEVERITIES = ("inlet+16", "k0.3+25", "k0.2+31")
+
+
+def scenario_mission(mission: tuple, onset_min: float, severity: tuple) -> Mission:
+    """The mission with one fault on gen1."""
+    name, actions, _ = mission
+    label, k_flow, rise = severity
+    fault = ({"generator": 1, "kind": "inlet_rise", "onset_min": onset_min, "inlet_rise_C": rise} if k_flow >= 1.0 else
+             {"generator": 1, "kind": "coolant_blockage", "onset_min": onset_min, "k_flow": k_flow,
+              "inlet_rise_C": rise})
+    return Mission.from_dict({"name": f"{name}@{onset_min:g}min/{label}",
+                              "actions": [{"condition": c, "duration_min": m} for c, m in actions],
+                              "faults": [fault]})
+
+
+def fly_scenario(mission: Mission, margin_cost: bool) -> dict:
+    """Fly one scenario with every scheduler (and the optimal one without margin)."""
+    system = PowerSystem.from_mission(mission)
+    runs, solve_times = {}, {}
+    flights = [(s, ManagerSettings()) for s in SCHEDULERS]
+    if margin_cost:
+        flights.append(("optimal_no_margin", ManagerSettings(margin_K=0.0, rise_backoff=0.0)))
+    for label, settings in flights:
+        result = fly(system, label.replace("_no_margin", ""), settings)
+        runs[label] = flight_summary(result)
+        solve_times[label] = [plan["solve_s"] for plan in result.plans]
+    return {"name": mission.name, "runs": runs, "solve_times": solve_times}
+
+
+def summarise(records: list, labels) -> dict:
+    """Per scheduler: mean added rest, number of scenarios where it rests strictly less (by > 1 s)
+    than every other scheduler (and than each other one), worst breach, median solve time."""
+    summary = {}
+    for label in labels:
+        rests = np.array([r["runs"][label]["added_rest_s"] for r in records])
+        others = [[r["runs"][o]["added_rest_s"] for o in labels if o != label] for r in records]
+        better = sum(rest < min(other) - 1.0 for rest, other in zip(rests, others))
+        times = [t for r in records for t in r["solve_times"][label]]
+        pairwise = {o: int(sum(r["runs"][label]["added_rest_s"] < r["runs"][o]["added_rest_s"] - 1.0 for r in records))
+                    for o in labels if o != label}
+        summary[label] = {"mean_added_rest_s": float(rests.mean()), "strictly_better_count": int(better),
+                          "strictly_better_than": pairwise,
+                          "worst_breach_s": float(max(r["runs"][label]["breach_s"] for r in records)),
+                          "median_solve_s": float(np.median(times)) if times else 0.0,
+                          "max_solve_s": float(max(times)) if times else 0.0, "plans": len(times)}
+    return summary
+
+
+def markdown(records: list, summary: dict) -> str:
+    """Per-scenario added rest and breach, then the summary."""
+    lines = ["| scenario | " + " | ".join(f"{s} rest min / breach s" for s in SCHEDULERS) + " |",
+             "|---|" + "---|" * len(SCHEDULERS)]
+    for r in records:
+        cells = [f"{r['runs'][s]['added_rest_s'] / 60:.1f} / {r['runs'][s]['breach_s']:.0f}" for s in SCHEDULERS]
+        lines.append(f"| {r['name']} | " + " | ".join(cells) + " |")
+    lines += ["", "| scheduler | mean added rest min | strictly better | worst breach s | median solve s |",
+              "|---|---|---|---|---|"]
+    for s in SCHEDULERS:
+        v = summary[s]
+        lines.append(f"| {s} | {v['mean_added_rest_s'] / 60:.2f} | {v['strictly_better_count']} | "
+                     f"{v['worst_breach_s']:.0f} | {v['median_solve_s']:.3f} |")
+    return "\n".join(lines)
+
+
+def plot(records: list, path: Path) -> None:
+    """Added rest per scenario and scheduler."""
+    fig, ax = plt.subplots(figsize=(12, 4.5))
+    x = np.arange(len(records))
+    for i, s in enumerate(SCHEDULERS):
+        ax.bar(x + (i - 1) * 0.27, [r["runs"][s]["added_rest_s"] / 60 for r in records], 0.27, label=s)
+    ax.set_xticks(x, [r["name"] for r in records], rotation=75, fontsize=7)
+    ax.set_ylabel("added rest [min]")
+    ax.set_title("Closed-loop added rest per scenario (true plant, margin applied)")
+    ax.legend()
+    ax.grid(alpha=0.3, axis="y")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--json", required=True, help="output JSON file")
+    parser.add_argument("--quick", action="store_true", help="6 scenarios, no back-off-cost runs")
+    parser.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    args = parser.parse_args(argv)
+    severities = [s for s in SEVERITIES if not args.quick or s[0] in QUICK_SEVERITIES]
+    missions = MISSIONS[:1] if args.quick else MISSIONS
+    scenarios = [scenario_mission(m, onset, s) for m in missions for onset in m[2] for s in severities]
+    started = time.perf_counter()
+    with concurrent.futures.ProcessPoolExecutor(max_workers=args.workers) as pool:
+        records = list(pool.map(fly_scenario, scenarios, [not args.quick] * len(scenarios)))
+    summary = summarise(records, SCHEDULERS)
+    resting = [r for r in records if r["runs"]["heuristic"]["added_rest_s"] > 0]
+    ratio = (np.mean([r["runs"]["optimal"]["added_rest_s"] for r in resting]) /
+             np.mean([r["runs"]["heuristic"]["added_rest_s"] for r in resting])) if resting else None
+    never_worse = all(r["runs"]["optimal"]["added_rest_s"] <= r["runs"]["heuristic"]["added_rest_s"] + 1.0
+                      for r in records)
+    report = {"scenarios": [{"name": r["name"], **r["runs"]} for r in records], "summary": summary,
+              "rest_ratio_optimal_over_heuristic": None if ratio is None else float(ratio),
+              "optimal_never_rests_more_than_heuristic": bool(never_worse),
+              "scenarios_where_heuristic_rests": len(resting),
+              "settings": dataclasses.asdict(ManagerSettings()), "elapsed_s": time.perf_counter() - started}
+    if not args.quick:
+        with_margin = np.mean([r["runs"]["optimal"]["mission_time_s"] for r in records])
+        without = np.mean([r["runs"]["optimal_no_margin"]["mission_time_s"] for r in records])
+        report["margin"] = {"margin_K": ManagerSettings().margin_K, "rise_backoff": ManagerSettings().rise_backoff,
+                            "mean_mission_time_cost_s": float(with_margin - without),
+                            "worst_breach_without_margin_s": max(r["runs"]["optimal_no_margin"]["breach_s"]
+                                                                  for r in records),
+                            "scenarios_breaching_without_margin": sum(r["runs"]["optimal_no_margin"]["breach_s"] > 0
+                                                                      for r in records)}
+    out = Path(args.json)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=2, default=str))
+    plot(records, out.with_suffix(".png"))
+    print(markdown(records, summary))
+    print(f"\nrest ratio optimal/heuristic (scenarios where the heuristic rests: {len(resting)}): "
+          f"{report['rest_ratio_optimal_over_heuristic']}; optimal never rests more: {never_worse}")
+    if "margin" in report:
+        print(f"margin: {json.dumps(report['margin'])}")
+    print(f"wrote {out} and {out.with_suffix('.png')} ({report['elapsed_s']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

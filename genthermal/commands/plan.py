@@ -1,0 +1,94 @@
+"""``genthermal plan SCENARIO --scheduler heuristic|optimal|milp [--json FILE] [--plot FILE]``.
+
+Open-loop load-management plan on the linear design model (thesis chapter 7): the mission is flown
+as planned until the first management cycle after the fault onset, then one schedule (displaced
+current per generator and rest before each action) is planned for the rest of the mission.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+from ..errors import InputError
+from ..mission import load_mission
+from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
+from ..schedule.power_system import PowerSystem
+from ..schedule.report import flight_summary, plot_flight, summary_text
+from ._common import positive_float
+
+
+def add_schedule_arguments(parser) -> None:
+    """Arguments shared by ``plan`` and ``fly``."""
+    parser.add_argument("scenario", help="scenario name (see scenarios/) or path to a YAML file with "
+                        "generators and faults (see genthermal.schedule.power_system)")
+    parser.add_argument("--scheduler", default="optimal", help=f"{' | '.join(SCHEDULERS)} (default optimal)")
+    parser.add_argument("--json", help="write the summary as JSON to this file")
+    parser.add_argument("--plot", help="PNG file for currents and temperatures")
+    parser.add_argument("--margin", default=str(ManagerSettings.margin_K),
+                        help=f"back-off margin below the limit, K (default {ManagerSettings.margin_K:g})")
+    parser.add_argument("--rise-backoff", default=str(ManagerSettings.rise_backoff),
+                        help="plans tolerate a design model that underestimates a temperature rise within one "
+                        f"cycle by this fraction (default {ManagerSettings.rise_backoff:g}; 0 = margin only)")
+    parser.add_argument("--cycle-min", default="5", help="management cycle, min (default 5, thesis 7.2)")
+
+
+def _number_in(option: str, text: str, low: float, high: float, what: str) -> float:
+    """Parse a number in ``[low, high]`` for ``option`` or raise InputError naming it."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(option, text, f"must be {what} in {low:g}..{high:g}") from None
+    if not low <= value <= high:
+        raise InputError(option, text, f"must be {what} in {low:g}..{high:g}")
+    return value
+
+
+def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
+    """The power system and settings the arguments describe; InputError names a bad option."""
+    if args.scheduler not in SCHEDULERS:
+        raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
+    margin = _number_in("--margin", args.margin, 0.0, 50.0, "a number of kelvin")
+    backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
+    settings = ManagerSettings(cycle_s=60.0 * positive_float("--cycle-min", args.cycle_min), margin_K=margin,
+                               rise_backoff=backoff)
+    if getattr(args, "seed", None) is not None:
+        settings = dataclasses.replace(settings, seed=int(args.seed))
+    system = PowerSystem.from_mission(load_mission(args.scenario))
+    return system, settings
+
+
+def write_outputs(args, summary: dict, result, limit_C: float) -> None:
+    """Print the summary, write the JSON and the plot when asked."""
+    print(summary_text(summary, limit_C))
+    if args.json:
+        path = Path(args.json)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(summary, indent=2))
+        print(f"wrote {path}")
+    if args.plot:
+        plot_flight(result, path=args.plot)
+        print(f"wrote {args.plot}")
+
+
+def register(subparsers) -> None:
+    """Add the ``plan`` sub-command."""
+    parser = subparsers.add_parser("plan", help="plan load displacement and rests (open loop, design model)",
+                                   description=__doc__.split("\n\n")[1])
+    add_schedule_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Plan, print the schedule table and the summary."""
+    system, settings = settings_from_args(args)
+    print(system.describe())
+    result = plan_mission(system, args.scheduler, settings)
+    summary = flight_summary(result)
+    summary["schedule"] = [] if result.schedule_table is None else result.schedule_table.to_dict("records")
+    summary["plans"] = result.plans
+    if result.schedule_table is not None:
+        print(result.schedule_table.to_string(index=False))
+    write_outputs(args, summary, result, system.limit_C)
+    return 0

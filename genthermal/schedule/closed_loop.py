@@ -1,0 +1,367 @@
+r"""The load management system of thesis 7.2, open loop (``plan``) and closed loop (``fly``).
+
+Closed loop, every ``cycle_s`` (thesis: 5 min):
+
+1. **update** each generator's Kalman filter (design model) with the plant's noisy measurements of
+   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10);
+2. **predict** to the end of the mission under the current schedule, with the measured inlet
+   temperature held (thesis 7.3.6) and the faults that have occurred so far (a fault is known at the
+   first cycle after its onset);
+3. **re-plan** if a temperature above the planning limit :math:`\theta_{max} - \text{margin}` is
+   predicted, warm-started from the current plan;
+4. **apply** the schedule to the true plant for one cycle.
+
+The true plant is the nonlinear model with the faults from their onsets and parameters that differ
+from the design model (``PowerSystem.plant_mismatch``). The back-off ``margin_K`` absorbs the
+mismatch; its cost in mission time is measured by flying with and without it.
+
+When no schedule keeps the prediction within the limit, the lowest reachable peak is found
+(min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
+the generator and the action.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..estimation.kalman import THESIS_R_K2, KalmanFilter
+from ..simulate import simulate
+from .heuristic import HeuristicSettings, heuristic_plan
+from .milp import MilpSettings, milp_plan
+from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
+from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, generator_inputs, mission_segments,
+                   predict, remaining_after)
+from .power_system import PowerSystem
+
+SCHEDULERS = ("heuristic", "optimal", "milp")
+#: Default back-off margin below θmax, K.
+DEFAULT_MARGIN_K = 2.5
+#: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
+#: within one cycle by this fraction (the plant's copper loss at 7 A and 110 °C is ~20 % above the
+#: linear design model's).
+DEFAULT_RISE_BACKOFF = 0.3
+
+
+@dataclasses.dataclass(frozen=True)
+class ManagerSettings:
+    """Settings of the load management system.
+
+    Attributes
+    ----------
+    cycle_s : float
+        Management cycle, s (thesis 7.2: 5 min).
+    dt_s : float
+        Plant and design-model step, s.
+    margin_K : float
+        Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K.
+    rise_backoff : float
+        :math:`\\kappa` of the robust constraint on temperature rises within one cycle (see
+        :class:`~genthermal.schedule.plan.PlanningProblem`).
+    max_rest_s : float
+        Longest rest before one segment, s.
+    replan_tolerance_K : float
+        A prediction above the planning limit by more than this triggers a re-plan, K.
+    seed : int
+        Seed of the measurement noise.
+    heuristic, optimal, milp
+        Settings of each scheduler.
+    """
+
+    cycle_s: float = 300.0
+    dt_s: float = 10.0
+    margin_K: float = DEFAULT_MARGIN_K
+    rise_backoff: float = DEFAULT_RISE_BACKOFF
+    max_rest_s: float = 3600.0
+    replan_tolerance_K: float = 0.05
+    seed: int = 0
+    heuristic: HeuristicSettings = HeuristicSettings()
+    optimal: OptimalSettings = OptimalSettings()
+    milp: MilpSettings = MilpSettings()
+
+
+@dataclasses.dataclass
+class FlightResult:
+    """What was flown: per step (``dt_s``) the applied currents and the temperatures.
+
+    Attributes
+    ----------
+    system : PowerSystem
+    scheduler : str
+    closed_loop : bool
+        True: true plant under the closed loop; False: design-model run of an open-loop plan.
+    time_s : numpy.ndarray
+        (n + 1,) s.
+    temperatures_C : numpy.ndarray
+        (n_generators, 2, n + 1) winding and iron, °C.
+    currents_A : numpy.ndarray
+        (n_generators, n) applied phase currents, A RMS.
+    nominal_A : numpy.ndarray
+        (n,) nominal current of the action flown (rest mode current during rests), A.
+    resting : numpy.ndarray
+        (n,) True during rests.
+    action_index : numpy.ndarray
+        (n,) index of the mission action being flown or rested before.
+    plans : list of dict
+        One record per (re-)plan: ``time_s``, ``method``, ``solve_s``, ``feasible``, ``peak_C``.
+    warnings : list of str
+    schedule_table : pandas.DataFrame or None
+        The open-loop plan per action.
+    """
+
+    system: PowerSystem
+    scheduler: str
+    closed_loop: bool
+    time_s: np.ndarray
+    temperatures_C: np.ndarray
+    currents_A: np.ndarray
+    nominal_A: np.ndarray
+    resting: np.ndarray
+    action_index: np.ndarray
+    plans: list
+    warnings: list
+    schedule_table: object = None
+
+
+def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
+              previous=None) -> PlanResult:
+    """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak.
+
+    Parameters
+    ----------
+    scheduler : {"heuristic", "optimal", "milp"}
+    problem : PlanningProblem
+        Its ``limit_C`` is the planning limit (θmax minus the margin).
+    settings : ManagerSettings
+    names : sequence of str
+        Generator names, for the messages.
+    limit_C : float
+        θmax, °C: ``feasible`` of the result says whether the plan keeps it.
+    previous : Schedule, optional
+        Warm start of the optimal scheduler.
+    """
+    def run(p):
+        if scheduler == "heuristic":
+            return heuristic_plan(p, settings.heuristic)
+        if scheduler == "optimal":
+            return optimal_plan(p, settings.optimal, previous)
+        return milp_plan(p, settings.milp)
+    result = run(problem)
+    if result.feasible:
+        return result
+    lowest = lowest_reachable_peak(problem, settings.optimal)
+    segment = problem.segments[lowest.peak_segment]
+    where = (f"the lowest reachable peak is {lowest.peak_C:.1f} °C, on {names[lowest.peak_generator]} during "
+             f"action {segment.action_index + 1} ({segment.label})")
+    if lowest.peak_C > limit_C:
+        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; flying the lowest-peak schedule"
+    else:
+        message = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C; "
+                   f"{where}, within θmax {limit_C:g} °C")
+    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
+    relaxed.feasible = lowest.peak_C <= limit_C
+    relaxed.solve_s += result.solve_s + lowest.solve_s
+    relaxed.warnings.append(message)
+    relaxed.details.update(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
+                           lowest_peak_action=segment.action_index + 1)
+    return relaxed
+
+
+def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, faults) -> PlanningProblem:
+    generators = [system.design_generator(g, faults) for g in range(system.n_generators)]
+    inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
+                           system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
+                           system.limit_C - settings.margin_K, settings.max_rest_s, settings.dt_s,
+                           settings.rise_backoff, settings.cycle_s)
+
+
+class _Recorder:
+    """Collects the steps flown, from a cold machine (every node at the ambient temperature)."""
+
+    def __init__(self, system: PowerSystem):
+        self.system, self.time = system, [0.0]
+        self.temperatures = [np.full((system.n_generators, 2), system.mission.T_ambient_C)]
+        self.currents, self.nominal, self.resting, self.action = [], [], [], []
+        self.plans, self.warnings = [], []
+
+    def plan(self, t_s: float, result: PlanResult) -> None:
+        """Record a (re-)plan made at ``t_s``."""
+        self.plans.append({"time_s": t_s, "method": result.method, "solve_s": result.solve_s,
+                           "feasible": result.feasible, "peak_C": result.peak_C, **result.details})
+        self.warnings += result.warnings
+
+    def add(self, segments, timeline, n: int, outputs, t0: float) -> None:
+        """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, 2, n) after each."""
+        dt = timeline.dt_s
+        self.time += list(t0 + dt * np.arange(1, n + 1))
+        self.temperatures += list(np.moveaxis(outputs, 2, 0))
+        self.currents.append(timeline.currents_A[:, :n])
+        self.resting.append(timeline.resting[:n])
+        self.action.append(np.array([segments[k].action_index for k in timeline.segment[:n]]))
+        nominal = [self.system.rest_current_A if timeline.resting[i] else
+                   float(segments[timeline.segment[i]].current_at(timeline.offset_s[i])) for i in range(n)]
+        self.nominal.append(np.array(nominal))
+
+    def result(self, scheduler, closed_loop, table=None) -> FlightResult:
+        """The :class:`FlightResult`."""
+        return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
+                            np.moveaxis(np.array(self.temperatures), 0, 2), np.hstack(self.currents),
+                            np.concatenate(self.nominal), np.concatenate(self.resting),
+                            np.concatenate(self.action), self.plans, self.warnings, table)
+
+
+def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_at):
+    """Run the design models for ``n`` steps of ``timeline`` from ``t0``; ``faults_at(t)`` gives the
+    faults in force. Returns (outputs (n_gen, 2, n), states after (n_gen, nx))."""
+    outputs = np.empty((system.n_generators, 2, n))
+    states = np.array(x0, dtype=float)
+    for i in range(n):
+        t = t0 + i * timeline.dt_s
+        for g in range(system.n_generators):
+            generator = system.design_generator(g, faults_at(t))
+            E, G = generator.step(timeline.dt_s)
+            u = generator.input(timeline.currents_A[g, i], float(system.inlet_C(g, t)), system.mission.T_ambient_C)
+            states[g] = E @ states[g] + G @ generator.forcing(u)
+            outputs[g, :, i] = generator.outputs(states[g], u)
+    return outputs, states
+
+
+def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings()) -> FlightResult:
+    """Open-loop plan on the design model.
+
+    The mission is flown as planned up to the first management cycle at or after the earliest
+    fault onset; there every fault of the scenario is taken as known (conservative for later
+    onsets) and one plan is made for the rest of the mission, which the design model then flies.
+    """
+    dt = settings.dt_s
+    segments = mission_segments(system.mission)
+    schedule = Schedule.nominal(system.n_generators, len(segments))
+    x = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    onset = min((f.onset_s for f in system.faults), default=0.0)
+    t_plan = float(np.ceil(onset / settings.cycle_s - 1e-9) * settings.cycle_s)
+    timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
+    n_before = min(int(round(t_plan / dt)), timeline.n_steps)
+    recorder = _Recorder(system)
+    outputs, x = _design_steps(system, x, timeline, 0.0, n_before, system.faults_known_at)
+    recorder.add(segments, timeline, n_before, outputs, 0.0)
+    segments, schedule = remaining_after(segments, schedule, timeline, n_before)
+    table = None
+    if segments:
+        all_faults = tuple(range(len(system.faults)))
+        problem = _problem(system, settings, segments, x, t_plan, all_faults)
+        if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
+            schedule = result.schedule.rounded(dt)
+            recorder.plan(t_plan, result)
+        table = schedule.table(segments, system.generator_names)
+        timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
+        outputs, x = _design_steps(system, x, timeline, t_plan, timeline.n_steps, system.faults_known_at)
+        recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
+    return recorder.result(scheduler, False, table)
+
+
+class StateEstimator:
+    """The Kalman filter (:class:`~genthermal.estimation.kalman.KalmanFilter`, time-varying gain)
+    of one generator, on the design model of the faults known so far.
+
+    Parameters
+    ----------
+    generator : AffineGenerator
+        Design model to start with.
+    x0 : array_like
+        Initial estimate, °C.
+    dt_s : float
+        Filter step, s.
+    filters : dict
+        Kalman filters by design model, shared between the generators of one flight.
+    """
+
+    def __init__(self, generator, x0, dt_s: float, filters: dict):
+        self.x, self.P, self.dt_s, self._filters = np.array(x0, dtype=float), None, dt_s, filters
+        self.use(generator)
+
+    def use(self, generator) -> None:
+        """Continue on ``generator``'s design model (state and covariance kept): a fault is known."""
+        if id(generator) not in self._filters:
+            self._filters[id(generator)] = KalmanFilter(generator.model, self.dt_s)
+        self.generator, self.kalman = generator, self._filters[id(generator)]
+        if self.P is None:
+            self.P = self.kalman.P0
+
+    def update(self, y) -> None:
+        """Measurement update with the measured winding and iron temperatures ``y`` (°C)."""
+        step = self.kalman.update(self.x, self.P, y)
+        self.x, self.P = step.x, step.P
+
+    def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
+        """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
+        for current, inlet in zip(currents_A, inlets_C):
+            self.x, self.P = self.kalman.predict(self.x, self.P, self.generator.input(current, inlet, ambient_C))
+
+
+def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
+    """Run generator ``g``'s true plant over ``timeline`` from ``t0`` (faults switch in at their
+    onsets). Returns (outputs (2, n) after each step, state at the end)."""
+    n = timeline.n_steps
+    model = system.plant_model(g, system.faults_known_at(t0))
+    _, switches = system.plant_switches(g)
+    later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
+    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C)
+    run = simulate(model, frame, x0=x0, switches=later)
+    states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
+    return run[["T_winding", "T_iron"]].to_numpy()[1:].T, states[-1]
+
+
+def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings()) -> FlightResult:
+    """Fly the mission in closed loop on the true plant (module docstring).
+
+    Parameters
+    ----------
+    system : PowerSystem
+    scheduler : {"heuristic", "optimal", "milp"}
+    settings : ManagerSettings
+
+    Returns
+    -------
+    FlightResult
+        True-plant temperatures, applied currents and one record per re-plan.
+    """
+    dt = settings.dt_s
+    cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
+    rng = np.random.default_rng(settings.seed)
+    noise_sd = np.sqrt(np.asarray(THESIS_R_K2))
+    segments = mission_segments(system.mission)
+    schedule = Schedule.nominal(system.n_generators, len(segments))
+    x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    kalman_filters: dict = {}
+    filters = [StateEstimator(system.design_generator(g), x_true[g], dt, kalman_filters)
+               for g in range(system.n_generators)]
+    recorder = _Recorder(system)
+    measured, t = recorder.temperatures[0], 0.0
+    while segments:
+        known = system.faults_known_at(t)
+        for g, estimator in enumerate(filters):
+            estimator.use(system.design_generator(g, known))
+            if t > 0:
+                estimator.update(measured[g] + noise_sd * rng.standard_normal(noise_sd.size))
+        problem = _problem(system, settings, segments, [f.x for f in filters], t, known)
+        if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
+                               previous=schedule)
+            schedule = result.schedule.rounded(dt)
+            recorder.plan(t, result)
+        timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
+        n = min(cycle_steps, timeline.n_steps)
+        applied = timeline.head(n)
+        outputs = np.empty((system.n_generators, 2, n))
+        step_times = t + dt * np.arange(n)
+        for g, estimator in enumerate(filters):
+            outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
+            estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+        measured = outputs[:, :, -1]
+        recorder.add(segments, timeline, n, outputs, t)
+        segments, schedule = remaining_after(segments, schedule, timeline, n)
+        t += n * dt
+    return recorder.result(scheduler, True)

@@ -1,0 +1,163 @@
+r"""The load management heuristic of thesis chapter 7 (eqs. 7.1-7.5, Fig. 7.2).
+
+Going forward through the segments, for the first segment :math:`k` in which some generator would
+exceed :math:`\theta_{max}` (winding or iron) during its rest and the segment:
+
+1. **Displacement only** (eq. 7.2): each violating generator :math:`f` sheds the smallest
+   :math:`I_d` that keeps it within the limit; the others share it equally (eqs. 7.3-7.4). On the
+   linear design model the temperature is affine in :math:`I_d`,
+   :math:`\theta(t) = \theta_0(t) - I_d\,s(t)` with :math:`s(t) \ge 0`, so the minimum is exact:
+   :math:`I_d = \max_t (\theta_0(t) - \theta_{max})/s(t)`. It is accepted if the receivers stay
+   within the limit and every current within :math:`[0, I_{limit}]`.
+2. Otherwise **rest both generators** (eq. 7.1) for ``rest_step_s`` more before the segment and
+   go back to 1 (a rested receiver is cooler and can take more), until a solution is found.
+
+Minimising the mission time (eq. 7.5) this way prefers displacement, which adds no time. Decisions
+for segment :math:`k` fix the state for :math:`k+1`, so one forward sweep ends.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, robust_outputs
+
+
+@dataclasses.dataclass(frozen=True)
+class HeuristicSettings:
+    """Settings of the thesis heuristic.
+
+    Attributes
+    ----------
+    rest_step_s : float
+        Increment by which a rest is extended, s (thesis Fig. 7.2: "a short rest ... extended").
+    """
+
+    rest_step_s: float = 300.0
+
+
+def _run(E: np.ndarray, forced: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """States after each step of :math:`x^+ = Ex + f_i`; ``forced`` is (n_steps, n_states)."""
+    x = np.empty_like(forced)
+    state = x0
+    for i in range(forced.shape[0]):
+        state = E @ state + forced[i]
+        x[i] = state
+    return x
+
+
+class SegmentResponse:
+    r"""Temperatures of generator ``g`` over a rest of ``rest_s`` and segment ``k`` from ``x_start``,
+    affine in the displaced current: :math:`y = y_0 + d\,y_d`, :math:`x_{end} = x_0 + d\,x_d`.
+    The rows of :math:`y` are the temperatures after each step and, below them, the same with the
+    rise back-off of ``problem`` (:func:`~genthermal.schedule.plan.robust_outputs`)."""
+
+    def __init__(self, problem: PlanningProblem, g: int, k: int, x_start: np.ndarray, rest_s: float):
+        generator, dt = problem.generators[g], problem.dt_s
+        segment = problem.segments[k]
+        E, G = generator.step(dt)
+        n_rest = int(np.ceil(rest_s / dt - 1e-6))
+        n_run = max(int(round(segment.duration_s / dt)), 1)
+        current = np.concatenate([np.full(n_rest, problem.rest_current_A),
+                                  segment.current_at(np.arange(n_run) * dt)])
+        u = problem.inputs(g, current)
+        x = np.vstack([x_start, _run(E, generator.forcing(u) @ G.T, x_start)])
+        u_sample = np.vstack([u, u[-1:]])  # the input in force at each sample
+        shed = np.zeros((n_rest + n_run, x_start.size))
+        shed[n_rest:] = -(generator.B @ generator.e_I) @ G.T  # shedding 1 A during the segment
+        dx = np.vstack([np.zeros_like(x_start), _run(E, shed, np.zeros_like(x_start))])
+        du = np.zeros_like(u_sample)
+        du[n_rest:] = -generator.e_I
+        windows = np.concatenate([np.zeros(n_rest, dtype=int),
+                                  n_rest + segment.window_start_steps(dt, problem.window_s)])
+        samples = [generator.outputs(x, u_sample).T, (dx @ generator.Cy.T + du @ generator.Dy.T).T]
+        self.y0, self.yd = (np.vstack([y[:, 1:], robust_outputs(y, windows, problem.rise_backoff)]) for y in samples)
+        self.x_end0, self.x_end_d = x[-1], dx[-1]
+
+    def peak(self, d: float) -> float:
+        """Peak temperature (°C) with displaced current ``d`` (A)."""
+        return float(np.max(self.y0 + d * self.yd))
+
+    def least_displacement(self, limit_C: float) -> float:
+        """Smallest ``d >= 0`` keeping the peak within ``limit_C``; ``inf`` if none does."""
+        excess = self.y0 - limit_C
+        over = excess > LIMIT_TOLERANCE_K
+        if not over.any():
+            return 0.0
+        relief = -self.yd[over]
+        if np.any(relief <= 1e-12):
+            return np.inf
+        return float(np.max(excess[over] / relief)) * (1.0 + 1e-9) + 1e-9
+
+
+def _displacement(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray | None:
+    """Eq. 7.2 for segment ``k``: least displacement off each violator, shared equally by the others;
+    None when displacement alone cannot keep every generator within the limit."""
+    low, high = problem.displacement_bounds(k)
+    receivers = [g for g in range(problem.n_generators) if g not in violators]
+    if not receivers:
+        return None
+    d = np.zeros(problem.n_generators)
+    for f in violators:
+        d[f] = responses[f].least_displacement(problem.limit_C)
+        if d[f] > high:
+            return None
+    d[receivers] = -np.sum(d) / len(receivers)
+    if d[receivers[0]] < low:
+        return None
+    if any(responses[h].peak(d[h]) > problem.limit_C + LIMIT_TOLERANCE_K for h in receivers):
+        return None
+    return d
+
+
+def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = HeuristicSettings()) -> PlanResult:
+    """Plan by the thesis heuristic (Fig. 7.2) on the design model.
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+    settings : HeuristicSettings
+
+    Returns
+    -------
+    PlanResult
+        When no rest up to ``problem.max_rest_s`` makes a segment feasible, that segment gets the
+        longest rest and the largest displacement off its violators, and ``feasible`` is False.
+    """
+    started = time.perf_counter()
+    n_seg, n_gen = len(problem.segments), problem.n_generators
+    displaced, rests = np.zeros((n_gen, n_seg)), np.zeros(n_seg)
+    x = problem.x0.copy()
+    warnings = []
+    for k in range(n_seg):
+        rest = 0.0
+        while True:
+            responses = [SegmentResponse(problem, g, k, x[g], rest) for g in range(n_gen)]
+            violators = [g for g in range(n_gen) if responses[g].peak(0.0) > problem.limit_C + LIMIT_TOLERANCE_K]
+            d = np.zeros(n_gen) if not violators else _displacement(problem, k, responses, violators)
+            if d is not None:
+                break
+            if rest + settings.rest_step_s > problem.max_rest_s + 1e-9:
+                d = _best_effort(problem, k, violators)
+                warnings.append(f"segment {k} ({problem.segments[k].label}): no rest up to "
+                                f"{problem.max_rest_s / 60:g} min keeps it within {problem.limit_C:g} °C")
+                break
+            rest += settings.rest_step_s
+        displaced[:, k], rests[k] = d, rest
+        x = np.array([responses[g].x_end0 + d[g] * responses[g].x_end_d for g in range(n_gen)])
+    schedule = Schedule(displaced, rests)
+    return evaluate(problem, schedule, "heuristic", time.perf_counter() - started, warnings)
+
+
+def _best_effort(problem: PlanningProblem, k: int, violators) -> np.ndarray:
+    """Largest displacement off the violators that the receivers' current limit allows."""
+    low, high = problem.displacement_bounds(k)
+    receivers = [g for g in range(problem.n_generators) if g not in violators]
+    d = np.zeros(problem.n_generators)
+    if receivers:
+        d[violators] = max(0.0, min(high, -low * len(receivers) / len(violators)))
+        d[receivers] = -np.sum(d[violators]) / len(receivers)
+    return d

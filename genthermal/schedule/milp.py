@@ -1,0 +1,217 @@
+r"""Discrete load schedule as a mixed-integer linear program (thesis 8.3.1: loads move in chunks).
+
+Rests come in whole blocks of ``block_s`` (5 min) and loads move between generators in whole
+chunks of ``chunk_A``. On the linear design model the problem is then exactly a MILP, which HiGHS
+solves to proven optimality: the answer *certifies* the best discrete schedule for that model.
+
+Per segment :math:`k` a one-hot choice :math:`\lambda_{k,n}\in\{0,1\}` of the rest length
+:math:`n\in\{0..N\}` blocks, and integer chunk counts :math:`m_{g,k}` (:math:`d_{g,k} = c\,m_{g,k}`,
+:math:`\sum_g m_{g,k} = 0`). The rest couples a binary with the entry state, which is linearised
+exactly by disaggregation (convex hull): the entry state :math:`x^{in}_{g,k} = \sum_n z_{g,k,n}`
+with :math:`\underline\theta\lambda_{k,n} \le z_{g,k,n} \le \overline\theta\lambda_{k,n}`, and
+
+.. math::
+    s_{g,k} = \sum_n \left(\Phi^n z_{g,k,n} + (I - \Phi^n)x^{ss}_g\lambda_{k,n}\right),
+    \qquad \Phi = e^{L\,\Delta_{block}},
+
+the state when the segment starts. Inside the segment the temperatures at every check point are
+affine in :math:`s_{g,k}` and :math:`m_{g,k}` (exact zero-order hold), and so is the end state.
+Objective: :math:`\sum_{k,n} n\Delta_{block}\lambda_{k,n} + w\sum_{g,k} (T_k/3600)\,c\,|m_{g,k}|`
+(minutes). Solved by HiGHS through CasADi's ``conic`` plugin, or ``scipy.optimize.milp`` (also
+HiGHS) when that plugin is missing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import casadi as ca
+import numpy as np
+import scipy.optimize
+import scipy.sparse
+
+from .heuristic import heuristic_plan
+from .optimal import LinearRows, sparse_dm
+from .plan import PlanningProblem, PlanResult, Schedule, evaluate
+
+
+@dataclasses.dataclass(frozen=True)
+class MilpSettings:
+    """Settings of the discrete schedule.
+
+    Attributes
+    ----------
+    block_s : float
+        Rest block, s.
+    chunk_A : float
+        Smallest movable load, A RMS per phase (0.35 A = 5 % of the rated 7 A).
+    max_rest_s : float
+        Longest rest before one segment, s (whole blocks; at most ``problem.max_rest_s``).
+    check_s : float
+        Longest interval between temperature checks inside a segment, s.
+    displacement_weight : float
+        :math:`w`, s of mission time per A·h of displaced load.
+    time_limit_s : float
+        HiGHS time limit; a solution without a proof of optimality is reported as not certified.
+    """
+
+    block_s: float = 300.0
+    chunk_A: float = 0.35
+    max_rest_s: float = 3600.0
+    check_s: float = 60.0
+    displacement_weight: float = 1.0
+    time_limit_s: float = 30.0
+
+
+class _Variables:
+    """Allocates columns of the MILP with bounds, costs and integrality."""
+
+    def __init__(self):
+        self.lower, self.upper, self.cost, self.integer = [], [], [], []
+
+    def take(self, count: int, lower, upper, cost=0.0, integer: bool = False) -> np.ndarray:
+        first = sum(len(b) for b in self.lower)
+        for store, value in ((self.lower, lower), (self.upper, upper), (self.cost, cost)):
+            store.append(np.broadcast_to(np.asarray(value, dtype=float), (count,)).copy())
+        self.integer.append(np.full(count, integer))
+        return np.arange(first, first + count)
+
+    def arrays(self):
+        return tuple(np.concatenate(v) for v in (self.lower, self.upper, self.cost, self.integer))
+
+
+def _segment_maps(problem: PlanningProblem, g: int, k: int, check_s: float):
+    r"""Affine maps of segment ``k`` for generator ``g`` from its start state :math:`s` and shed
+    current :math:`d`: temperatures at the check points :math:`y = \Psi_y s + \phi_y - d\sigma_y`
+    (stacked; with the rise back-off rows when ``problem.rise_backoff`` > 0) and the end state
+    :math:`x = \Psi s + \phi - d\sigma`."""
+    generator, kappa = problem.generators[g], problem.rise_backoff
+    nx = problem.x0.shape[1]
+    state = (np.eye(nx), np.zeros(nx), np.zeros(nx))  # Psi, phi, sigma of the state now
+    plain, robust = [], []
+    for _, length, current in problem.segments[k].windows(problem.window_s):
+        u0 = problem.inputs(g, current)
+        offsets = (generator.Dy @ u0 + generator.ey, generator.Dy @ generator.e_I)
+        start = _output_maps(generator, state, offsets)
+        n = max(int(np.ceil(length / check_s - 1e-9)), 1)
+        E, G = generator.step(length / n)
+        for _ in range(n):
+            Psi, phi, sigma = state
+            state = (E @ Psi, E @ phi + G @ generator.forcing(u0), E @ sigma + G @ (generator.B @ generator.e_I))
+            y = _output_maps(generator, state, offsets)
+            plain.append(y)
+            robust.append(tuple((1 + kappa) * a - kappa * b for a, b in zip(y, start)))
+    rows = plain + (robust if kappa > 0 else [])
+    return (np.vstack([r[0] for r in rows]), np.concatenate([r[1] for r in rows]),
+            np.concatenate([r[2] for r in rows])), state
+
+
+def _output_maps(generator, state, offsets):
+    """Output maps ``(C Psi, C phi + y_u, C sigma + y_d)`` of a state map ``(Psi, phi, sigma)``."""
+    Psi, phi, sigma = state
+    return generator.Cy @ Psi, generator.Cy @ phi + offsets[0], generator.Cy @ sigma + offsets[1]
+
+
+def _solve_highs(c, A_sparse, lba, uba, lbx, ubx, integer, time_limit_s):
+    """Solve the MILP with HiGHS; return ``(x or None, status text, proven optimal, gap)``."""
+    if ca.has_conic("highs"):
+        A = sparse_dm(A_sparse)
+        options = {"discrete": integer.tolist(), "error_on_fail": False,
+                   "highs": {"output_flag": False, "mip_rel_gap": 1e-9, "time_limit": float(time_limit_s)}}
+        solver = ca.conic("schedule_milp", "highs", {"h": ca.Sparsity(len(c), len(c)), "a": A.sparsity()}, options)
+        result = solver(g=c, a=A, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
+        stats = solver.stats()
+        status = str(stats.get("return_status"))
+        found = stats.get("primal_solution_status") == "Feasible"
+        x = np.asarray(result["x"]).ravel() if found else None
+        return x, f"HiGHS (CasADi): {status}", status == "Optimal", float(stats.get("mip_gap", np.nan))
+    result = scipy.optimize.milp(c, constraints=scipy.optimize.LinearConstraint(A_sparse, lba, uba),
+                                 bounds=scipy.optimize.Bounds(lbx, ubx), integrality=integer.astype(int),
+                                 options={"time_limit": time_limit_s, "mip_rel_gap": 1e-9})
+    gap = float(getattr(result, "mip_gap", np.nan))
+    return result.x, f"HiGHS (scipy): {result.message}", result.status == 0, gap
+
+
+def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings()) -> PlanResult:
+    """Plan the best discrete schedule (rest blocks, load chunks) by a MILP on the design model.
+
+    Returns
+    -------
+    PlanResult
+        ``details`` holds the objective (min), HiGHS status, ``certified`` (proven optimal) and the
+        gap. On infeasibility or solver failure: the heuristic's plan, ``method`` =
+        ``milp->heuristic`` and a warning.
+    """
+    started = time.perf_counter()
+    n_gen, n_seg, nx = problem.n_generators, len(problem.segments), problem.x0.shape[1]
+    n_blocks = int(min(settings.max_rest_s, problem.max_rest_s) // settings.block_s)
+    block_min = settings.block_s / 60.0
+    durations_h = np.array([s.duration_s for s in problem.segments]) / 3600.0
+    hot = max(500.0, float(np.max(problem.x0)) + 1.0)
+    cold = min(-60.0, float(np.min(problem.x0)) - 1.0)
+    cols, rows = _Variables(), LinearRows()
+    rest = [cols.take(n_blocks + 1, 0.0, 1.0, block_min * np.arange(n_blocks + 1), integer=True) for _ in range(n_seg)]
+    chunks = [[None] * n_seg for _ in range(n_gen)]
+    for k in range(n_seg):
+        low, high = problem.displacement_bounds(k)
+        for g in range(n_gen):
+            chunks[g][k] = cols.take(1, np.ceil(low / settings.chunk_A - 1e-9),
+                                     np.floor(high / settings.chunk_A + 1e-9), integer=True)
+            size = cols.take(1, 0.0, np.inf, settings.displacement_weight / 60.0 * durations_h[k] * settings.chunk_A)
+            rows.add([(size, [1.0]), (chunks[g][k], [-1.0])], [0.0], [np.inf])
+            rows.add([(size, [1.0]), (chunks[g][k], [1.0])], [0.0], [np.inf])
+        rows.add([(rest[k], np.ones((1, n_blocks + 1)))], [1.0], [1.0])
+        rows.add([(np.concatenate([chunks[g][k] for g in range(n_gen)]), np.ones((1, n_gen)))], [0.0], [0.0])
+    for g, generator in enumerate(problem.generators):
+        u_rest = problem.inputs(g, problem.rest_current_A)
+        xss = generator.steady_state(u_rest)
+        y_rest = generator.Dy @ u_rest + generator.ey
+        E_block, _ = generator.step(settings.block_s)
+        powers = [np.eye(nx)]
+        for _ in range(n_blocks):
+            powers.append(E_block @ powers[-1])
+        entry_terms, entry_value = [], problem.x0[g]
+        for k in range(n_seg):
+            z = [cols.take(nx, -np.inf, np.inf) for _ in range(n_blocks + 1)]
+            rows.add([(np.concatenate(z), np.tile(np.eye(nx), n_blocks + 1))] + entry_terms, entry_value, entry_value)
+            for n in range(n_blocks + 1):  # z = 0 unless this rest length is chosen
+                rows.add([(z[n], np.eye(nx)), (rest[k][n], -hot * np.ones(nx))], np.full(nx, -np.inf), 0.0)
+                rows.add([(z[n], np.eye(nx)), (rest[k][n], -cold * np.ones(nx))], np.zeros(nx), np.inf)
+                for j in range(1, n + 1):  # temperatures at the end of every block of this rest
+                    offset = generator.Cy @ (np.eye(nx) - powers[j]) @ xss + y_rest - problem.limit_C
+                    rows.add([(z[n], generator.Cy @ powers[j]), (rest[k][n], offset)],
+                             np.full(len(offset), -np.inf), 0.0)
+            start = cols.take(nx, -np.inf, np.inf)
+            terms = [(z[n], -powers[n]) for n in range(n_blocks + 1)]
+            terms += [(rest[k][n], -(np.eye(nx) - powers[n]) @ xss) for n in range(n_blocks + 1)]
+            rows.add([(start, np.eye(nx))] + terms, np.zeros(nx), np.zeros(nx))
+            (P_y, phi_y, sigma_y), (P, phi, sigma) = _segment_maps(problem, g, k, settings.check_s)
+            rows.add([(start, P_y), (chunks[g][k], -settings.chunk_A * sigma_y)], np.full(len(phi_y), -np.inf),
+                     problem.limit_C - phi_y)
+            entry_terms = [(start, -P), (chunks[g][k], settings.chunk_A * sigma)]
+            entry_value = phi
+    lbx, ubx, cost, integer = cols.arrays()
+    lba, uba = rows.bounds()
+    x, status, proven, gap = _solve_highs(cost, rows.matrix(len(cost)), lba, uba, lbx, ubx, integer,
+                                          settings.time_limit_s)
+    if x is None:
+        fallback = heuristic_plan(problem)
+        fallback.method, fallback.solve_s = "milp->heuristic", time.perf_counter() - started
+        fallback.warnings.append(f"MILP found no discrete schedule ({status}); using the heuristic")
+        return fallback
+    rests = np.array([settings.block_s * np.argmax(x[r]) for r in rest])
+    displaced = np.array([[settings.chunk_A * round(x[chunks[g][k][0]]) for k in range(n_seg)] for g in range(n_gen)])
+    schedule = Schedule(displaced, rests)
+    warnings = [] if proven else [f"MILP optimality not proven ({status})"]
+    result = evaluate(problem, schedule, "milp", time.perf_counter() - started, warnings)
+    result.details = {"objective_min": float(cost @ x), "status": status, "certified": bool(proven), "mip_gap": gap}
+    return result
+
+
+def milp_objective(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings = MilpSettings()) -> float:
+    """The MILP objective (min) of any discrete ``schedule``: rest minutes plus the displacement
+    penalty, for comparing against the MILP's certified optimum."""
+    durations_h = np.array([s.duration_s for s in problem.segments]) / 3600.0
+    penalty = settings.displacement_weight / 60.0 * np.sum(np.abs(schedule.displaced_A) * durations_h)
+    return schedule.added_rest_s / 60.0 + float(penalty)

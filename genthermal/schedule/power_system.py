@@ -1,0 +1,411 @@
+r"""A power system of N ≥ 2 generators sharing one mission's load demand, with faults at onsets.
+
+Every generator carries the mission's load profile :math:`I_{ini}(t)` (thesis 7.3.2: "initially
+applied to both generators"), so the total demand is :math:`N\,I_{ini}(t)`. A load manager may move
+current between generators (load displacement, thesis eqs. 7.3-7.4) or put all of them into the
+minimum power mode (generator resting, thesis eq. 7.1).
+
+Scenario keys (top level of a mission YAML, kept unchecked by :mod:`genthermal.mission` and
+validated here)::
+
+    generators:                    # optional mapping
+      count: 2                     # >= 2 (default 2), or names: [left, right]
+      rest_percent: 27.3           # minimum power mode, % of rated (default: condition 1 continuous)
+      limit_C: 110                 # temperature limit theta_max, degC (thesis 7.3.1)
+      current_limit_percent: 100   # highest phase current a generator may carry, % of rated
+      plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
+      machine: genco_rf201a
+    faults:                        # optional list
+      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
+      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10}
+      - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
+      - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
+
+Blockage mapping (assumed): the thesis calls the 10 mm outlet "20 % of the non-fault state" (50 mm),
+read here as the coolant flow fraction :math:`k_{flow} = d/d_0` (0.2 at 10 mm). A pure orifice at
+fixed pressure would give the area ratio :math:`(d/d_0)^2 = 0.04`; the fan raises its pressure when
+throttled, so the flow falls much less, and 0.2-0.3 is the plausible range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Any, Mapping
+
+import casadi as ca
+import numpy as np
+
+from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
+from ..design import linear_design_model
+from ..effects import get_effect
+from ..errors import InputError
+from ..losses import INPUT_NAMES
+from ..machines import MACHINES, build_model
+from ..mission import EXCITATION_GAIN_A_PER_A, EXCITATION_NO_LOAD_A, Mission
+
+#: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
+DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
+#: Temperature limit of the thesis experiments, degC (hot-spot rating 140 degC, 30 K allowance).
+DEFAULT_LIMIT_C = 110.0
+#: Assumed model mismatch of the true plant against the design model (parameter factors).
+DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
+#: Unblocked coolant outlet diameter of the thesis rig, mm (thesis 7.3.1).
+OUTLET_DIAMETER_MM = 50.0
+FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
+_GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
+                   "plant_mismatch", "machine")
+_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "inlet_rise_C"),
+               "inlet_rise": ("inlet_rise_C",), "effect": ("effect", "values", "inlet_rise_C")}
+
+
+@dataclasses.dataclass(frozen=True)
+class Fault:
+    """A fault on one generator from an onset time on.
+
+    Attributes
+    ----------
+    generator : int
+        Index of the generator (0-based).
+    onset_s : float
+        Onset, s since the mission start (absolute time: rests do not move it).
+    kind : str
+        One of :data:`FAULT_KINDS`.
+    inlet_rise_C : float
+        Rise of the coolant inlet temperature from the onset on, K.
+    effect : str or None
+        Catalogue effect applied to the plant and design models (``coolant_flow_reduction`` for a
+        blockage), None for an inlet rise alone.
+    values : dict
+        Parameter values of ``effect`` (``{"k_flow": 0.2}``).
+    """
+
+    generator: int
+    onset_s: float
+    kind: str
+    inlet_rise_C: float = 0.0
+    effect: str | None = None
+    values: Mapping[str, float] = dataclasses.field(default_factory=dict)
+
+    def describe(self, names: tuple[str, ...]) -> str:
+        """One line: what happens to which generator when."""
+        what = ", ".join(f"{k}={v:g}" for k, v in self.values.items())
+        effect = f"{self.effect}({what})" if self.effect else ""
+        rise = f"inlet +{self.inlet_rise_C:g} K" if self.inlet_rise_C else ""
+        return f"{names[self.generator]}: {self.kind} at {self.onset_s / 60:g} min " + \
+            " and ".join(part for part in (effect, rise) if part)
+
+
+def _number(entry, key, path, low, high, unit, default=None):
+    if key not in entry:
+        if default is None:
+            raise InputError(f"{path}.{key}", None, f"missing: give {key} ({unit})")
+        return default
+    value = checked_number(entry[key], f"{path}.{key}", f"a number ({unit})")
+    if not low <= value <= high:
+        raise InputError(f"{path}.{key}", entry[key], f"must lie in {low:g}..{high:g} {unit}")
+    return value
+
+
+def _generator_index(value, names, path) -> int:
+    if isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= len(names):
+        return value - 1
+    if isinstance(value, str) and value in names:
+        return names.index(value)
+    raise InputError(f"{path}.generator", value,
+                     f"must be a generator number 1..{len(names)} or a name among {', '.join(names)}")
+
+
+def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
+    """Build a :class:`Fault` from a scenario entry (schema in the module docstring).
+
+    Raises
+    ------
+    InputError
+        Naming the field (``faults[0].k_flow``).
+    """
+    if not isinstance(entry, Mapping):
+        raise InputError(path, entry, "each fault must be a mapping such as {generator: 1, kind: "
+                         "coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}")
+    kind = entry.get("kind")
+    if kind not in FAULT_KINDS:
+        raise InputError(f"{path}.kind", kind, f"must be one of {', '.join(FAULT_KINDS)}")
+    reject_unknown_keys(entry, ("generator", "kind", "onset_min") + _FAULT_KEYS[kind], prefix=f"{path}.")
+    if "generator" not in entry:
+        raise InputError(f"{path}.generator", None, "missing: which generator (number 1.. or name)")
+    generator = _generator_index(entry["generator"], names, path)
+    onset_s = 60.0 * _number(entry, "onset_min", path, 0.0, 1e5, "min")
+    rise = _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K", default=0.0)
+    if kind == "inlet_rise":
+        return Fault(generator, onset_s, kind, _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K"))
+    if kind == "coolant_blockage":
+        if ("k_flow" in entry) == ("outlet_diameter_mm" in entry):
+            raise InputError(f"{path}.k_flow", entry.get("k_flow"),
+                             "give exactly one of k_flow (flow fraction) and outlet_diameter_mm")
+        if "k_flow" in entry:
+            k_flow = _number(entry, "k_flow", path, 0.05, 1.0, "(flow fraction)")
+        else:
+            k_flow = _number(entry, "outlet_diameter_mm", path, 2.5, OUTLET_DIAMETER_MM, "mm") / OUTLET_DIAMETER_MM
+        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", {"k_flow": k_flow})
+    try:
+        effect = get_effect(entry.get("effect"))
+    except InputError as error:
+        raise InputError(f"{path}.effect", error.value, error.reason) from None
+    values = entry.get("values", {})
+    if not isinstance(values, Mapping):
+        raise InputError(f"{path}.values", values, "must be a mapping of the effect's parameters")
+    bounds = {p.name: p for p in effect.parameters}
+    checked = {}
+    for name, value in values.items():
+        if name not in bounds:
+            raise InputError(f"{path}.values.{name}", value, f"unknown; {effect.name} takes {', '.join(bounds)}")
+        checked[name] = _number(values, name, f"{path}.values", bounds[name].lower, bounds[name].upper,
+                                bounds[name].unit)
+    return Fault(generator, onset_s, kind, rise, effect.name, checked)
+
+
+class AffineGenerator:
+    r"""A linear design model as matrices: :math:`\dot x = Lx + Bu + c`, :math:`y = C_yx + D_yu + e_y`.
+
+    The phase current :math:`I` enters affinely, :math:`u = u_0 + I\,e_I` with
+    :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases, assumed exciter). ``L`` has real
+    eigenvalues :math:`L = V\Lambda V^{-1}`, so a rest of free length :math:`h` at constant input
+    is exactly :math:`x(h) = x_{ss} + V e^{\Lambda h}V^{-1}(x(0) - x_{ss})`.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        An affine (linear design) model.
+    """
+
+    def __init__(self, model):
+        if not model.is_affine:
+            raise InputError("model", model.name, "the scheduler plans on the linear design model")
+        nx, nu = model.n_states, len(INPUT_NAMES)
+        x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+        xdot = model.functions["rhs"](x, u, model.p0)
+        y = model.functions["outputs"](x, u, model.p0)
+        matrices = ca.Function("m", [x, u], [ca.jacobian(xdot, x), ca.jacobian(xdot, u),
+                                             ca.jacobian(y, x), ca.jacobian(y, u), xdot, y])
+        L, B, Cy, Dy, c, ey = (np.asarray(m) for m in matrices(np.zeros(nx), np.zeros(nu)))
+        self.model, self.L, self.B, self.c, self.Cy, self.Dy, self.ey = model, L, B, c.ravel(), Cy, Dy, ey.ravel()
+        self.e_I = np.zeros(nu)
+        self.e_I[[INPUT_NAMES.index(p) for p in ("I_u", "I_v", "I_w")]] = 1.0
+        self.e_I[INPUT_NAMES.index("I_exc")] = EXCITATION_GAIN_A_PER_A
+        eigenvalues, self.V = np.linalg.eig(L)
+        if np.max(np.abs(eigenvalues.imag)) > 0 or np.max(eigenvalues.real) >= 0:
+            raise InputError("model", model.name, "the design model needs real, negative eigenvalues")
+        self.eigenvalues, self.V_inv = eigenvalues.real, np.linalg.inv(self.V)
+        self.V = self.V.real
+        self._steps: dict = {}
+
+    def input(self, current_A, inlet_C: float, ambient_C: float) -> np.ndarray:
+        """Input vectors for phase currents ``current_A`` (A RMS), shape ``(..., n_inputs)``."""
+        u0 = np.zeros(len(INPUT_NAMES))
+        u0[INPUT_NAMES.index("I_exc")] = EXCITATION_NO_LOAD_A
+        u0[INPUT_NAMES.index("T_inlet")] = inlet_C
+        u0[INPUT_NAMES.index("T_ambient")] = ambient_C
+        return u0 + np.multiply.outer(np.asarray(current_A, dtype=float), self.e_I)
+
+    def forcing(self, u: np.ndarray) -> np.ndarray:
+        """:math:`Bu + c`, K/s, for inputs of shape ``(..., n_inputs)``."""
+        return u @ self.B.T + self.c
+
+    def step(self, h_s: float) -> tuple[np.ndarray, np.ndarray]:
+        r"""Exact ZOH step of length ``h_s``: :math:`x^+ = Ex + \Gamma(Bu + c)` → ``(E, Γ)``."""
+        key = round(float(h_s), 9)
+        if key not in self._steps:
+            decay = np.exp(self.eigenvalues * key)
+            self._steps[key] = ((self.V * decay) @ self.V_inv,
+                                (self.V * ((decay - 1.0) / self.eigenvalues)) @ self.V_inv)
+        return self._steps[key]
+
+    def steady_state(self, u: np.ndarray) -> np.ndarray:
+        """Steady state (°C) for constant input ``u``."""
+        return -np.linalg.solve(self.L, self.forcing(u))
+
+    def outputs(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Sensor temperatures (°C) for states ``(..., n_states)`` and inputs ``(..., n_inputs)``."""
+        return x @ self.Cy.T + u @ self.Dy.T + self.ey
+
+
+@functools.lru_cache(maxsize=4)
+def _nominal_models(machine: str):
+    """The nominal simulation model and its linear design model (built once per machine; models
+    are not changed after they are built)."""
+    model = build_model(machine)
+    return model, linear_design_model(model)
+
+
+@dataclasses.dataclass
+class PowerSystem:
+    """N generators flying one mission, with faults, a rest mode and a temperature limit.
+
+    Parameters
+    ----------
+    mission : Mission
+        The load demand of every generator (balanced phases).
+    generator_names : tuple of str
+        At least two.
+    faults : tuple of Fault
+    rest_percent : float
+        Minimum power mode during a rest, % of rated current.
+    limit_C : float
+        :math:`\theta_{max}` for the winding and the iron, °C.
+    current_limit_percent : float
+        Highest phase current a generator may carry, % of rated (100: rated 7 A).
+    plant_mismatch : dict
+        Parameter name → factor applied to the nominal value in the true plant.
+    machine : str
+        Built-in machine of every generator.
+    """
+
+    mission: Mission
+    generator_names: tuple[str, ...] = ("gen1", "gen2")
+    faults: tuple[Fault, ...] = ()
+    rest_percent: float = DEFAULT_REST_PERCENT
+    limit_C: float = DEFAULT_LIMIT_C
+    current_limit_percent: float = 100.0
+    plant_mismatch: Mapping[str, float] = dataclasses.field(default_factory=lambda: dict(DEFAULT_PLANT_MISMATCH))
+    machine: str = "genco_rf201a"
+
+    def __post_init__(self):
+        if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
+            raise InputError("generators.names", list(self.generator_names), "need at least two distinct names")
+        for index, action in enumerate(self.mission.actions):
+            if len(set(action.phase_share)) != 1:
+                raise InputError(f"actions[{index}].phase_share", list(action.phase_share),
+                                 "the load manager handles balanced loads only")
+        for index, fault in enumerate(self.faults):
+            if fault.effect and any(f.effect == fault.effect and f.generator == fault.generator
+                                    for f in self.faults[:index]):
+                raise InputError(f"faults[{index}].kind", fault.kind,
+                                 f"{self.generator_names[fault.generator]} already has {fault.effect}")
+        self._models: dict = {}
+
+    @classmethod
+    def from_mission(cls, mission: Mission) -> "PowerSystem":
+        """Read the ``generators`` and ``faults`` keys of a mission (schema in the module docstring)."""
+        config = mission.extras.get("generators", {}) or {}
+        if not isinstance(config, Mapping):
+            raise InputError("generators", config, "must be a mapping such as {count: 2}")
+        reject_unknown_keys(config, _GENERATOR_KEYS, prefix="generators.")
+        if "names" in config:
+            names = config["names"]
+            if not isinstance(names, list) or not all(isinstance(n, str) and n for n in names):
+                raise InputError("generators.names", names, "must be a list of at least two names")
+            names = tuple(names)
+        else:
+            count = config.get("count", 2)
+            if isinstance(count, bool) or not isinstance(count, int) or not 2 <= count <= 8:
+                raise InputError("generators.count", count, "must be a whole number 2..8")
+            names = tuple(f"gen{i + 1}" for i in range(count))
+        machine = config.get("machine", "genco_rf201a")
+        if machine not in MACHINES:
+            raise InputError("generators.machine", machine, f"unknown machine; built in: {', '.join(MACHINES)}")
+        mismatch = config.get("plant_mismatch", DEFAULT_PLANT_MISMATCH)
+        if not isinstance(mismatch, Mapping):
+            raise InputError("generators.plant_mismatch", mismatch, "must map parameter names to factors")
+        factors = {str(k): _number(mismatch, k, "generators.plant_mismatch", 0.2, 5.0, "(factor)") for k in mismatch}
+        fault_entries = mission.extras.get("faults", []) or []
+        if not isinstance(fault_entries, list):
+            raise InputError("faults", fault_entries, "must be a list of faults")
+        faults = tuple(parse_fault(e, names, f"faults[{i}]") for i, e in enumerate(fault_entries))
+        return cls(mission, names, faults,
+                   rest_percent=_number(config, "rest_percent", "generators", 0.0, 100.0, "%", DEFAULT_REST_PERCENT),
+                   limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC", DEFAULT_LIMIT_C),
+                   current_limit_percent=_number(config, "current_limit_percent", "generators", 50.0, 150.0,
+                                                 "%", 100.0),
+                   plant_mismatch=factors, machine=machine)
+
+    # --- quantities -------------------------------------------------------------------------
+    @property
+    def n_generators(self) -> int:
+        """Number of generators."""
+        return len(self.generator_names)
+
+    @property
+    def rated_current_A(self) -> float:
+        """Rated phase current of the mission, A RMS."""
+        return self.mission.rated_current_A
+
+    @property
+    def rest_current_A(self) -> float:
+        """Phase current in the minimum power mode, A RMS."""
+        return self.rest_percent / 100.0 * self.rated_current_A
+
+    @property
+    def current_limit_A(self) -> float:
+        """Highest phase current a generator may carry, A RMS."""
+        return self.current_limit_percent / 100.0 * self.rated_current_A
+
+    def faults_known_at(self, t_s: float) -> tuple[int, ...]:
+        """Indices of the faults whose onset is at or before ``t_s``."""
+        return tuple(i for i, f in enumerate(self.faults) if f.onset_s <= t_s + 1e-9)
+
+    def inlet_C(self, generator: int, t_s) -> np.ndarray:
+        """Coolant inlet temperature of ``generator`` at times ``t_s`` (°C): mission value plus the
+        rises of the faults that have started."""
+        t = np.asarray(t_s, dtype=float)
+        inlet = np.full(t.shape, self.mission.T_inlet_C)
+        for fault in self.faults:
+            if fault.generator == generator:
+                inlet = inlet + np.where(t >= fault.onset_s - 1e-9, fault.inlet_rise_C, 0.0)
+        return inlet
+
+    # --- models -----------------------------------------------------------------------------
+    def _cached(self, key, build):
+        if key not in self._models:
+            self._models[key] = build()
+        return self._models[key]
+
+    def _with_faults(self, model, generator: int, fault_indices) -> Any:
+        for index in fault_indices:
+            fault = self.faults[index]
+            if fault.generator == generator and fault.effect:
+                try:
+                    model = model.with_effect(fault.effect, **fault.values)
+                except InputError as error:
+                    raise InputError(f"faults[{index}].effect", fault.effect, error.reason) from None
+        return model
+
+    @property
+    def nominal_model(self):
+        """Nonlinear simulation model of the machine with its nominal parameters."""
+        return _nominal_models(self.machine)[0]
+
+    def plant_model(self, generator: int, fault_indices=()):
+        """True plant: the nominal model with ``plant_mismatch`` and the given faults applied."""
+        def build():
+            base = self.nominal_model
+            try:
+                values = {name: base.parameters.value(name) * factor for name, factor in self.plant_mismatch.items()}
+                plant = base.with_parameters("assumed", "plant mismatch of the closed-loop test", **values)
+            except (InputError, KeyError) as error:
+                raise InputError("generators.plant_mismatch", dict(self.plant_mismatch), str(error)) from None
+            return self._with_faults(plant, generator, fault_indices)
+        relevant = tuple(i for i in fault_indices if self.faults[i].generator == generator and self.faults[i].effect)
+        return self._cached(("plant", generator, relevant), build)
+
+    def plant_switches(self, generator: int) -> tuple[Any, list]:
+        """The plant of ``generator`` before any fault and its ``(onset_s, model)`` switches."""
+        onsets = sorted({f.onset_s for f in self.faults if f.generator == generator and f.effect})
+        return self.plant_model(generator), [(t, self.plant_model(generator, self.faults_known_at(t))) for t in onsets]
+
+    def design_generator(self, generator: int, fault_indices=()) -> AffineGenerator:
+        """Linear design model (thesis 5.2) of the nominal machine with the given faults, as matrices."""
+        relevant = tuple(i for i in fault_indices if self.faults[i].generator == generator and self.faults[i].effect)
+        effects = tuple((self.faults[i].effect, tuple(self.faults[i].values.items())) for i in relevant)
+
+        def build():
+            design = _nominal_models(self.machine)[1]
+            return AffineGenerator(self._with_faults(design, generator, relevant))
+        return self._cached(("affine", effects), build)
+
+    def describe(self) -> str:
+        """Several lines: generators, rest mode, limit, faults."""
+        lines = [f"{self.n_generators} generators ({', '.join(self.generator_names)}) flying {self.mission.name}; "
+                 f"rest mode {self.rest_percent:g} % of rated, limit {self.limit_C:g} °C, current limit "
+                 f"{self.current_limit_A:g} A"]
+        lines += [f"  fault {fault.describe(self.generator_names)}" for fault in self.faults]
+        return "\n".join(lines)

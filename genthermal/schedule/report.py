@@ -1,0 +1,147 @@
+"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``), plots and the scheduler demo.
+
+Keys of :func:`flight_summary`:
+
+``mission_time_s``      end of the last action, s
+``added_rest_s``        mission time minus the nominal mission duration, s
+``max_T_winding``       per generator name, highest winding temperature, °C (true plant when flown)
+``max_T_iron``          per generator name, highest iron temperature, °C
+``breach_s``            time with any generator above θmax, s
+``replans``             number of (re-)plans
+``median_solve_s``      median wall-clock time of a plan, s (0 without plans)
+``displaced_Ah``        phase current moved off generators times time, A·h
+``feasible``            every plan kept the prediction within the planning limit
+``warnings``            scheduler fallbacks and infeasibility messages
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+matplotlib.use("Agg")  # files, not windows
+import matplotlib.pyplot as plt  # noqa: E402
+
+from .closed_loop import FlightResult, ManagerSettings  # noqa: E402
+from .power_system import PowerSystem  # noqa: E402
+
+OUTPUT_LABELS = ("T_winding", "T_iron")
+
+
+def flight_summary(result: FlightResult) -> dict:
+    """The summary keys (module docstring) of a flown or planned mission."""
+    system = result.system
+    names = system.generator_names
+    dt = float(np.diff(result.time_s[:2])[0]) if result.time_s.size > 1 else 0.0
+    above = result.temperatures_C[:, :, 1:] > system.limit_C
+    shed = np.clip(result.nominal_A[None, :] - result.currents_A, 0.0, None)[:, ~result.resting]
+    solve_times = [plan["solve_s"] for plan in result.plans]
+    summary = {
+        "scheduler": result.scheduler,
+        "closed_loop": result.closed_loop,
+        "mission_time_s": float(result.time_s[-1]),
+        "added_rest_s": float(result.time_s[-1] - system.mission.duration_s),
+        "max_T_winding": {n: float(result.temperatures_C[g, 0].max()) for g, n in enumerate(names)},
+        "max_T_iron": {n: float(result.temperatures_C[g, 1].max()) for g, n in enumerate(names)},
+        "breach_s": float(np.count_nonzero(above.any(axis=(0, 1))) * dt),
+        "replans": len(result.plans),
+        "median_solve_s": float(np.median(solve_times)) if solve_times else 0.0,
+        "displaced_Ah": float(shed.sum() * dt / 3600.0),
+        "feasible": all(plan["feasible"] for plan in result.plans),
+        "warnings": list(dict.fromkeys(result.warnings)),
+    }
+    return summary
+
+
+def summary_text(summary: dict, limit_C: float) -> str:
+    """A few lines for the terminal."""
+    peaks = ", ".join(f"{name} {summary['max_T_winding'][name]:.1f}/{summary['max_T_iron'][name]:.1f}"
+                      for name in summary["max_T_winding"])
+    lines = [f"mission time {summary['mission_time_s'] / 60:.1f} min "
+             f"(added rest {summary['added_rest_s'] / 60:.1f} min); "
+             f"peak winding/iron °C: {peaks}",
+             f"time above {limit_C:g} °C: {summary['breach_s']:.0f} s; plans: {summary['replans']}, median solve "
+             f"{summary['median_solve_s']:.2f} s; displaced {summary['displaced_Ah']:.2f} A·h"]
+    lines += [w if w.startswith("infeasible") else f"warning: {w}" for w in summary["warnings"]]
+    return "\n".join(lines)
+
+
+def plot_flight(result: FlightResult, title: str = "", path=None):
+    """Applied currents (rests shaded) and winding and iron temperatures of every generator."""
+    system = result.system
+    hours = result.time_s / 3600.0
+    fig, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True, gridspec_kw={"height_ratios": [1, 1.4, 1.4]})
+    steps = hours[:-1]
+    axes[0].step(steps, result.nominal_A, where="post", color="k", ls=":", lw=1, label="nominal")
+    for g, name in enumerate(system.generator_names):
+        axes[0].step(steps, result.currents_A[g], where="post", lw=1.3, label=name)
+        for panel, output in zip(axes[1:], OUTPUT_LABELS):
+            panel.plot(hours, result.temperatures_C[g, OUTPUT_LABELS.index(output)], lw=1.3, label=name)
+    for ax in axes:
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], result.resting.astype(int), [0]])))
+        for start, end in zip(edges[::2], edges[1::2]):
+            ax.axvspan(steps[start], hours[end], color="tab:green", alpha=0.15, lw=0)
+        ax.grid(alpha=0.3)
+    for panel, output in zip(axes[1:], OUTPUT_LABELS):
+        panel.axhline(system.limit_C, color="red", ls="--", lw=1, label=f"limit {system.limit_C:g} °C")
+        panel.set_ylabel(f"{output} [°C]")
+        panel.legend(loc="upper left", fontsize=8)
+    axes[0].set_ylabel("phase current [A]")
+    axes[0].legend(loc="lower right", fontsize=8, ncol=system.n_generators + 1)
+    axes[-1].set_xlabel("time [h] (green: rest)")
+    kind = "closed loop, true plant" if result.closed_loop else "open-loop plan, design model"
+    axes[0].set_title(title or f"{system.mission.name}: {result.scheduler} ({kind})")
+    fig.tight_layout()
+    if path is not None:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return fig
+
+
+def comparison_table(summaries: dict) -> str:
+    """Markdown table of several summaries (label → summary)."""
+    header = ("| scheduler | mission min | added rest min | peak winding °C | breach s | plans | median solve s "
+              "| displaced A·h |")
+    rows = [header, "|" + "---|" * 8]
+    for label, s in summaries.items():
+        rows.append(f"| {label} | {s['mission_time_s'] / 60:.1f} | {s['added_rest_s'] / 60:.1f} | "
+                    f"{max(s['max_T_winding'].values()):.1f} | {s['breach_s']:.0f} | {s['replans']} | "
+                    f"{s['median_solve_s']:.2f} | {s['displaced_Ah']:.2f} |")
+    return "\n".join(rows)
+
+
+def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
+    """Fly the large-blockage mission closed loop with the heuristic and the optimal scheduler.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Folder for ``schedule_heuristic.png`` and ``schedule_optimal.png``.
+    scenario : str
+        Shipped scenario name or path.
+
+    Returns
+    -------
+    dict
+        ``scenario``, ``summaries`` (scheduler → :func:`flight_summary`), ``table`` (markdown) and
+        ``plots`` (paths).
+    """
+    from ..mission import load_mission
+    from .closed_loop import fly
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    system = PowerSystem.from_mission(load_mission(scenario))
+    summaries, plots = {}, []
+    for scheduler in ("heuristic", "optimal"):
+        result = fly(system, scheduler, ManagerSettings())
+        summaries[scheduler] = flight_summary(result)
+        path = out / f"schedule_{scheduler}.png"
+        plot_flight(result, path=path)
+        plots.append(str(path))
+    table = comparison_table(summaries)
+    print(f"== Load management, {system.mission.name} (closed loop, true plant) ==\n{system.describe()}\n{table}")
+    return {"scenario": system.mission.name, "summaries": summaries, "table": table, "plots": plots}

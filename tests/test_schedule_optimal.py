@@ -1,0 +1,81 @@
+"""Optimal (IPOPT) and MILP (HiGHS) schedules on the design model, and infeasible cases."""
+
+import itertools
+
+import numpy as np
+import pytest
+
+from genthermal.mission import load_mission
+from genthermal.schedule.closed_loop import ManagerSettings, plan_mission, plan_with
+from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
+from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict
+from genthermal.schedule.power_system import AffineGenerator, PowerSystem
+
+
+@pytest.fixture(scope="module")
+def blockage():
+    return PowerSystem.from_mission(load_mission("blockage_large"))
+
+
+@pytest.fixture(scope="module")
+def open_loop_plans(blockage):
+    return {s: plan_mission(blockage, s) for s in ("heuristic", "optimal", "milp")}
+
+
+def test_optimal_rests_no_more_than_the_heuristic_and_keeps_the_limit(blockage, open_loop_plans):
+    heuristic, optimal = open_loop_plans["heuristic"], open_loop_plans["optimal"]
+    planning_limit = blockage.limit_C - ManagerSettings().margin_K
+    for flown in (heuristic, optimal):
+        assert flown.plans and all(plan["feasible"] for plan in flown.plans)
+        assert flown.temperatures_C.max() <= planning_limit + 0.05  # design model, every 10 s
+    rest = {name: flown.time_s[-1] - blockage.mission.duration_s for name, flown in open_loop_plans.items()}
+    assert rest["heuristic"] > 0
+    assert rest["optimal"] <= 0.75 * rest["heuristic"]
+    assert open_loop_plans["optimal"].plans[0]["method"] == "optimal"
+
+
+def test_milp_plan_is_certified_and_feasible(open_loop_plans):
+    plan = open_loop_plans["milp"].plans[0]
+    assert plan["certified"] and plan["feasible"]
+    assert plan["status"].startswith("HiGHS")
+
+
+@pytest.fixture(scope="module")
+def tiny(design_model):
+    faulty = AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2))
+    healthy = AffineGenerator(design_model)
+    inlets = np.array([51.0, 20.0])
+    x0 = np.array([g.steady_state(g.input(4.5, t, 20.0)) for g, t in zip((faulty, healthy), inlets)])
+    segments = (Segment(0, "a", 900.0, ((0.0, 5.5),)), Segment(1, "b", 900.0, ((0.0, 6.0),)))
+    return PlanningProblem(segments, [faulty, healthy], x0, inlets, 20.0, 1.911, 7.0, limit_C=108.0,
+                           max_rest_s=900.0)
+
+
+def test_milp_optimum_is_no_worse_than_any_enumerated_discrete_schedule(tiny):
+    settings = MilpSettings(chunk_A=0.5, max_rest_s=900.0)
+    result = milp_plan(tiny, settings)
+    assert result.method == "milp" and result.details["certified"]
+    assert result.feasible and predict(tiny, result.schedule).peak()[0] <= tiny.limit_C + 0.05
+    best = np.inf
+    # gen1 sheds m chunks, gen2 takes them: both currents within [0, 7 A]
+    chunks = [range(max(int(np.ceil(lo / 0.5 - 1e-9)), -int(np.floor(hi / 0.5 + 1e-9))),
+                    min(int(np.floor(hi / 0.5 + 1e-9)), -int(np.ceil(lo / 0.5 - 1e-9))) + 1)
+              for lo, hi in (tiny.displacement_bounds(0), tiny.displacement_bounds(1))]
+    for r0, r1, m0, m1 in itertools.product(range(4), range(4), *chunks):
+        schedule = Schedule(np.array([[0.5 * m0, 0.5 * m1], [-0.5 * m0, -0.5 * m1]]), 300.0 * np.array([r0, r1]))
+        if predict(tiny, schedule).peak()[0] <= tiny.limit_C:
+            best = min(best, milp_objective(tiny, schedule, settings))
+    assert np.isfinite(best)
+    assert result.details["objective_min"] <= best + 1e-6
+    assert milp_objective(tiny, result.schedule, settings) == pytest.approx(result.details["objective_min"], abs=1e-6)
+
+
+def test_infeasible_case_names_the_lowest_peak_and_the_action(tiny):
+    hopeless = PlanningProblem(tiny.segments, tiny.generators, tiny.x0, tiny.inlet_C, 20.0, 1.911, 7.0,
+                               limit_C=60.0, max_rest_s=900.0)
+    result = plan_with("heuristic", hopeless, ManagerSettings(), ("gen1", "gen2"), limit_C=60.0)
+    assert not result.feasible
+    message = result.warnings[-1]
+    assert message.startswith("infeasible: no schedule keeps θ ≤ 60 °C")
+    assert "lowest reachable peak is" in message and "during action" in message
+    assert result.details["lowest_peak_C"] > 60.0

@@ -1,0 +1,70 @@
+"""Power system, faults and schedule data: scenario schema, timelines, remaining plans."""
+
+import numpy as np
+import pytest
+
+from genthermal.errors import InputError
+from genthermal.mission import Mission, load_mission
+from genthermal.schedule.plan import Schedule, build_timeline, mission_segments, remaining_after
+from genthermal.schedule.power_system import PowerSystem
+
+ACTIONS = [{"condition": "taxi", "duration_min": 15}, {"condition": "landing", "duration_min": 20}]
+
+
+def system_from(**extras):
+    return PowerSystem.from_mission(Mission.from_dict({"name": "t", "actions": ACTIONS, **extras}))
+
+
+def test_large_blockage_scenario_maps_the_outlet_to_a_flow_factor():
+    system = PowerSystem.from_mission(load_mission("blockage_large"))
+    (fault,) = system.faults
+    assert system.generator_names == ("gen1", "gen2")
+    assert fault.effect == "coolant_flow_reduction" and fault.values["k_flow"] == pytest.approx(0.2)
+    assert system.inlet_C(0, [0.0, 66 * 60.0]).tolist() == [20.0, 51.0]
+    assert system.inlet_C(1, 66 * 60.0) == 20.0
+    assert system.rest_current_A == pytest.approx(0.273 * 7.0)
+    assert system.faults_known_at(66 * 60.0 - 1) == () and system.faults_known_at(66 * 60.0) == (0,)
+
+
+@pytest.mark.parametrize("extras, field", [
+    ({"faults": [{"generator": 1, "kind": "coolant_blockage", "onset_min": 66, "k_flow": 3}]}, "faults[0].k_flow"),
+    ({"faults": [{"generator": 5, "kind": "inlet_rise", "onset_min": 1, "inlet_rise_C": 4}]}, "faults[0].generator"),
+    ({"faults": [{"generator": 1, "kind": "meltdown"}]}, "faults[0].kind"),
+    ({"faults": [{"generator": 1, "kind": "effect", "effect": "phase_short", "onset_min": 1}]}, "faults[0].effect"),
+    ({"faults": [{"generator": 1, "kind": "inlet_rise", "onset_min": 1, "inlet_rise_C": 4, "k_flow": 0.2}]},
+     "faults[0].k_flow"),
+    ({"faults": [{"generator": 1, "kind": "coolant_blockage", "onset_min": 6, "k_flow": 0.2,
+                  "outlet_diameter_mm": 10}]}, "faults[0].k_flow"),
+    ({"faults": [{"generator": "gen1", "kind": "inlet_rise", "inlet_rise_C": 4}]}, "faults[0].onset_min"),
+    ({"faults": {"generator": 1}}, "faults"),
+    ({"generators": {"count": 1}}, "generators.count"),
+    ({"generators": {"rest_percent": 150}}, "generators.rest_percent"),
+    ({"generators": {"colour": "red"}}, "generators.colour"),
+    ({"generators": {"plant_mismatch": {"h_end_air": -1}}}, "generators.plant_mismatch.h_end_air"),
+])
+def test_bad_fields_name_the_field(extras, field):
+    with pytest.raises(InputError) as error:
+        system_from(**extras)
+    assert error.value.field == field
+
+
+def test_effect_fault_and_named_generators():
+    system = system_from(generators={"names": ["left", "right"]},
+                         faults=[{"generator": "right", "kind": "effect", "effect": "phase_short_circuit",
+                                  "onset_min": 10, "values": {"R_short": 0.3}}])
+    assert system.faults[0].generator == 1 and system.faults[0].values == {"R_short": 0.3}
+
+
+def test_segments_timeline_and_what_remains():
+    mission = Mission.from_dict({"name": "t", "actions": ACTIONS})
+    segments = mission_segments(mission)
+    assert segments[1].levels == ((0.0, 7.0), (300.0, pytest.approx(0.767 * 7.0)))
+    schedule = Schedule(np.array([[0.0, 0.5], [0.0, -0.5]]), np.array([0.0, 125.0]))
+    timeline = build_timeline(segments, schedule, 1.911, 10.0)
+    assert timeline.n_steps == 90 + 13 + 120  # the 125 s rest rounds up to 130 s
+    assert timeline.resting[90:103].all() and timeline.currents_A[0, 103] == pytest.approx(6.5)
+    left, rest_of = remaining_after(segments, schedule, timeline, 95)
+    assert len(left) == 1 and rest_of.rest_before_s[0] == pytest.approx(75.0)
+    left, rest_of = remaining_after(segments, schedule, timeline, 103 + 10)
+    assert left[0].duration_s == pytest.approx(1100.0) and left[0].levels[0] == (0.0, 7.0)
+    assert left[0].levels[1][0] == pytest.approx(200.0) and rest_of.rest_before_s[0] == 0.0
