@@ -16,6 +16,12 @@ def test_demo_runs_end_to_end(tmp_path, capsys):
     assert max(summary["estimation"]["filter_rmse"].values()) < 1.0
     for minutes in summary["estimation"]["improved_minutes"].values():
         assert min(minutes.values()) >= 20.0
+    for summary_of_flight in summary["load_management"]["summaries"].values():
+        assert summary_of_flight["breach_s"] == 0
+    flights = summary["load_management"]["summaries"]
+    assert flights["optimal"]["added_rest_s"] <= flights["heuristic"]["added_rest_s"]
+    discovery = summary["discovery"]
+    assert discovery["verdict"] != "none" and discovery["rmse_after"] < 0.2 * discovery["rmse_before"]
     for picture in ("mission_healthy.png", "blockage.png", "design_vs_simulation.png", "prediction.png"):
         assert (tmp_path / picture).stat().st_size > 10_000
     assert "Kalman filter" in capsys.readouterr().out
