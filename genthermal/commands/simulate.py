@@ -33,6 +33,9 @@ def run(args) -> int:
     result.to_csv(out, index=False, float_format="%.6f")
     peak = result[model.output_names].max()
     print(f"{mission.name}: {mission.duration_s / 3600:.2f} h on {model.name}, dt = {dt:g} s")
+    if mission.extras.get("faults"):
+        print("note: this scenario's faults and generators are not simulated here (one healthy generator "
+              "on the nominal profile); `genthermal plan` and `genthermal fly` run them")
     for name, value in peak.items():
         print(f"  peak {name}: {value:.2f} °C")
     print(f"wrote {out} ({len(result)} rows)")
