@@ -227,7 +227,6 @@ class ThermalModel:
         p = ca.SX.sym("p", len(self.parameter_names))
         internal = self.state_names + self.massless_names
         index = {name: i for i, name in enumerate(internal)}
-        b_index = {name: i for i, name in enumerate(self.boundary_names)}
         theta_internal = ca.SX.sym("theta", len(internal))  # placeholder for all internal temps
         symbols = [self.parameters[n].symbol for n in self.parameter_names]
         symbols += [input_symbol(n) for n in INPUT_NAMES]

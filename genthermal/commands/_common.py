@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from ..design import linear_design_model
 from ..errors import InputError
@@ -55,3 +56,15 @@ def positive_float(option: str, text: str) -> float:
     if not value > 0:
         raise InputError(option, text, "must be a positive number")
     return value
+
+
+def non_negative_float(option: str, text: str) -> float:
+    """Parse a finite number >= 0 for ``option`` or raise InputError naming it."""
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise InputError(option, text, "must be a number >= 0") from None
+    if not (math.isfinite(value) and value >= 0):
+        raise InputError(option, text, "must be a number >= 0")
+    return value
+

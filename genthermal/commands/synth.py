@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from ..errors import InputError
 from ..machines import build_model
 from ..mission import load_mission
 from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
-from ._common import parse_assignments, positive_float
+from ._common import non_negative_float, parse_assignments, positive_float
 
 
 def register(subparsers) -> None:
@@ -36,17 +35,6 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def non_negative(option: str, text: str) -> float:
-    """Parse a finite number >= 0 for ``option`` or raise InputError naming it."""
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        raise InputError(option, text, "must be a number >= 0") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise InputError(option, text, "must be a number >= 0")
-    return value
-
-
 def run(args) -> int:
     """Simulate the plant and write the CSV."""
     dt = positive_float("--dt", args.dt)
@@ -56,8 +44,8 @@ def run(args) -> int:
         raise InputError("--seed", args.seed, "must be a whole number") from None
     if seed < 0:
         raise InputError("--seed", args.seed, "must be a whole number >= 0")
-    noise = (non_negative("--noise-winding", args.noise_winding), non_negative("--noise-iron", args.noise_iron))
-    current_noise = non_negative("--current-noise", args.current_noise)
+    noise = (non_negative_float("--noise-winding", args.noise_winding), non_negative_float("--noise-iron", args.noise_iron))
+    current_noise = non_negative_float("--current-noise", args.current_noise)
     overrides = parse_assignments(args.param)
     mission = load_mission(args.scenario)
     plant = build_model(args.machine)

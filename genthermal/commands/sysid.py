@@ -27,7 +27,7 @@ from ..estimation.arx_search import (
     training_record,
 )
 from ..measurements import load_measurements, resample
-from ._common import positive_float
+from ._common import non_negative_float, positive_float
 
 #: Largest order or delay accepted on the command line (the search grows as the product of ranges).
 MAX_STRUCTURE_VALUE = 20
@@ -69,17 +69,6 @@ def parse_range(option: str, text: str, smallest: int) -> range:
     if low < smallest or high < low or high > MAX_STRUCTURE_VALUE:
         raise InputError(option, text, f"need {smallest} <= LOW <= HIGH <= {MAX_STRUCTURE_VALUE}")
     return range(low, high + 1)
-
-
-def non_negative_float(option: str, text: str) -> float:
-    """Parse a number >= 0 for ``option`` or raise InputError naming it."""
-    try:
-        value = float(text)
-    except (TypeError, ValueError):
-        raise InputError(option, text, "must be a number >= 0") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise InputError(option, text, "must be a number >= 0")
-    return value
 
 
 def run(args) -> int:
