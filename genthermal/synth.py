@@ -37,7 +37,7 @@ CURRENT_COLUMNS = (*PHASE_CURRENTS, "I_exc")
 
 def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed: int = 0,
                noise_var=THESIS_NOISE_VARIANCE_K2, current_noise: float = DEFAULT_CURRENT_NOISE,
-               x0=None) -> pd.DataFrame:
+               x0=None, switches=()) -> pd.DataFrame:
     r"""Simulate ``model`` on a mission and return what the rig's sensors would record.
 
     Parameters
@@ -59,6 +59,8 @@ def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed:
         Relative standard deviation :math:`c` of the measured currents (0.01 = 1 %).
     x0 : array_like or float, optional
         Initial plant state, °C (default: the machine cold at the first ambient temperature).
+    switches : sequence of (float, ThermalModel)
+        Plant models that take over at an onset (a fault), as in :func:`genthermal.simulate.simulate`.
 
     Returns
     -------
@@ -82,7 +84,7 @@ def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed:
     for output in ("T_winding", "T_iron"):
         if output not in model.output_names:
             raise InputError("model", model.name, f"has no output {output}; outputs: {model.output_names}")
-    truth = simulate(model, inputs, x0=x0)
+    truth = simulate(model, inputs, x0=x0, switches=switches)
     rng = np.random.default_rng(seed)
     n = len(truth)
     frame = pd.DataFrame({"time_s": truth["time_s"].to_numpy()})

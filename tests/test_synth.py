@@ -93,3 +93,19 @@ def test_bad_synth_arguments_exit_2_naming_the_option(extra, named, tmp_path, ca
     err = capsys.readouterr().err
     assert named in err and "Traceback" not in err
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_synth_records_the_faults_of_a_scenario(tmp_path, capsys):
+    """Faults come from the scenario: generator 1 of the large blockage overheats, generator 2 not."""
+    peaks = {}
+    for generator in (1, 2):
+        out = tmp_path / f"gen{generator}.csv"
+        assert main(["synth", "blockage_large", "--out", str(out), "--dt", "60",
+                     "--generator", str(generator)]) == 0
+        data = load_measurements(out).frame
+        peaks[generator] = (data["T_winding_u"].max(), data["T_inlet"].max())
+    assert peaks[1][0] > 110.0 and peaks[1][1] == pytest.approx(51.0)
+    assert peaks[2][0] < 100.0 and peaks[2][1] == pytest.approx(20.0)
+    assert "coolant_blockage at 66 min" in capsys.readouterr().out
+    assert main(["synth", "blockage_large", "--out", str(tmp_path / "x.csv"), "--generator", "3"]) == 2
+    assert "--generator" in capsys.readouterr().err

@@ -32,6 +32,8 @@ def register(subparsers) -> None:
     parser.add_argument("--machine", default="genco_rf201a", help="built-in machine (default genco_rf201a)")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="plant parameter override (SI units), e.g. --param h_end_air=13; repeatable")
+    parser.add_argument("--generator", type=int, default=1,
+                        help="which generator of a fault scenario to record (1-based, default 1)")
     parser.set_defaults(func=run)
 
 
@@ -52,13 +54,46 @@ def run(args) -> int:
     if overrides:
         plant = plant.with_parameters(provenance="assumed", source="synthetic plant, set on the command line",
                                       **overrides)
-    frame = synthesize(plant, mission, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise)
+    inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
+    frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
+                       switches=switches)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     frame.to_csv(out, index=False, float_format="%.5f")
     changed = ", ".join(f"{name}={value:g}" for name, value in overrides.items()) or "default parameters"
     print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} ({changed}), seed {seed}")
+    if fault_text:
+        print(f"faults of generator {args.generator}: {fault_text}")
     print(f"noise variances: winding {noise[0]:g} K² per sensor, iron {noise[1]:g} K², currents "
           f"{100 * current_noise:g} %")
     print(f"wrote {out}")
     return 0
+
+
+def apply_scenario_faults(plant, mission, dt_s: float, generator: int):
+    """The inputs and plant switches of one generator of a scenario with ``faults``.
+
+    Each fault of that generator raises its coolant inlet temperature and switches the plant to
+    the fault's catalogue effect from its onset (the schema is that of
+    :mod:`genthermal.schedule.power_system`). Returns ``(inputs, switches, description)``.
+    """
+    inputs = mission.to_inputs(dt_s)
+    if not mission.extras.get("faults"):
+        return inputs, [], ""
+    from ..schedule.power_system import PowerSystem
+
+    system = PowerSystem.from_mission(mission)
+    if not 1 <= generator <= system.n_generators:
+        raise InputError("--generator", generator, f"the scenario has generators 1..{system.n_generators}")
+    index = generator - 1
+    inputs["T_inlet"] = system.inlet_C(index, inputs["time_s"].to_numpy())
+    faults = sorted((f for f in system.faults if f.generator == index), key=lambda f: f.onset_s)
+    switches, model = [], plant
+    for fault in faults:
+        if fault.effect:
+            model = model.with_effect(fault.effect, **fault.values)
+            switches.append((fault.onset_s, model))
+    text = "; ".join(f"{f.kind} at {f.onset_s / 60:g} min (inlet +{f.inlet_rise_C:g} K"
+                     + (f", {f.effect} {dict(f.values)})" if f.effect else ")") for f in faults)
+    return inputs, switches, text or "none"
+
