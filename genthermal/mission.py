@@ -16,8 +16,8 @@ Missions are stored as YAML under ``scenarios/`` at the top of the repository::
       - {load_percent: 100, duration_min: 60}       # constant load, 0..120 % of rated
       - {condition: cruise, duration_min: 45, phase_share: [1.1, 1.0, 0.9]}
     extensions: {}                       # optional mapping: free-form data, not checked
-    faults: ...                          # reserved for fault scenarios, kept unchecked
-    generators: ...                      # reserved for multi-generator missions, kept unchecked
+    faults: ...                          # fault scenarios: checked by genthermal.schedule.power_system
+    generators: ...                      # generators of the power system: checked there too
 
 Any other key is an error. Every problem is reported as :class:`~genthermal.errors.InputError`
 whose field is a path into the document (``actions[3].duration_min``).
