@@ -41,13 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers.required = True
     for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(f"genthermal.commands.{name}")
-        except ModuleNotFoundError as exc:  # a command not built yet is simply not offered
-            if exc.name == f"genthermal.commands.{name}":
-                continue
-            raise
-        module.register(subparsers)
+        importlib.import_module(f"genthermal.commands.{name}").register(subparsers)
     return parser
 
 

@@ -70,3 +70,11 @@ def test_bad_scenarios_name_the_field(document, named, tmp_path, capsys):
     assert main(["simulate", _bad_scenario(tmp_path, document), "--out", str(tmp_path / "x.csv")]) == 2
     err = capsys.readouterr().err
     assert named in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "synth", "estimate", "sysid",
+                                     "compare-models", "compare", "calibrate", "diagnose", "plan", "fly"])
+def test_every_command_documents_itself(command, capsys):
+    with pytest.raises(SystemExit) as stopped:
+        main([command, "--help"])
+    assert stopped.value.code == 0 and "usage: genthermal" in capsys.readouterr().out
