@@ -13,12 +13,16 @@ import pandas as pd  # noqa: E402
 LIMIT_C = 110.0
 
 
-def finish_figure(fig, path=None):
-    """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it."""
+def finish_figure(fig, path=None, close: bool = False):
+    """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it.
+
+    ``close`` releases the figure from pyplot after saving (for reports that draw many)."""
     fig.tight_layout()
     if path is not None:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=110)
+    if close:
+        plt.close(fig)
     return fig
 
 

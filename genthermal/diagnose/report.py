@@ -9,19 +9,16 @@ from pathlib import Path
 import numpy as np
 
 from ..mission import SCENARIO_DIR
-from ..plots import plt  # the Agg backend is chosen there
+from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from .compare import REGRESSORS, Comparison, compare
 from .discover import Diagnosis
 
-_FIGURE_DPI = 110
 #: The shipped demo dataset (which effect is hidden is said in its README, not in the CSV).
 DEMO_DATA = SCENARIO_DIR / "data" / "hidden_effect_demo.csv"
 
 
 def _save(fig, path: Path) -> str:
-    fig.tight_layout()
-    fig.savefig(path, dpi=_FIGURE_DPI)
-    plt.close(fig)
+    finish_figure(fig, path, close=True)
     return path.name
 
 

@@ -18,14 +18,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 
-matplotlib.use("Agg")  # files, not windows
-import matplotlib.pyplot as plt  # noqa: E402
-
-from .closed_loop import FlightResult, ManagerSettings  # noqa: E402
-from .power_system import PowerSystem  # noqa: E402
+from ..plots import finish_figure, plt  # the Agg backend is chosen there
+from .closed_loop import FlightResult, ManagerSettings
+from .power_system import PowerSystem
 
 OUTPUT_LABELS = ("T_winding", "T_iron")
 
@@ -93,12 +90,7 @@ def plot_flight(result: FlightResult, title: str = "", path=None):
     axes[-1].set_xlabel("time [h] (green: rest)")
     kind = "closed loop, true plant" if result.closed_loop else "open-loop plan, design model"
     axes[0].set_title(title or f"{system.mission.name}: {result.scheduler} ({kind})")
-    fig.tight_layout()
-    if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return fig
+    return finish_figure(fig, path, close=True)
 
 
 def comparison_table(summaries: dict) -> str:
