@@ -130,3 +130,41 @@ def _step_functions(x, u, w, x_next) -> tuple[ca.Function, ca.Function]:
     forced = ca.Function("forced_step", [x, u, w], [x_next], ["x", "u", "w"], ["x_next"])
     unforced = ca.substitute(x_next, w, ca.SX.zeros(w.numel()))
     return ca.Function("step", [x, u], [unforced], ["x", "u"], ["x_next"]), forced
+
+
+#: Largest step-doubling difference accepted for a filter step, K (see :func:`check_step_accuracy`).
+STEP_TOLERANCE_K = 0.05
+
+
+def check_step_accuracy(model: ThermalModel, dt_s: float, tolerance_K: float = STEP_TOLERANCE_K) -> float:
+    """Check that ``model`` can be discretised at ``dt_s`` accurately enough for a filter.
+
+    One step of ``dt_s`` is compared with two steps of ``dt_s / 2`` from the cold machine (every
+    node at 20 °C) at rated current (``model.spec.rated_current_A`` on every phase, the
+    mission's excitation law): the difference estimates the step's local error. The exact
+    zero-order hold of an affine model has none; the exponential integrator of the nonlinear model
+    differs by 1e-5 K at 10 s, 2e-3 K at 60 s, 0.16 K at 300 s (thesis generator).
+
+    Returns
+    -------
+    float
+        The step-doubling difference, K.
+
+    Raises
+    ------
+    InputError
+        Naming ``dt_s`` when it is not a positive number or the difference exceeds ``tolerance_K``.
+    """
+    from .mission import excitation_current  # the mission module builds on the model
+
+    step = model.discretise(dt_s).step
+    half = model.discretise(dt_s / 2.0).step
+    rated = model.spec.rated_current_A
+    u = model.input_vector(rated, rated, rated, excitation_current(rated), 20.0, 20.0)
+    x = np.full(model.n_states, 20.0)
+    difference = float(np.max(np.abs(np.asarray(step(x, u)) - np.asarray(half(half(x, u), u)))))
+    if difference > tolerance_K:
+        raise InputError("dt_s", dt_s, f"{model.name} cannot be discretised accurately at this step: one step "
+                         f"and two half steps differ by {difference:.3g} K at rated load (limit {tolerance_K:g} K); "
+                         "use a shorter step")
+    return difference

@@ -78,7 +78,7 @@ def test_baseline_calibration_absorbs_a_different_healthy_machine(plant_model, t
     healthy.data.to_csv(tmp_path / "healthy.csv", index=False)
     faulty.data.to_csv(tmp_path / "faulty.csv", index=False)
     out = tmp_path / "diagnosis.json"
-    assert main(["diagnose", "genco_rf201a", str(tmp_path / "faulty.csv"), "--baseline",
+    assert main(["diagnose", "--model", "genco_rf201a", str(tmp_path / "faulty.csv"), "--baseline",
                  str(tmp_path / "healthy.csv"), "--json", str(out), "--report", str(tmp_path / "report")]) == 0
     document = json.loads(out.read_text())
     assert document["verdict"] == "winding_insulation_degradation"
@@ -89,11 +89,11 @@ def test_baseline_calibration_absorbs_a_different_healthy_machine(plant_model, t
 
 
 @pytest.mark.parametrize("argv, field", [
-    (["diagnose", "genco_rf201x", "DATA"], "model"),
-    (["diagnose", "genco_rf201a", "MISSING_COLUMN"], "column"),
-    (["diagnose", "genco_rf201a", "DATA", "--dt", "-5"], "--dt"),
-    (["calibrate", "genco_rf201a", "DATA", "--params", "k_cr,h_end_ari"], "--params"),
-    (["compare", "genco_rf201a", "NO_SUCH_FILE"], "no_such_file.csv"),
+    (["diagnose", "--model", "genco_rf201x", "DATA"], "--model"),
+    (["diagnose", "MISSING_COLUMN"], "column"),
+    (["diagnose", "DATA", "--dt", "-5"], "--dt"),
+    (["calibrate", "DATA", "--model", "genco_rf201a", "--params", "k_cr,h_end_ari"], "--params"),
+    (["compare", "NO_SUCH_FILE"], "no_such_file.csv"),
 ])
 def test_bad_inputs_exit_2_naming_the_field(argv, field, tmp_path, capsys, plant_model):
     data = _case(None, plant_model, seed=1).data

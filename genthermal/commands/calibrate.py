@@ -1,11 +1,12 @@
-"""``genthermal calibrate MODEL DATA.csv --params k_cr,h_end_air --out model.yaml``."""
+"""``genthermal calibrate DATA.csv [--model NAME|FILE] --params k_cr,h_end_air --out model.yaml``."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-from ..model_file import load_model, save_model
+from ..model_file import save_model
+from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step
 
 
@@ -27,7 +28,7 @@ def run(args) -> int:
     """Calibrate, print the table and warnings, write the model file."""
     from ..diagnose.calibrate import calibrate, check_parameter_names
 
-    model = load_model(args.model)
+    model = model_from_args(args)
     names = check_parameter_names(model, args.params.split(","), "--params")
     result = calibrate(model, args.data, names, data_step(args))
     summary = result.to_dict()

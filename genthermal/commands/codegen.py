@@ -1,4 +1,4 @@
-"""``genthermal codegen --out DIR [--variant nonlinear|linear] [--dt 10]``: C code of the model.
+"""``genthermal codegen --out DIR [--model NAME|FILE] [--dt 10]``: C code of the model.
 
 Writes the CasADi-generated sources, their header, the ABI layer (``gt.c``, ``gt.h``), the
 example program with its Makefile and ``ABI.md`` into DIR, then compiles ``libgt.so`` there. The

@@ -1,11 +1,12 @@
-"""``genthermal diagnose MODEL DATA.csv [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
+"""``genthermal diagnose DATA.csv [--model NAME|FILE] [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-from ..model_file import load_model, save_model
+from ..model_file import save_model
+from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step
 
 
@@ -29,7 +30,7 @@ def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
     from ..diagnose.discover import diagnose
 
-    model = load_model(args.model)
+    model = model_from_args(args)
     result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")

@@ -5,10 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import InputError
-from ..machines import build_model
 from ..mission import load_mission
 from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
-from ._common import non_negative_float, parse_assignments, positive_float
+from ._common import add_model_arguments, model_from_args, non_negative_float, parse_assignments, positive_float
 
 
 def register(subparsers) -> None:
@@ -29,9 +28,7 @@ def register(subparsers) -> None:
                         help="noise variance of the iron and outlet sensors, K² (default 0.013)")
     parser.add_argument("--current-noise", default=str(DEFAULT_CURRENT_NOISE), metavar="REL",
                         help="relative standard deviation of the measured currents (default 0.01)")
-    parser.add_argument("--machine", default="genco_rf201a", help="built-in machine (default genco_rf201a)")
-    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="plant parameter override (SI units), e.g. --param h_end_air=13; repeatable")
+    add_model_arguments(parser, what="the plant")
     parser.add_argument("--generator", type=int, default=1,
                         help="which generator of a fault scenario to record (1-based, default 1)")
     parser.set_defaults(func=run)
@@ -50,10 +47,7 @@ def run(args) -> int:
     current_noise = non_negative_float("--current-noise", args.current_noise)
     overrides = parse_assignments(args.param)
     mission = load_mission(args.scenario)
-    plant = build_model(args.machine)
-    if overrides:
-        plant = plant.with_parameters(provenance="assumed", source="synthetic plant, set on the command line",
-                                      **overrides)
+    plant = model_from_args(args, source="synthetic plant, set on the command line")
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
     frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
                        switches=switches)

@@ -31,7 +31,9 @@ Process noise, in K² and W² per step:
   ``benchmarks/bench_prediction.py`` (calibrated model, records it was not fitted on): 5-120 W/h
   and 1-15 W were tried; 15 W/h with 5 W gave the lowest winding errors at 15-60 min on the
   healthy records with 30-min errors on the blockage within 0.2 K of the best; a larger drift
-  chases the noise and load transients (60 W/h: 15-min error 0.59 instead of 0.45 K).
+  chases the noise and load transients (60 W/h: 15-min error 0.59 instead of 0.45 K). A
+  disturbance that decays (first-order Markov, 10-30 min) helps on healthy records at load steps
+  but loses the blockage (30-min error 6.6-9.6 K instead of 2.5 K), so the walk is not damped.
 
 Predictions hold the disturbance at its last estimate (:meth:`ExtendedKalmanFilter.forecast`):
 a constant model error is carried into the future, which is what makes them offset-free.
@@ -43,6 +45,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
+from ..discretise import check_step_accuracy
 from ..errors import InputError
 from ..losses import INPUT_NAMES
 from ..model import ThermalModel
@@ -84,7 +87,8 @@ class ExtendedKalmanFilter(RecursiveFilter):
         Any model: the nonlinear simulation model, a calibrated or diagnosed model file, or the
         linear design model (then :math:`F` is constant).
     dt_s : float
-        Filter step, s (the data must be sampled at this step).
+        Filter step, s (the data must be sampled at this step); checked by
+        :func:`~genthermal.discretise.check_step_accuracy`.
     disturbance_nodes : sequence of str, optional
         Nodes that receive an unknown heat flow; default the sensor nodes
         (``model.spec.sensors``), one per measured output, so the disturbances are observable.
@@ -105,6 +109,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
                             ("initial_disturbance_W", initial_disturbance_W)):
             if not (np.isfinite(value) and value >= 0):
                 raise InputError(name, value, "must be a heat flow in W >= 0")
+        check_step_accuracy(model, dt_s)
         discrete = model.discretise(dt_s)
         self.model, self.dt_s = model, float(dt_s)
         nodes = list(model.spec.sensors.values()) if disturbance_nodes is None else list(disturbance_nodes)
