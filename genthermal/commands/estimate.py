@@ -44,7 +44,7 @@ def register(subparsers) -> None:
         "prediction from --predict-from beats the open-loop model.")
     parser.add_argument("data", help="rig data CSV (genthermal.measurements schema)")
     add_model_arguments(parser)
-    parser.add_argument("--filter", default="ekf", choices=FILTERS,
+    parser.add_argument("--filter", default="ekf", metavar="|".join(FILTERS),
                         help="ekf: extended Kalman filter on the model with disturbance heat flows (default); "
                         "kf: the thesis's linear filter on the model's linear design model")
     parser.add_argument("--every", default=str(DEFAULT_EVERY_MIN), metavar="MIN",
@@ -92,6 +92,8 @@ def run(args) -> int:
     if not (math.isfinite(margin) and margin >= 0):
         raise InputError("--margin", args.margin, "must be a number of kelvin >= 0")
     every = positive_float("--every", args.every)
+    if args.filter not in FILTERS:
+        raise InputError("--filter", args.filter, f"must be one of {', '.join(FILTERS)}")
     if args.steady_state and args.filter != "kf":
         raise InputError("--steady-state", True, "only the linear filter has a steady-state gain; add --filter kf")
     model = model_from_args(args)
