@@ -22,6 +22,7 @@ from ..estimation.prediction import (
     DEFAULT_MARGIN_K,
     DEFAULT_SMOOTHING_MIN,
     THESIS_STARTS_MIN,
+    check_sensors,
     check_start_times,
     horizon_starts,
     on_grid,
@@ -100,10 +101,7 @@ def run(args) -> int:
     data = on_grid(load_measurements(args.data), dt)
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
     horizon_starts(len(data.time_s), dt, DEFAULT_HORIZONS_MIN, every)
-    missing = [name for name in model.output_names if name not in data.sensors.columns]
-    if missing:
-        raise InputError(f"{args.data}: sensors", missing, f"{model.name} needs the sensors "
-                         f"{', '.join(model.output_names)}; is the model for another machine than the data?")
+    check_sensors(model, data, field=f"{args.data}: sensors")
     for flag in data.flags:
         print(f"warning: {flag}")
     model = model if args.filter == "ekf" or model.is_affine else linear_design_model(model)

@@ -92,6 +92,15 @@ def on_grid(data: MeasurementData, dt_s: float) -> MeasurementData:
     return resample(data, dt_s)
 
 
+def check_sensors(model: ThermalModel, data: MeasurementData, field: str = "data sensors") -> None:
+    """Raise InputError naming ``field`` when the record lacks a sensor of the model (a model of
+    another machine than the data)."""
+    missing = [name for name in model.output_names if name not in data.sensors.columns]
+    if missing:
+        raise InputError(field, missing, f"{model.name} measures {', '.join(model.output_names)}; "
+                         "is the model for another machine than the data?")
+
+
 def horizon_starts(n_samples: int, dt_s: float, horizons_min, every_min: float = DEFAULT_EVERY_MIN) -> np.ndarray:
     """Start samples every ``every_min`` (from ``every_min`` on) whose longest horizon ends in the record.
 
@@ -362,6 +371,7 @@ def prediction_study(model: ThermalModel, data, starts_min=THESIS_STARTS_MIN, dt
         Data without the model's sensors, a record shorter than the longest horizon, bad settings.
     """
     data = on_grid(data if isinstance(data, MeasurementData) else dataframe_to_measurements(data), dt_s)
+    check_sensors(model, data)
     kalman = kalman or ExtendedKalmanFilter(model, dt_s)
     if abs(kalman.dt_s - dt_s) > 1e-9 * dt_s:
         raise InputError("kalman.dt_s", kalman.dt_s, f"must equal dt_s = {dt_s:g} s")
