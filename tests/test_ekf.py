@@ -80,3 +80,28 @@ def test_bad_inputs_name_the_field(plant_model, ekf):
         prediction_study(other, data, starts_min=(60,))
     with pytest.raises(InputError, match="longest horizon"):
         prediction_study(plant_model, data.frame.iloc[:300], starts_min=(20,))
+
+
+def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
+    from genthermal.codegen import model_library
+    from genthermal.errors import CompilerNotFoundError
+    from genthermal.estimation.ekf import embedded_functions
+
+    functions = embedded_functions(plant_model, DT_S, predict_steps=30)
+    try:
+        library = model_library(plant_model, dt_s=DT_S, prefix="gte", extra_functions=functions)
+    except CompilerNotFoundError as exc:
+        pytest.skip(str(exc))
+    z = np.concatenate([np.linspace(40.0, 90.0, 8), [12.0, -4.0]])
+    P = ekf.P0 * 0.3 + 0.01
+    u = plant_model.input_vector(6.0, 6.0, 6.0, 0.93, 22.0, 21.0)
+    y = np.array([85.0, 60.0])
+    for measured in ([1.0, 1.0], [1.0, 0.0]):  # the iron sensor missing at this sample
+        compiled = library.call("ekf_update", z, P, u, y, np.array(measured))
+        step = ekf.update(z, P, np.where(np.array(measured) == 1, y, np.nan))
+        z_next, P_next = ekf.predict(step.x, step.P, u)
+        for c_value, python in zip(compiled, (step.x, step.P, z_next, P_next)):
+            assert np.max(np.abs(np.asarray(c_value).reshape(python.shape) - python)) < 1e-9
+    U = np.tile(u[:, None], (1, 30))
+    expected = ekf.forecast(z_next, np.hstack([U, U[:, :1]]))[1:].T  # outputs after each step
+    assert np.max(np.abs(library.call("ekf_predict", z_next, U) - expected)) < 1e-9

@@ -188,3 +188,66 @@ class ExtendedKalmanFilter(RecursiveFilter):
             self._forecasters[n] = self.state_step.mapaccum("forecast", n)
         Z = np.column_stack([z0, np.asarray(self._forecasters[n](z0, U))[:, :-1]]) if n > 1 else z0[:, None]
         return (self.H @ Z).T + self.e
+
+    # --- CasADi functions for code generation ----------------------------------------------
+    def update_function(self) -> ca.Function:
+        """``(z_pred, P_pred, u, y, measured) -> (z, P, z_next_pred, P_next_pred)``: one update
+        with the measurement and the prediction to the next sample, as :meth:`update` then
+        :meth:`predict`.
+
+        ``measured`` holds 1 for each sensor read at this sample and 0 for a missing one (its
+        ``y`` is then ignored): the sensor's row of :math:`H` and its innovation are zeroed and its
+        row and column of :math:`R` replaced by the identity's, which gives exactly the update
+        without that sensor.
+        """
+        nz, ny = len(self.state_names), len(self.output_names)
+        z, P = ca.SX.sym("z_pred", nz), ca.SX.sym("P_pred", nz, nz)
+        u, y, measured = ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
+        mask = ca.diag(measured)
+        H = mask @ ca.DM(self.H)
+        R = mask @ ca.DM(self.R) @ mask + ca.diag(1 - measured)
+        innovation = measured * (y - ca.DM(self.H) @ z - ca.DM(self.e))
+        K = ca.solve(H @ P @ H.T + R, H @ P).T
+        z_filtered = z + K @ innovation
+        I_KH = ca.DM.eye(nz) - K @ H
+        P_filtered = I_KH @ P @ I_KH.T + K @ R @ K.T
+        z_next, F = self.transition(z_filtered, u)
+        P_next = F @ P_filtered @ F.T + ca.DM(self.Q)
+        return ca.Function("ekf_update", [z, P, u, y, measured], [z_filtered, P_filtered, z_next, P_next],
+                           ["z_pred", "P_pred", "u", "y", "measured"], ["z", "P", "z_next_pred", "P_next_pred"])
+
+    def predict_function(self, n_steps: int) -> ca.Function:
+        """``(z, U) -> Y``: outputs after each of ``n_steps`` steps from the filter state ``z``, the
+        disturbances held (:meth:`forecast`); ``U`` is (n_inputs × n_steps), ``Y[:, k]`` (°C) the
+        outputs after step k + 1."""
+        if not (isinstance(n_steps, (int, np.integer)) and n_steps >= 1):
+            raise InputError("n_steps", n_steps, "must be an integer >= 1")
+        z, U = ca.MX.sym("z", len(self.state_names)), ca.MX.sym("U", len(INPUT_NAMES), int(n_steps))
+        Z = self.state_step.mapaccum("forecast", int(n_steps))(z, U)
+        Y = ca.DM(self.H) @ Z + ca.repmat(ca.DM(self.e), 1, int(n_steps))
+        return ca.Function(f"ekf_predict_{int(n_steps)}", [z, U], [Y], ["z", "U"], ["Y"])
+
+
+def embedded_functions(model: ThermalModel, dt_s: float = 10.0, predict_steps: int = 180) -> dict:
+    """The EKF's CasADi functions for the generated C library.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model the filter runs on (its own discrete step, with disturbance heat flows).
+    dt_s : float
+        Filter step, s.
+    predict_steps : int
+        Horizon of the n-step prediction, steps (default 180: 30 min at 10 s).
+
+    Returns
+    -------
+    dict
+        ``{"ekf_update": ExtendedKalmanFilter.update_function(), "ekf_predict":
+        ExtendedKalmanFilter.predict_function(predict_steps)}`` for
+        :func:`genthermal.codegen.generate_c`'s ``extra_functions``.
+    """
+    if int(predict_steps) != predict_steps or predict_steps < 1:
+        raise InputError("predict_steps", predict_steps, "must be a positive whole number of steps")
+    ekf = ExtendedKalmanFilter(model, dt_s)
+    return {"ekf_update": ekf.update_function(), "ekf_predict": ekf.predict_function(int(predict_steps))}
