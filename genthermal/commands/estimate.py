@@ -57,7 +57,8 @@ def register(subparsers) -> None:
     parser.add_argument("--dt", default="10",
                         help="filter step in s; data on another grid are resampled to it (default 10)")
     parser.add_argument("--plot", metavar="OUT.png", help="prediction plot (thesis Figs 6.8-6.10); the filter "
-                        "plot goes next to it as <name>_filter.png")
+                        "plot goes next to it as <name>_filter.png, the predictions against the measured winding "
+                        "and the error by horizon as <name>_horizons.png")
     parser.add_argument("--steady-state", action="store_true",
                         help="use the converged (steady-state) gain (--filter kf only)")
     parser.add_argument("--estimate-noise", action="store_true",
@@ -129,9 +130,11 @@ def run(args) -> int:
     if args.plot:
         plot = Path(args.plot)
         filter_plot = plot.with_name(f"{plot.stem}_filter{plot.suffix or '.png'}")
+        horizons_plot = plot.with_name(f"{plot.stem}_horizons{plot.suffix or '.png'}")
         study.plot(plot)
         result.plot(filter_plot)
-        print(f"wrote {plot} and {filter_plot}")
+        study.plot_horizons(horizons_plot)
+        print(f"wrote {plot}, {filter_plot} and {horizons_plot}")
     return 0
 
 

@@ -54,8 +54,9 @@ def run(args) -> int:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     frame.to_csv(out, index=False, float_format="%.5f")
-    changed = ", ".join(f"{name}={value:g}" for name, value in overrides.items()) or "default parameters"
-    print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} ({changed}), seed {seed}")
+    changed = "".join(f", {name}={value:g}" for name, value in overrides.items())
+    print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} (--model {args.model}{changed}), "
+          f"seed {seed}")
     if fault_text:
         print(f"faults of generator {args.generator}: {fault_text}")
     print(f"noise variances: winding {noise[0]:g} K² per sensor, iron {noise[1]:g} K², currents "

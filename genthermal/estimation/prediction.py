@@ -145,18 +145,20 @@ def horizon_errors(estimator: RecursiveFilter, result: FilterResult, open_loop: 
     -------
     dict
         ``"prediction"`` and ``"open_loop"``: horizon label → (n_starts × n_outputs) errors, K
-        (model − measured, NaN where not measured).
+        (model − measured, NaN where not measured); ``"forecasts"``: (n_starts × (longest + 1) ×
+        n_outputs) predicted outputs from each start to the longest horizon, °C.
     """
     steps = {f"{h:g}": int(round(float(h) * 60.0 / dt_s)) for h in horizons_min}
     longest = max(steps.values())
     U, Y = result.inputs, result.measured
     prediction = {label: np.empty((len(starts), Y.shape[1])) for label in steps}
+    forecasts = np.empty((len(starts), longest + 1, Y.shape[1]))
     for i, k in enumerate(starts):
-        forecast = estimator.forecast(result.filter_state(k), U[:, k:k + longest + 1])
+        forecasts[i] = estimator.forecast(result.filter_state(k), U[:, k:k + longest + 1])
         for label, n in steps.items():
-            prediction[label][i] = forecast[n] - Y[k + n]
+            prediction[label][i] = forecasts[i, n] - Y[k + n]
     open_loop_error = {label: open_loop[starts + n] - Y[starts + n] for label, n in steps.items()}
-    return {"prediction": prediction, "open_loop": open_loop_error}
+    return {"prediction": prediction, "open_loop": open_loop_error, "forecasts": forecasts}
 
 
 def _by_sensor(errors: np.ndarray, names, statistic) -> dict:
@@ -216,7 +218,7 @@ class PredictionStudy:
         Settings of the period (module docstring).
     horizon_errors : dict
         :func:`horizon_errors`: ``"prediction"`` / ``"open_loop"`` → horizon label (min) →
-        (n_starts × n_outputs) errors, K.
+        (n_starts × n_outputs) errors, K; ``"forecasts"`` the predicted outputs, °C.
     horizon_start_indices : numpy.ndarray
         Start samples of the error-by-horizon table (every ``every_min``).
     every_min : float
@@ -297,6 +299,41 @@ class PredictionStudy:
                                      "|open-loop error|; censored values are lower bounds (the record ended first)"),
             },
         }
+
+    def plot_horizons(self, path=None, sensor: str | None = None):
+        """Prediction vs measurement: the measured ``sensor`` (default the first output) with the
+        prediction from every start of the error-by-horizon table up to the longest horizon and the
+        open-loop model, and the RMS error by horizon of the prediction and the open loop."""
+        from ..plots import finish_figure, plt
+
+        result = self.filter_result
+        i = self.output_names.index(sensor or self.output_names[0])
+        name = self.output_names[i]
+        minutes = (result.time_s - result.time_s[0]) / 60.0
+        fig, (ax_t, ax_e) = plt.subplots(2, 1, figsize=(9, 7), gridspec_kw={"height_ratios": [2, 1]})
+        ax_t.plot(minutes, result.measured[:, i], ".", color="0.6", ms=2, label=f"{name} measured")
+        ax_t.plot(minutes, self.open_loop[:, i], "--", color="0.3", lw=1, label="open-loop model")
+        forecasts = self.horizon_errors["forecasts"]
+        for j, k in enumerate(self.horizon_start_indices):
+            ax_t.plot(minutes[k:k + forecasts.shape[1]], forecasts[j, :, i], lw=1.3, color=f"C{j % 10}",
+                      label="prediction from each start" if j == 0 else None)
+            ax_t.plot(minutes[k], forecasts[j, 0, i], "o", ms=3, color=f"C{j % 10}")
+        kind = "extended Kalman filter" if self.filter_kind == "ekf" else "Kalman filter"
+        ax_t.set(xlabel="time [min]", ylabel="temperature [°C]",
+                 title=f"{name}: predictions every {self.every_min:g} min ({kind} on {result.model.name})")
+        ax_t.legend(fontsize=8)
+        labels = list(self.horizon_errors["prediction"])
+        positions = np.arange(len(labels))
+        for offset, (which, text) in zip((-0.2, 0.2), (("prediction", "prediction"), ("open_loop", "open loop"))):
+            values = [self.by_horizon(which)[h][name] for h in labels]
+            bars = ax_e.bar(positions + offset, values, 0.4, label=f"{text} RMS")
+            ax_e.bar_label(bars, fmt="%.2f", fontsize=8)
+        ax_e.set(xticks=positions, xticklabels=[f"{h} min" for h in labels], ylabel=f"{name} RMS error [K]",
+                 title="error by horizon over all starts")
+        ax_e.legend(fontsize=8)
+        for ax in (ax_t, ax_e):
+            ax.grid(alpha=0.3)
+        return finish_figure(fig, path)
 
     def plot(self, path=None):
         """Prediction errors per sensor against the open-loop and filter errors (thesis Figs 6.8,
