@@ -20,7 +20,7 @@ class FilterResult:
     Attributes
     ----------
     model : ThermalModel
-        The design model filtered.
+        The model filtered (the linear design model for the Kalman filter, any model for the EKF).
     time_s : numpy.ndarray
         Sample times, s.
     inputs : numpy.ndarray

@@ -347,7 +347,8 @@ class PredictionStudy:
         for i, (name, ax) in enumerate(zip(names, axes)):
             measured = result.measured[:, i]
             ax.plot(minutes, self.open_loop[:, i] - measured, color="0.4", lw=1, label="open loop")
-            ax.plot(minutes, result.outputs[:, i] - measured, color="k", lw=0.6, label="Kalman filter")
+            ax.plot(minutes, result.outputs[:, i] - measured, color="k", lw=0.6,
+                    label="extended Kalman filter" if self.filter_kind == "ekf" else "Kalman filter")
             for start, predicted in self.predictions.items():
                 k = self.start_indices[start]
                 ax.plot(minutes[k:], predicted[:, i] - measured[k:], lw=1.2, label=f"prediction from {start:g} min")
