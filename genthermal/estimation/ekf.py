@@ -34,6 +34,11 @@ Process noise, in K² and W² per step:
   chases the noise and load transients (60 W/h: 15-min error 0.59 instead of 0.45 K). A
   disturbance that decays (first-order Markov, 10-30 min) helps on healthy records at load steps
   but loses the blockage (30-min error 6.6-9.6 K instead of 2.5 K), so the walk is not damped.
+  Unknown conductances from the sensor nodes to the coolant (heat :math:`-g_j(\theta_j -
+  T_{inlet})`, alone or next to the heat flows) were tried too: they follow the load, which helps
+  on the varying-load record (30-min winding error 0.4 instead of 1.0 K), but are worse on the
+  Fig. 3.2 flight (60 min: 0.7-1.3 instead of 0.56 K) and no better on the blockage, so they are
+  not part of the filter.
 
 Predictions hold the disturbance at its last estimate (:meth:`ExtendedKalmanFilter.forecast`):
 a constant model error is carried into the future, which is what makes them offset-free.
