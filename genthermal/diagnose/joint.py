@@ -1,0 +1,193 @@
+r"""Joint search over pairs of effects: parameters and both onsets fitted together.
+
+A greedy search adds the single effect that explains most, then the next: the first effect
+absorbs part of the second one's signature (a blockage from 1.3 h fitted from the start because
+an end-winding loss present from the start warms the winding too), and the second round cannot
+undo it. Here every pair of the best single effects is fitted as one model:
+
+1. pool: the :data:`PAIR_POOL` single effects of best ΔBIC (pruning: an effect that explains
+   nothing alone rarely belongs to the answer; two that each explain part do);
+2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
+   the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
+   effects fitted at each grid point by Levenberg-Marquardt (warm starts from the neighbour);
+3. from the best grid point, coordinate descent: each onset by golden section between its grid
+   neighbours with the values refitted, twice;
+4. on the full series: each onset refined within ± one coarse step, then both effects' values and
+   the initial state by Gauss-Newton with the exact Jacobian.
+
+The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
+effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
+applied against each of its members alone and against the best single effect
+(:func:`genthermal.diagnose.discover.choose_pair`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from .search import (Candidate, EffectSearch, _bic_delta, _indicator, _Problem, _regimes, _Structure,
+                     parameter_scaling)
+from .trajectory import ParametricSimulator
+
+#: Single effects (best ΔBIC first) whose pairs are fitted.
+PAIR_POOL = 4
+#: Onsets per effect in the coarse grid of a pair.
+PAIR_GRID = 6
+#: Rounds of coordinate descent over the two onsets.
+_DESCENT_ROUNDS = 2
+
+
+@dataclasses.dataclass
+class JointCandidate:
+    """Two effects fitted together.
+
+    Attributes
+    ----------
+    effects : tuple of str
+        The two effects, earlier onset first.
+    values : dict
+        Effect → fitted parameter values (model units).
+    onsets_s : dict
+        Effect → onset from the start of the record, s.
+    onset_indices : dict
+        Effect → onset sample index.
+    rss : float
+        Residual sum of squares, K².
+    k : int
+        Fitted parameters of both effects plus the two onsets.
+    rmse_before, rmse_after : float
+        RMSE without effects and with the pair, K.
+    delta_bic : float
+        ΔBIC against the model without effects.
+    predicted : numpy.ndarray
+        Model outputs with the pair, (n_outputs, N), °C.
+    significant : bool
+        Chosen by :func:`genthermal.diagnose.discover.choose_pair`.
+    """
+
+    effects: tuple
+    values: dict
+    onsets_s: dict
+    onset_indices: dict
+    rss: float
+    k: int
+    rmse_before: float
+    rmse_after: float
+    delta_bic: float
+    predicted: np.ndarray
+    significant: bool = False
+
+    def to_dict(self) -> dict:
+        """The JSON entry of the pair ranking."""
+        return {"effects": list(self.effects), "params": self.values, "onset_s": self.onsets_s,
+                "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
+                "k": self.k, "significant": self.significant}
+
+
+class PairSearch:
+    """Fit pairs of catalogue effects jointly on the series of a first-round :class:`EffectSearch`.
+
+    Parameters
+    ----------
+    search : EffectSearch
+        The first round (no effects found yet): its model, series, decimated series, initial state
+        coefficients, cache and score before.
+    """
+
+    def __init__(self, search: EffectSearch):
+        if search.found:
+            raise InputError("search.found", [f.effect for f in search.found],
+                             "a pair search starts from the model without found effects")
+        self.search = search
+
+    def _structure(self, pair: Sequence[str], series) -> _Structure:
+        search = self.search
+        key = ("pair model", search.model, tuple(pair))
+        if key not in search._cache:
+            model = search.model
+            for name in pair:
+                model = model.with_effect(search.effect(name))
+            search._cache[key] = model
+        model = search._cache[key]
+        groups = [[p.name for p in search.effect(name).parameters] for name in pair]
+        names = [n for group in groups for n in group]
+        simulator_key = ("pair simulator", search.model, tuple(pair), series.time_s.size, series.dt_s)
+        if simulator_key not in search._cache:
+            regimes = _regimes([(g, {n: n for n in g}) for g in groups])
+            search._cache[simulator_key] = ParametricSimulator(model, series.dt_s, series.input_matrix, names, regimes)
+        simulator = search._cache[simulator_key].with_inputs(series.input_matrix)
+        scalings = [parameter_scaling(model, p.name, typical=p.typical)
+                    for name in pair for p in search.effect(name).parameters]
+        return _Structure(simulator, series, scalings)
+
+    def fit(self, first: Candidate, second: Candidate) -> JointCandidate:
+        """Fit the effects of two single candidates jointly (started from their single fits)."""
+        search = self.search
+        pair = (first.effect, second.effect)
+        coarse = self._structure(pair, search.coarse)
+        z = np.array([s.decision(float(np.clip(v, s.lower, s.upper))) for s, v in
+                      zip(coarse.problem.scalings, [*first.values.values(), *second.values.values()])])
+        n = search.coarse.time_s.size
+        last = n - max(3, int(0.05 * n))
+        grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
+        best = (math.inf, None, z)
+        for i, a in enumerate(grid):
+            z_row = z
+            for b in grid:
+                z_row, rss = coarse.fit([int(a), int(b)], z_row, search.x0_coefficients)
+                if rss < best[0]:
+                    best = (rss, (i, int(np.searchsorted(grid, b))), z_row)
+        _, (i, j), z = best
+        onsets = [int(grid[i]), int(grid[j])]
+        ranges = [(int(grid[max(g - 1, 0)]), int(grid[min(g + 1, grid.size - 1)])) for g in (i, j)]
+        for _ in range(_DESCENT_ROUNDS):
+            for position, (low, high) in enumerate(ranges):
+                onsets[position], z, _ = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        full = self._structure(pair, search.series) if factor > 1 else coarse
+        onsets = [o * factor for o in onsets]
+        if factor > 1:
+            last_index = search.series.time_s.size - 1
+            for position in range(2):
+                onsets[position], z, _ = full.search_onset(onsets, position, z, search.x0_coefficients,
+                                                           max(onsets[position] - factor, 0),
+                                                           min(onsets[position] + factor, last_index))
+        problem = _Problem(full.problem.simulator, search.series, full.problem.scalings, exact=True,
+                           fit_initial_state=True)
+        indicator = _indicator(search.series.time_s.size, onsets)
+        z, rss = problem.gauss_newton(np.concatenate([z, [0.0, 0.0]]), search.x0_coefficients, indicator)
+        theta = problem.theta(z)
+        predicted = problem.simulator.outputs(theta, problem.initial(z, search.x0_coefficients), indicator)
+        values, position = {}, 0
+        for name in pair:
+            names = [p.name for p in search.effect(name).parameters]
+            values[name] = {p: float(theta[position + i]) for i, p in enumerate(names)}
+            position += len(names)
+        order = sorted(range(2), key=lambda m: onsets[m])
+        effects = tuple(pair[m] for m in order)
+        k = len(theta) + 2
+        rss = max(float(rss), 1e-300)
+        return JointCandidate(effects, {e: values[e] for e in effects},
+                              {pair[m]: search.elapsed_s(onsets[m]) for m in order},
+                              {pair[m]: int(onsets[m]) for m in order}, rss, k, search.rmse_before,
+                              math.sqrt(rss / search.n_valid), _bic_delta(rss, search.rss_before, search.n_valid, k),
+                              predicted)
+
+    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
+        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC); best ΔBIC first.
+
+        ``progress(done, total, label)`` is called after each pair when given."""
+        best = sorted(singles, key=lambda c: c.delta_bic)[:pool]
+        pairs = list(itertools.combinations(best, 2))
+        ranked = []
+        for done, (first, second) in enumerate(pairs, start=1):
+            ranked.append(self.fit(first, second))
+            if progress:
+                progress(done, len(pairs), f"{first.effect} + {second.effect}")
+        return sorted(ranked, key=lambda c: c.delta_bic)
