@@ -309,8 +309,8 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         Share one dict between diagnoses of the same ``model`` (no ``baseline``) on series of the
         same length to reuse the models and simulators built for the candidates.
     pairs : bool
-        In the first round, when the best single effect leaves more than noise, fit pairs of
-        effects jointly (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes
+        In the first round, when the residual after the best single effect fails the tests of
+        :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes
         :func:`choose_pair`.
     catalogue : mapping of str to Effect
         The effects searched (default: the catalogue of :mod:`genthermal.effects`).
@@ -349,7 +349,8 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         runner_up = ranked[1] if len(ranked) > 1 else None
         iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                               explain(best, search, runner_up))
-        if pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise:
+        if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
+                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names)["unexplained"]):
             iteration.pairs = PairSearch(search).rank(
                 ranked, progress=lambda done, total, label: report(f"pair {done}/{total} fitted: {label}"))
             chosen = choose_pair(iteration.pairs, ranked, search.noise)
