@@ -28,6 +28,19 @@ An effect is *significant* when all four hold:
   that only nibbles at a misfit is not the missing physics.
 
 The verdict is the best-ranked significant effect, else ``"none"``.
+
+Beyond one effect:
+
+* when the best single effect leaves a residual that is not noise, pairs of the best single effects
+  are fitted jointly, values and both onsets (:mod:`genthermal.diagnose.joint`), and a pair that
+  passes the four tests against the model, against each of its effects alone and against the best
+  single effect (:func:`choose_pair`) is the verdict (``"A + B"``);
+* the residual after the chosen effects is tested (:mod:`genthermal.diagnose.residual`): when it is
+  more than noise, ``unexplained`` says so, with where and when it is largest;
+* when another explanation fits about as well (:func:`look_alike`), a short rig test that separates
+  them is designed (:mod:`genthermal.diagnose.experiment`);
+* the catalogue is a parameter: :func:`genthermal.diagnose.open_search.open_search` passes a generic
+  library of heat flows instead.
 """
 
 from __future__ import annotations
@@ -41,6 +54,7 @@ from ..effects import CATALOGUE, Effect
 from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
+from .experiment import SeparatingExperiment, separating_experiment
 from .joint import JointCandidate, PairSearch
 from .residual import residual_tests
 from .search import Candidate, EffectSearch, FoundEffect, model_with_effects, noise_std
@@ -164,6 +178,9 @@ class Diagnosis:
         still missing, and where and when.
     catalogue : mapping of str to Effect
         The effects searched.
+    experiment : SeparatingExperiment or None
+        When another explanation fits about as well as the verdict (:func:`look_alike`): the short
+        rig test that tells them apart (:mod:`genthermal.diagnose.experiment`).
     """
 
     model: ThermalModel
@@ -174,6 +191,7 @@ class Diagnosis:
     calibration: object = None
     residual: dict = dataclasses.field(default_factory=dict)
     catalogue: Mapping[str, Effect] = dataclasses.field(default_factory=lambda: CATALOGUE)
+    experiment: SeparatingExperiment | None = None
 
     @property
     def verdict(self) -> str:
@@ -205,12 +223,39 @@ class Diagnosis:
             "iterations": [it.to_dict() for it in self.iterations],
             "rmse_final": self.iterations[-1].rmse_after,
             "unexplained": self.unexplained, "residual": self.residual,
+            "experiment": self.experiment.to_dict() if self.experiment else None,
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
 
-#: A runner-up closer than this in ΔBIC is reported as indistinguishable from the verdict.
+#: A runner-up closer than this in ΔBIC is reported as indistinguishable from the verdict ...
 AMBIGUITY_BIC = 10.0
+#: ... and so is one whose RMSE is within this share of the verdict's (with thousands of samples,
+#: a ΔBIC of a few hundred can separate fits whose errors differ by 1 %, well below what a model
+#: error of the plant can do).
+AMBIGUITY_RMSE = 0.02
+
+
+def look_alike(chosen, other) -> bool:
+    """True when ``other`` (a Candidate or JointCandidate) explains the data about as well as
+    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`."""
+    return bool(other.delta_bic - chosen.delta_bic < AMBIGUITY_BIC
+                or other.rmse_after <= (1 + AMBIGUITY_RMSE) * chosen.rmse_after)
+
+
+def _explanations(candidate) -> dict:
+    """Effect → fitted values of a Candidate or JointCandidate."""
+    return dict(candidate.values) if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.values}
+
+
+def rival(iteration: "Iteration"):
+    """The best other explanation that looks alike the one ``iteration`` added, or None."""
+    chosen = iteration.added_pair or iteration.added
+    if chosen is None:
+        return None
+    pool = iteration.pairs if iteration.added_pair else iteration.ranked
+    others = [c for c in pool if c is not chosen and look_alike(chosen, c)]
+    return min(others, key=lambda c: c.delta_bic) if others else None
 
 
 def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candidate | None = None) -> str:
@@ -265,12 +310,12 @@ def explain_pair(pair: JointCandidate, search: EffectSearch, best_single: Candid
 
 
 def _ambiguity(candidate: Candidate, runner_up: Candidate | None) -> str:
-    if runner_up is None or runner_up.delta_bic - candidate.delta_bic >= AMBIGUITY_BIC:
+    if runner_up is None or not look_alike(candidate, runner_up):
         return ""
     return (f" Caution: {runner_up.effect} explains the data almost as well (RMSE {runner_up.rmse_after:.3f} K, "
             f"ΔBIC only {runner_up.delta_bic - candidate.delta_bic:.1f} higher): these data cannot tell the two "
             f"apart (e.g. with balanced phase currents a loss in I_u² grows like one in ΣI²); a test that "
-            f"separates their signatures would.")
+            f"separates their signatures would (see the designed experiment).")
 
 
 def _correlation(a: np.ndarray, b: np.ndarray) -> float:
@@ -284,7 +329,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
              iterate: bool = False, dt_s: float | None = None, effects: Sequence[str] | None = None,
              max_iterations: int = 4, cache: dict | None = None, pairs: bool = True,
              catalogue: Mapping[str, Effect] = CATALOGUE,
-             progress: Callable[[str], None] | None = None) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, design_experiment: bool = True) -> Diagnosis:
     """Find the catalogue effect(s) ``model`` lacks to explain ``data``.
 
     Parameters
@@ -316,6 +361,9 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         The effects searched (default: the catalogue of :mod:`genthermal.effects`).
     progress : callable, optional
         Called with one line of text as each stage of the search finishes.
+    design_experiment : bool
+        When another explanation fits about as well as the verdict, design the rig test that
+        separates them (:func:`genthermal.diagnose.experiment.separating_experiment`).
 
     Returns
     -------
@@ -374,4 +422,13 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     noise = noise_std(series.outputs)
     residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names)
     report(residual["summary"])
-    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue)
+    experiment, other = None, rival(iterations[0])
+    if other is not None and design_experiment:
+        chosen = iterations[0].added_pair or iterations[0].added
+        experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)
+        report(f"look-alike: {' + '.join(_explanations(other))}; designed a {experiment.mission.duration_s / 60:.0f}-min "
+               f"test that separates them by {experiment.separation_sigma:.0f} σ")
+        if iterations[0].added_pair:
+            iterations[0].explanation += (f" Caution: {' + '.join(other.effects)} explains the data almost as well "
+                                          f"(RMSE {other.rmse_after:.3f} K): these data cannot tell them apart.")
+    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment)
