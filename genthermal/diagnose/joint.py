@@ -9,7 +9,8 @@ undo it. Here every pair of the best single effects is fitted as one model:
    nothing alone rarely belongs to the answer; two that each explain part do);
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
-   effects fitted at each grid point by Levenberg-Marquardt (warm starts from the neighbour);
+   effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
+   neighbour: the grid only has to find the basin);
 3. from the best grid point, coordinate descent: each onset by golden section between its grid
    neighbours with the values refitted, twice;
 4. on the full series: each onset refined within ± one coarse step, then both effects' values and
@@ -38,7 +39,9 @@ from .trajectory import ParametricSimulator
 #: Single effects (best ΔBIC first) whose pairs are fitted.
 PAIR_POOL = 4
 #: Onsets per effect in the coarse grid of a pair.
-PAIR_GRID = 6
+PAIR_GRID = 5
+#: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
+_GRID_ITERATIONS = 2
 #: Rounds of coordinate descent over the two onsets.
 _DESCENT_ROUNDS = 2
 
@@ -140,7 +143,7 @@ class PairSearch:
         for i, a in enumerate(grid):
             z_row = z
             for b in grid:
-                z_row, rss = coarse.fit([int(a), int(b)], z_row, search.x0_coefficients)
+                z_row, rss = coarse.fit([int(a), int(b)], z_row, search.x0_coefficients, _GRID_ITERATIONS)
                 if rss < best[0]:
                     best = (rss, (i, int(np.searchsorted(grid, b))), z_row)
         _, (i, j), z = best

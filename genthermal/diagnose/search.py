@@ -266,9 +266,8 @@ class _Structure:
     def indicator(self, onsets):
         return _indicator(self.series.time_s.size, onsets)
 
-    def fit(self, onsets, z0, x0_coefficients):
-        return self.problem.gauss_newton(z0, x0_coefficients, self.indicator(onsets), _SEARCH_ITERATIONS,
-                                         _SEARCH_TOLERANCE)
+    def fit(self, onsets, z0, x0_coefficients, iterations: int = _SEARCH_ITERATIONS):
+        return self.problem.gauss_newton(z0, x0_coefficients, self.indicator(onsets), iterations, _SEARCH_TOLERANCE)
 
     def search_onset(self, onsets, position, z_start, x0_coefficients, low=None, high=None):
         """Best index for ``onsets[position]`` (the others held) with its (z, RSS): a grid over the
