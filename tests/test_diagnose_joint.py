@@ -10,6 +10,7 @@ import pytest
 from genthermal.diagnose.discover import diagnose
 from genthermal.diagnose.experiment import separating_experiment
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
+from genthermal.diagnose.report import write_diagnosis_report
 from genthermal.diagnose.open_search import (conductance_effect, effect_code, heat_flow_effect, heat_flow_library,
                                              node_groups, open_search)
 from genthermal.effects import CATALOGUE
@@ -139,6 +140,9 @@ def test_look_alike_diagnosis_designs_a_test_that_separates_them(plant_model, ca
     # the record itself could not separate them: the designed test can
     ranked = result.iterations[0].ranked
     assert abs(ranked[0].rmse_after - ranked[1].rmse_after) <= 0.02 * ranked[0].rmse_after
+    report = write_diagnosis_report(result, tmp_path / "report")
+    assert (tmp_path / "report" / "separating_test.yaml").is_file()
+    assert "tells the look-alikes apart" in report.read_text()
     with pytest.raises(InputError, match="noise_K"):
         separating_experiment(plant_model, {"phase_short_circuit": {"R_short": 0.3}},
                               {"end_winding_stray_loss": {"R_stray": 0.1}}, 0.0)

@@ -56,7 +56,7 @@ from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
 from .experiment import SeparatingExperiment, separating_experiment
 from .joint import JointCandidate, PairSearch
-from .residual import residual_tests
+from .residual import correlation, residual_tests
 from .search import Candidate, EffectSearch, FoundEffect, model_with_effects, noise_std
 
 DELTA_BIC_LIMIT = -10.0
@@ -280,7 +280,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
                   "dθ/dt": winding_rate_K_per_min(series.time_s, series.outputs[0])}
     links = []
     for name, e in zip(outputs, residual):
-        scores = {r: _correlation(e[after], v[after]) for r, v in regressors.items()}
+        scores = {r: correlation(e[after], v[after]) for r, v in regressors.items()}
         top = max(scores, key=lambda r: abs(scores[r]))
         links.append(f"the {name} error follows {top} (r = {scores[top]:+.2f})")
     values = ", ".join(f"{n} = {v:.4g} {p.unit}" for (n, v), p in zip(candidate.values.items(), effect.parameters))
@@ -316,13 +316,6 @@ def _ambiguity(candidate: Candidate, runner_up: Candidate | None) -> str:
             f"ΔBIC only {runner_up.delta_bic - candidate.delta_bic:.1f} higher): these data cannot tell the two "
             f"apart (e.g. with balanced phase currents a loss in I_u² grows like one in ΣI²); a test that "
             f"separates their signatures would (see the designed experiment).")
-
-
-def _correlation(a: np.ndarray, b: np.ndarray) -> float:
-    ok = np.isfinite(a) & np.isfinite(b)
-    if ok.sum() < 3 or np.std(a[ok]) == 0 or np.std(b[ok]) == 0:
-        return 0.0
-    return float(np.corrcoef(a[ok], b[ok])[0, 1])
 
 
 def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,

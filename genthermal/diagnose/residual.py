@@ -38,7 +38,8 @@ MAX_CORRELATION = 0.3
 SMOOTHING_S = 600.0
 
 
-def _correlation(a: np.ndarray, b: np.ndarray) -> float:
+def correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Pearson correlation of ``a`` and ``b`` over the samples where both are finite (0 if undefined)."""
     ok = np.isfinite(a) & np.isfinite(b)
     if ok.sum() < 3 or np.std(a[ok]) == 0 or np.std(b[ok]) == 0:
         return 0.0
@@ -86,7 +87,7 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
         rmse = float(np.sqrt(np.mean(e[ok] ** 2)))
         centred = e[ok] - e[ok].mean()
         lag1 = float(centred[1:] @ centred[:-1] / max(centred @ centred, 1e-300))
-        correlations = {r: _correlation(e, v) for r, v in regressors.items()}
+        correlations = {r: correlation(e, v) for r, v in regressors.items()}
         follows = max(correlations, key=lambda r: abs(correlations[r]))
         structured = (rmse > STRUCTURE_LEVEL_FACTOR * noise and lag1 > MAX_AUTOCORRELATION
                       and abs(correlations[follows]) > MAX_CORRELATION)
