@@ -10,9 +10,9 @@ import pytest
 from genthermal.diagnose.discover import diagnose
 from genthermal.diagnose.experiment import separating_experiment
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
-from genthermal.diagnose.report import write_diagnosis_report
 from genthermal.diagnose.open_search import (conductance_effect, effect_code, heat_flow_effect, heat_flow_library,
                                              node_groups, open_search)
+from genthermal.diagnose.report import write_diagnosis_report
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
