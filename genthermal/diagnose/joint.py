@@ -13,8 +13,10 @@ undo it. Here every pair of the best single effects is fitted as one model:
    neighbour: the grid only has to find the basin);
 3. from the best grid point, coordinate descent: each onset by golden section between its grid
    neighbours with the values refitted, twice;
-4. on the full series: each onset refined within ± one coarse step, then both effects' values and
-   the initial state by Gauss-Newton with the exact Jacobian.
+4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
+   the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
+   stay on the decimated grid, a resolution of one minute); the others are scored on the full
+   series at their values from the decimated fit.
 
 The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
 effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
@@ -42,6 +44,8 @@ PAIR_POOL = 4
 PAIR_GRID = 5
 #: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
 _GRID_ITERATIONS = 2
+#: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
+POLISHED_PAIRS = 3
 #: Rounds of coordinate descent over the two onsets.
 _DESCENT_ROUNDS = 2
 
@@ -129,11 +133,10 @@ class PairSearch:
                     for name in pair for p in search.effect(name).parameters]
         return _Structure(simulator, series, scalings)
 
-    def fit(self, first: Candidate, second: Candidate) -> JointCandidate:
-        """Fit the effects of two single candidates jointly (started from their single fits)."""
+    def _coarse_fit(self, first: Candidate, second: Candidate):
+        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
         search = self.search
-        pair = (first.effect, second.effect)
-        coarse = self._structure(pair, search.coarse)
+        coarse = self._structure((first.effect, second.effect), search.coarse)
         z = np.array([s.decision(float(np.clip(v, s.lower, s.upper))) for s, v in
                       zip(coarse.problem.scalings, [*first.values.values(), *second.values.values()])])
         n = search.coarse.time_s.size
@@ -149,24 +152,27 @@ class PairSearch:
         _, (i, j), z = best
         onsets = [int(grid[i]), int(grid[j])]
         ranges = [(int(grid[max(g - 1, 0)]), int(grid[min(g + 1, grid.size - 1)])) for g in (i, j)]
+        rss = best[0]
         for _ in range(_DESCENT_ROUNDS):
             for position, (low, high) in enumerate(ranges):
-                onsets[position], z, _ = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+                onsets[position], z, rss = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+        return onsets, z, rss
+
+    def _finish(self, pair: tuple, onsets, z, polish: bool) -> JointCandidate:
+        """Step 4 on the full series (``polish``), or the coarse values scored on it."""
+        search = self.search
         factor = int(round(search.coarse.dt_s / search.series.dt_s))
-        full = self._structure(pair, search.series) if factor > 1 else coarse
+        full = self._structure(pair, search.series)
         onsets = [o * factor for o in onsets]
-        if factor > 1:
-            last_index = search.series.time_s.size - 1
-            for position in range(2):
-                onsets[position], z, _ = full.search_onset(onsets, position, z, search.x0_coefficients,
-                                                           max(onsets[position] - factor, 0),
-                                                           min(onsets[position] + factor, last_index))
+        indicator = _indicator(search.series.time_s.size, onsets)
         problem = _Problem(full.problem.simulator, search.series, full.problem.scalings, exact=True,
                            fit_initial_state=True)
-        indicator = _indicator(search.series.time_s.size, onsets)
-        z, rss = problem.gauss_newton(np.concatenate([z, [0.0, 0.0]]), search.x0_coefficients, indicator)
+        z = np.concatenate([z, [0.0, 0.0]])
+        if polish:
+            z, _ = problem.gauss_newton(z, search.x0_coefficients, indicator)
         theta = problem.theta(z)
         predicted = problem.simulator.outputs(theta, problem.initial(z, search.x0_coefficients), indicator)
+        rss = max(float(np.nansum((predicted - search.series.outputs) ** 2)), 1e-300)
         values, position = {}, 0
         for name in pair:
             names = [p.name for p in search.effect(name).parameters]
@@ -175,22 +181,31 @@ class PairSearch:
         order = sorted(range(2), key=lambda m: onsets[m])
         effects = tuple(pair[m] for m in order)
         k = len(theta) + 2
-        rss = max(float(rss), 1e-300)
         return JointCandidate(effects, {e: values[e] for e in effects},
                               {pair[m]: search.elapsed_s(onsets[m]) for m in order},
                               {pair[m]: int(onsets[m]) for m in order}, rss, k, search.rmse_before,
                               math.sqrt(rss / search.n_valid), _bic_delta(rss, search.rss_before, search.n_valid, k),
                               predicted)
 
+    def fit(self, first: Candidate, second: Candidate, polish: bool = True) -> JointCandidate:
+        """Fit the effects of two single candidates jointly (started from their single fits)."""
+        onsets, z, _ = self._coarse_fit(first, second)
+        return self._finish((first.effect, second.effect), onsets, z, polish)
+
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
-        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC); best ΔBIC first.
+        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) on the decimated series,
+        polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
+        there at their coarse values; best ΔBIC first.
 
         ``progress(done, total, label)`` is called after each pair when given."""
         best = sorted(singles, key=lambda c: c.delta_bic)[:pool]
         pairs = list(itertools.combinations(best, 2))
-        ranked = []
+        coarse = []
         for done, (first, second) in enumerate(pairs, start=1):
-            ranked.append(self.fit(first, second))
+            coarse.append(((first.effect, second.effect), *self._coarse_fit(first, second)))
             if progress:
                 progress(done, len(pairs), f"{first.effect} + {second.effect}")
+        coarse.sort(key=lambda item: item[3])
+        ranked = [self._finish(pair, onsets, z, rank < POLISHED_PAIRS)
+                  for rank, (pair, onsets, z, _) in enumerate(coarse)]
         return sorted(ranked, key=lambda c: c.delta_bic)
