@@ -7,9 +7,11 @@ Three runs, each from a cold start (models and simulators built inside the timin
 * ``pair``: two hidden effects (a blockage from 80 min on top of an end-winding stray loss from
   the start), the catalogue searched with jointly fitted pairs;
 * ``open``: the open search over the generic heat-flow library on a record with an excitation
-  iron loss from 1.4 h.
+  iron loss from 1.4 h;
+* ``lookalike``: a shorted turn from 50 min under balanced load (it looks like end-winding stray
+  loss): the separating test designed and the separation it predicts.
 
-Usage: ``python benchmarks/bench_diagnose.py [--json FILE] [--only single|pair|open]``. Prints one
+Usage: ``python benchmarks/bench_diagnose.py [--json FILE] [--only single|pair|open|lookalike]``. Prints one
 JSON document per run (elapsed and CPU seconds: the machine is shared, and CPU time is what the
 run would take alone on one core; verdict, ground truth, final RMSE); target ≤ 60 s each.
 """
@@ -32,6 +34,7 @@ RUNS = {
     "pair": ([Injection("coolant_flow_reduction", {"k_flow": 0.6}, 4800.0),
               Injection("end_winding_stray_loss", {"R_stray": 0.2}, 0.0)], diagnose),
     "open": ([Injection("excitation_iron_loss", {"k_exc": 30.0}, 5000.0)], open_search),
+    "lookalike": ([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)], diagnose),
 }
 
 
@@ -57,6 +60,9 @@ def main() -> int:
                               for f in result.found],
                     "truth": case.truth()["effects"], "rmse_final_K": round(result.iterations[-1].rmse_after, 4),
                     "noise_std_estimated_K": round(result.noise_std, 4), "unexplained": result.unexplained}
+        if result.experiment:
+            document["experiment"] = {k: v for k, v in result.experiment.to_dict().items() if k != "scenario"}
+            document["experiment"]["blocks"] = result.experiment.to_dict()["scenario"]["actions"]
         if method is open_search:
             document["described"] = [describe_term(f, result.catalogue) for f in result.found]
         documents.append(document)
