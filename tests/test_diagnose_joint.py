@@ -125,8 +125,9 @@ def test_bad_inputs_name_the_field(call, field, plant_model):
 
 def test_look_alike_diagnosis_designs_a_test_that_separates_them(plant_model, cache, tmp_path):
     """A shorted turn under balanced load looks like end-winding stray loss; the designed test
-    (≤ 30 min, within the ratings) separates the two fitted explanations by ≥ 5 noise σ, and
-    is a scenario file the rig can run."""
+    (≤ 30 min, within the ratings) separates the two explanations by ≥ 5 noise σ even with their
+    parameters refitted, is a scenario file the rig can run, and run on the plant it names the
+    shorted turn."""
     case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=12, plant=plant_model)
     result = diagnose(plant_model, case.data, effects=["phase_short_circuit", "end_winding_stray_loss"], cache=cache)
@@ -140,6 +141,12 @@ def test_look_alike_diagnosis_designs_a_test_that_separates_them(plant_model, ca
     # the record itself could not separate them: the designed test can
     ranked = result.iterations[0].ranked
     assert abs(ranked[0].rmse_after - ranked[1].rmse_after) <= 0.02 * ranked[0].rmse_after
+    # run the designed test on the plant (the shorted turn, not a fitted model): it now tells them apart
+    rig = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 0.0)], mission=str(path),
+                                  dt_s=10.0, seed=13, plant=plant_model)
+    retest = diagnose(plant_model, rig.data, effects=["phase_short_circuit", "end_winding_stray_loss"])
+    winner, other = retest.iterations[0].ranked[:2]
+    assert retest.verdict == "phase_short_circuit" and other.rmse_after >= 3 * winner.rmse_after
     report = write_diagnosis_report(result, tmp_path / "report")
     assert (tmp_path / "report" / "separating_test.yaml").is_file()
     assert "tells the look-alikes apart" in report.read_text()
