@@ -5,8 +5,10 @@ absorbs part of the second one's signature (a blockage from 1.3 h fitted from th
 an end-winding loss present from the start warms the winding too), and the second round cannot
 undo it. Here every pair of the best single effects is fitted as one model:
 
-1. pool: the :data:`PAIR_POOL` single effects of best ΔBIC (pruning: an effect that explains
-   nothing alone rarely belongs to the answer; two that each explain part do);
+1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
+   effect with each of the others (pruning: an effect that explains little alone belongs to the
+   answer mostly next to the effect that dominates the record, as a slow insulation change under a
+   strong excitation-dependent iron loss does);
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
    effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
@@ -97,6 +99,14 @@ class JointCandidate:
                 "k": self.k, "significant": self.significant}
 
 
+def _start(scaling, value: float, parameter) -> float:
+    """Start of a pair fit: the value fitted alone, or the typical value when that fit ended on a
+    bound (the effect alone could not explain the record, and its value says nothing)."""
+    at_bound = min(abs(value - parameter.lower), abs(value - parameter.upper)) <= 1e-6 * max(abs(value), 1.0)
+    value = parameter.typical if at_bound and parameter.typical is not None else value
+    return float(np.clip(value, scaling.lower, scaling.upper))
+
+
 class PairSearch:
     """Fit pairs of catalogue effects jointly on the series of a first-round :class:`EffectSearch`.
 
@@ -133,12 +143,16 @@ class PairSearch:
                     for name in pair for p in search.effect(name).parameters]
         return _Structure(simulator, series, scalings)
 
+    def _starts(self, single: Candidate):
+        """(value fitted alone, EffectParameter) of each parameter of ``single``."""
+        return [(single.values[p.name], p) for p in self.search.effect(single.effect).parameters]
+
     def _coarse_fit(self, first: Candidate, second: Candidate):
         """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
         search = self.search
         coarse = self._structure((first.effect, second.effect), search.coarse)
-        z = np.array([s.decision(float(np.clip(v, s.lower, s.upper))) for s, v in
-                      zip(coarse.problem.scalings, [*first.values.values(), *second.values.values()])])
+        z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
+                      zip(coarse.problem.scalings, [*self._starts(first), *self._starts(second)])])
         n = search.coarse.time_s.size
         last = n - max(3, int(0.05 * n))
         grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
@@ -193,13 +207,15 @@ class PairSearch:
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
-        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) on the decimated series,
+        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
+        each other one on the decimated series,
         polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
         there at their coarse values; best ΔBIC first.
 
         ``progress(done, total, label)`` is called after each pair when given."""
-        best = sorted(singles, key=lambda c: c.delta_bic)[:pool]
-        pairs = list(itertools.combinations(best, 2))
+        ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
+        pairs = list(itertools.combinations(ranked_singles[:pool], 2))
+        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:]]
         coarse = []
         for done, (first, second) in enumerate(pairs, start=1):
             coarse.append(((first.effect, second.effect), *self._coarse_fit(first, second)))
