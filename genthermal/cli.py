@@ -20,6 +20,7 @@ COMMAND_MODULES = (
     "simulate",
     "describe",
     "codegen",
+    "fmu",
     "synth",
     "estimate",
     "sysid",
