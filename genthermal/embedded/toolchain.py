@@ -34,8 +34,12 @@ ICOUNT_SHIFT = 5
 SYSTICK_HZ = 25e6
 #: Cortex-M4F, Thumb-2, single-precision FPU, hard-float calling convention.
 CPU_FLAGS = ("-mcpu=cortex-m4", "-mthumb", "-mfpu=fpv4-sp-d16", "-mfloat-abi=hard")
-#: Flags of every object; ``-fstack-usage`` writes one ``.su`` file per object.
-COMPILE_FLAGS = (*CPU_FLAGS, "-O2", "-std=c99", "-ffunction-sections", "-fdata-sections", "-fstack-usage")
+#: Flags of every object; ``-fstack-usage`` writes one ``.su`` file per object (frame sizes) and
+#: ``-fcallgraph-info=su`` one ``.ci`` file (the call graph with those sizes).
+COMPILE_FLAGS = (*CPU_FLAGS, "-O2", "-std=c99", "-ffunction-sections", "-fdata-sections", "-fstack-usage",
+                 "-fcallgraph-info=su")
+#: Bytes the Cortex-M4F stacks on an interrupt with an active FPU context (26 words).
+EXCEPTION_FRAME_BYTES = 104
 #: Hand-written sources compile warning-free with these; CasADi's sources add -Wno-unused-parameter.
 STRICT_FLAGS = ("-Wall", "-Wextra", "-Werror")
 #: Extra flags of each precision: the generated arithmetic in double or in float.
@@ -196,6 +200,55 @@ def stack_usage(build_result: TargetBuild) -> dict:
                 raise TargetRunError(f"{location.split(':')[-1]} has an unbounded stack frame ({kind})")
             frames[location.split(":")[-1]] = int(size)
     return frames
+
+
+def worst_case_stack(build_result: TargetBuild, root: str = "reset_handler") -> tuple[int, list[str]]:
+    """Deepest stack of any call path from ``root``, from the call graphs of ``-fcallgraph-info=su``.
+
+    Adds :data:`EXCEPTION_FRAME_BYTES` for the SysTick interrupt, which may arrive at the deepest
+    point (its handler's own frame is in the graph).
+
+    Returns
+    -------
+    bytes : int
+    external : list of str
+        Functions called on those paths whose frames the graph does not know (library routines
+        compiled elsewhere, e.g. newlib's ``memcpy``): their stack is not included.
+
+    Raises
+    ------
+    TargetRunError
+        A recursive call path or an unbounded frame: the stack has no static bound.
+    """
+    frames, calls = {}, {}
+    for obj in build_result.objects:
+        ci = obj.with_suffix(".ci")
+        text = ci.read_text() if ci.is_file() else ""
+        for title, label in re.findall(r'node: \{ title: "([^"]+)" label: "([^"]*)"', text):
+            size = re.search(r"(\d+) bytes \(([^)]*)\)", label)
+            if size:
+                if "dynamic" in size.group(2) and "bounded" not in size.group(2):
+                    raise TargetRunError(f"{title} has an unbounded stack frame ({size.group(2)})")
+                frames[title] = int(size.group(1))
+        for source, target in re.findall(r'edge: \{ sourcename: "([^"]+)" targetname: "([^"]+)"', text):
+            calls.setdefault(source, set()).add(target)
+    external, depth, visiting = set(), {}, set()
+
+    def deepest(function: str) -> int:
+        if function in depth:
+            return depth[function]
+        if function in visiting:
+            raise TargetRunError(f"recursive call path through {function}: the stack has no static bound")
+        if function not in frames:
+            external.add(function)
+            return 0
+        visiting.add(function)
+        depth[function] = frames[function] + max((deepest(c) for c in calls.get(function, ())), default=0)
+        visiting.discard(function)
+        return depth[function]
+
+    interrupt = max((deepest(t) for t in frames if t.endswith("systick_handler")), default=0)
+    return deepest(root) + EXCEPTION_FRAME_BYTES + interrupt, sorted(external)
 
 
 def run(elf, timeout_s: float = 600.0) -> str:
