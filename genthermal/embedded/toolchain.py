@@ -206,14 +206,17 @@ def worst_case_stack(build_result: TargetBuild, root: str = "reset_handler") -> 
     """Deepest stack of any call path from ``root``, from the call graphs of ``-fcallgraph-info=su``.
 
     Adds :data:`EXCEPTION_FRAME_BYTES` for the SysTick interrupt, which may arrive at the deepest
-    point (its handler's own frame is in the graph).
+    point (its handler's own frame is in the graph). A call through a function pointer (gcc's
+    ``__indirect_call`` node: the ABI layer calls the generated CasADi functions so) is bounded by
+    the deepest function that makes no indirect call itself.
 
     Returns
     -------
     bytes : int
     external : list of str
-        Functions called on those paths whose frames the graph does not know (library routines
-        compiled elsewhere, e.g. newlib's ``memcpy``): their stack is not included.
+        Linked functions called on those paths whose frames the graph does not know (library
+        routines compiled elsewhere, e.g. newlib's ``memcpy``): their stack is not included.
+        Functions the linker removed still count in the depth: the bound is conservative.
 
     Raises
     ------
@@ -247,8 +250,12 @@ def worst_case_stack(build_result: TargetBuild, root: str = "reset_handler") -> 
         visiting.discard(function)
         return depth[function]
 
+    direct = [f for f in frames if "__indirect_call" not in calls.get(f, ()) and not f.endswith("reset_handler")]
+    frames["__indirect_call"] = 0
+    calls["__indirect_call"] = set(direct)
     interrupt = max((deepest(t) for t in frames if t.endswith("systick_handler")), default=0)
-    return deepest(root) + EXCEPTION_FRAME_BYTES + interrupt, sorted(external)
+    linked = symbol_sizes(build_result.elf)  # functions the linker removed are no external calls
+    return deepest(root) + EXCEPTION_FRAME_BYTES + interrupt, sorted(f for f in external if f in linked)
 
 
 def run(elf, timeout_s: float = 600.0) -> str:
