@@ -21,6 +21,7 @@ COMMAND_MODULES = (
     "describe",
     "codegen",
     "fmu",
+    "cortex_m4",
     "synth",
     "estimate",
     "sysid",

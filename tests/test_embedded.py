@@ -93,3 +93,12 @@ def test_bad_precision_and_missing_toolchain_are_named(plant_model, mission_inpu
     with pytest.raises(toolchain.TargetToolchainError, match="apt-get install gcc-arm-none-eabi"):
         build_mission_program(plant_model, mission_inputs, tmp_path, precision="double")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_names_a_bad_precision(tmp_path, capsys):
+    from genthermal.cli import main
+
+    assert main(["cortex-m4", "--out", str(tmp_path / "build"), "--precision", "half"]) == 2
+    err = capsys.readouterr().err
+    assert "--precision" in err and "'half'" in err and "Traceback" not in err
+    assert not (tmp_path / "build").exists()
