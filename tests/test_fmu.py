@@ -11,7 +11,7 @@ from genthermal import fmu as fmu_module
 from genthermal.ccompile import find_compiler
 from genthermal.cli import main
 from genthermal.errors import CompilerNotFoundError, InputError
-from genthermal.fmu import FmuError, export_fmu
+from genthermal.fmu import FmuError, export_fmu, piecewise_constant_input
 from genthermal.mission import load_mission
 from genthermal.simulate import simulate
 
@@ -45,22 +45,11 @@ def _mission(dt_s):
     return inputs[inputs["time_s"] <= STOP_S].reset_index(drop=True)
 
 
-def _fmpy_input(inputs, names):
-    """Piecewise-constant inputs for FMPy: a repeated time marks each step change (an event)."""
-    t, U = inputs["time_s"].to_numpy(), inputs[list(names)].to_numpy()
-    rows = []
-    for k in range(len(t)):
-        if k and np.any(U[k] != U[k - 1]):
-            rows.append((t[k], *U[k - 1]))
-        rows.append((t[k], *U[k]))
-    return np.array(rows, dtype=[("time", float)] + [(n, float) for n in names])
-
-
 def _fly(path, model, kind, start_values=None):
     inputs = _mission(10.0)
     x0 = {f"x_{n}": float(inputs["T_ambient"].iloc[0]) for n in model.state_names}
     result = fmpy.simulate_fmu(str(path), fmi_type=kind, start_time=0.0, stop_time=STOP_S, output_interval=10.0,
-                               input=_fmpy_input(inputs, model.input_names), relative_tolerance=1e-10,
+                               input=piecewise_constant_input(inputs, model.input_names), relative_tolerance=1e-10,
                                start_values={**x0, **(start_values or {})}, output=list(model.output_names))
     grid = inputs["time_s"].to_numpy()
     return {name: np.interp(grid, result["time"], result[name]) for name in model.output_names}

@@ -31,6 +31,7 @@ from importlib import resources
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 from .. import __version__
 from ..ccompile import COMPILE_FLAGS, CompilationError, compile_objects, find_compiler
@@ -39,7 +40,7 @@ from ..errors import InputError
 from ..model import ThermalModel
 from .model_description import INPUT_START, STATE_START_C, FmuError, description_xml, variables
 
-__all__ = ["export_fmu", "FmuError", "FmuExport", "ATOL_K", "RTOL"]
+__all__ = ["export_fmu", "piecewise_constant_input", "FmuError", "FmuExport", "ATOL_K", "RTOL"]
 
 #: Co-simulation error tolerances per internal step: absolute (K) and relative.
 ATOL_K = 1e-10
@@ -152,6 +153,33 @@ def export_fmu(model: ThermalModel, out_path) -> FmuExport:
         finally:
             partial.unlink(missing_ok=True)
     return FmuExport(out_path, identifier, guid, platform, len(every))
+
+
+def piecewise_constant_input(inputs, names) -> np.ndarray:
+    """A mission's inputs as an FMPy input signal that holds each sample (zero-order hold).
+
+    FMPy interpolates input signals linearly; a time repeated with the old and the new value marks
+    a step change (an event for model exchange), so the FMU sees the inputs genthermal holds.
+
+    Parameters
+    ----------
+    inputs : pandas.DataFrame
+        ``time_s`` and the input columns, e.g. ``Mission.to_inputs(dt)``.
+    names : sequence of str
+        The FMU's input names (the model's ``input_names``).
+
+    Returns
+    -------
+    numpy.ndarray
+        Structured array with ``time`` and one field per input.
+    """
+    t, U = inputs["time_s"].to_numpy(dtype=float), inputs[list(names)].to_numpy(dtype=float)
+    rows = []
+    for k in range(len(t)):
+        if k and np.any(U[k] != U[k - 1]):
+            rows.append((t[k], *U[k - 1]))
+        rows.append((t[k], *U[k]))
+    return np.array(rows, dtype=[("time", float)] + [(n, float) for n in names])
 
 
 def _wrapper_source(model: ThermalModel, guid: str) -> str:
