@@ -62,15 +62,24 @@ def run(args) -> int:
           f"1 h prediction {counts['predict']:.0f} (QEMU -icount; instructions, not cycles)")
     print(f"  wrote {program.build.elf} and {program.build.link_map}")
     if args.flight:
-        design, settings, flight = blockage_flight(PowerSystem.from_mission(load_mission(args.flight)))
+        system = PowerSystem.from_mission(load_mission(args.flight))
+        design, settings, flight = blockage_flight(system)
         built = build_flight_program(design, settings, flight, f"{args.out}/flight")
         target, reference = fly_on_target(built), fly_reference(design, settings, flight)
         same = np.array_equal(target.flags, reference.flags)
         gap = np.max(np.abs(target.plant_winding_C - reference.plant_winding_C))
         print(f"{args.flight}: onboard manager in C, {len(target.flags)} samples flown; decisions "
               f"{'equal to' if same else 'DIFFERENT from'} the Python reference, temperatures within {gap:.3g} K")
-        print(f"  peak winding {target.plant_winding_C.max():.2f} °C, {target.flags[:, 0].sum() * settings.dt_s / 60:.0f} "
-              f"min of rest, longest manager call {target.instructions['manager_max']:.3g} instructions")
+        plant, switches = system.plant_switches(0)
+        unmanaged = simulate(plant, system.mission.to_inputs(settings.dt_s).assign(
+            T_inlet=lambda frame: system.inlet_C(0, frame["time_s"])), switches=switches)["T_winding"].max()
+        peaks = ", ".join(f"{name} {peak:.2f} °C" for name, peak in zip(system.generator_names,
+                                                                       target.plant_winding_C.max(axis=0)))
+        print(f"  peak winding {peaks} (unmanaged {system.generator_names[0]}: {unmanaged:.1f} °C; limit "
+              f"{system.limit_C:g} °C, planning limit {settings.limit_C:g} °C), "
+              f"{target.flags[:, 0].sum() * settings.dt_s / 60:.0f} min of rest")
+        print(f"  longest manager call {target.instructions['manager_max']:.3g} instructions, whole flight "
+              f"{target.instructions['manager_total']:.3g}, stack {target.stack_bytes} B used")
         if not same:
             return 1
     return 0
