@@ -6,7 +6,8 @@ import pytest
 
 from genthermal.design import linear_design_model
 from genthermal.embedded import toolchain
-from genthermal.embedded.mission import build_mission_program, run_mission, winding_state
+from genthermal.embedded.mission import (PrecisionError, build_mission_program, check_accuracy, run_mission,
+                                         winding_state)
 from genthermal.errors import InputError
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.mission import load_mission
@@ -63,8 +64,11 @@ def test_filter_update_and_prediction_on_the_target_equal_the_host(runs, plant_m
 
 
 def test_single_precision_error_over_four_hours_is_below_a_hundredth_of_a_kelvin(runs, plant_model, mission_inputs):
-    error = np.max(np.abs(runs["single"][1].states - _host_states(plant_model, mission_inputs)))
-    assert 1e-6 < error < 0.01  # really single precision, and within the 0.01 K
+    host = _host_states(plant_model, mission_inputs)
+    error = check_accuracy(runs["single"][1], host, "single", 0.01)
+    assert error > 1e-6  # really single precision
+    with pytest.raises(PrecisionError, match=r"precision = 'single'.*more than the tolerance 1e-06 K"):
+        check_accuracy(runs["single"][1], host, "single", 1e-6)
 
 
 def test_no_heap_and_a_small_bounded_stack(runs):

@@ -124,30 +124,26 @@ def test_directional_derivatives_equal_finite_differences(variant, fmus, plant_m
     states = [refs[f"x_{n}"] for n in model.state_names]
     inputs = [refs[n] for n in model.input_names]
     unknowns = [refs[f"der(x_{n})"] for n in model.state_names] + [refs[n] for n in model.output_names]
-    rng = np.random.default_rng(5)
-    x = rng.uniform(30.0, 120.0, model.n_states)
-    u = np.array([6.5, 7.0, 7.2, 1.1, 35.0, 22.0])
     instance.enterEventMode()
     instance.newDiscreteStates()
     instance.enterContinuousTimeMode()
+    n = model.n_states
+    rng = np.random.default_rng(5)
+    point = np.concatenate([rng.uniform(30.0, 120.0, n), [6.5, 7.0, 7.2, 1.1, 35.0, 22.0]])  # (x, u)
 
-    def unknown_values(x_value, u_value):
-        instance.setContinuousStates((fmpy.fmi2.fmi2Real * model.n_states)(*x_value), model.n_states)
-        instance.setReal(inputs, list(u_value))
+    def unknown_values(z):
+        instance.setContinuousStates((fmpy.fmi2.fmi2Real * n)(*z[:n]), n)
+        instance.setReal(inputs, list(z[n:]))
         return np.array(instance.getReal(unknowns))
 
-    base = unknown_values(x, u)
-    assert np.allclose(base[:model.n_states], model.rhs(x, u), rtol=1e-12, atol=1e-15)
-    for known, point, index in [(states[i], "x", i) for i in range(model.n_states)] + \
-                               [(inputs[j], "u", j) for j in range(len(inputs))]:
-        unknown_values(x, u)
-        derivative = np.array(instance.getDirectionalDerivative(unknowns, [known], [1.0]))
-        h = 1e-4 * max(1.0, abs((x if point == "x" else u)[index]))
-        shifted = [(x.copy(), u.copy()) for _ in range(2)]
-        for sign, (xs, us) in zip((1, -1), shifted):
-            (xs if point == "x" else us)[index] += sign * h
-        central = (unknown_values(*shifted[0]) - unknown_values(*shifted[1])) / (2 * h)
-        assert np.allclose(derivative, central, rtol=1e-6, atol=1e-9), (point, index)
+    assert np.allclose(unknown_values(point)[:n], model.rhs(point[:n], point[n:]), rtol=1e-12, atol=1e-15)
+    directions = list(np.eye(point.size)) + [rng.normal(size=point.size)]  # each known, then all at once
+    for direction in directions:
+        unknown_values(point)
+        derivative = np.array(instance.getDirectionalDerivative(unknowns, states + inputs, list(direction)))
+        h = 1e-4 * max(1.0, np.abs(point).max())
+        central = (unknown_values(point + h * direction) - unknown_values(point - h * direction)) / (2 * h)
+        assert np.allclose(derivative, central, rtol=1e-6, atol=1e-9), direction
     instance.terminate()
     instance.freeInstance()
 

@@ -5,8 +5,9 @@ Cross-compiles the model's step, the Kalman filter update and a 1 h prediction w
 ``gcc-arm-none-eabi`` toolchain, runs the mission bare metal under ``qemu-system-arm``
 (``mps2-an386``) and compares every state with the host's Python simulation; prints flash, RAM,
 stack and instruction counts. With ``--flight`` it also flies that two-generator fault scenario
-with the onboard manager in C and compares it with the manager's Python reference. Everything is
-built in DIR (generated sources, objects, ELF files and link maps).
+with the onboard manager in C and compares it with the manager's Python reference. A precision
+whose states differ from the host's by more than ``--tolerance`` K is an error. Everything is built
+in DIR (generated sources, objects, ELF files and link maps).
 """
 
 from __future__ import annotations
@@ -15,12 +16,13 @@ import numpy as np
 
 from ..embedded import toolchain
 from ..embedded.manager import blockage_flight, build_flight_program, fly_on_target, fly_reference
-from ..embedded.mission import PRECISIONS, build_mission_program, run_mission
+from ..embedded.mission import PRECISIONS, build_mission_program, check_accuracy, run_mission
 from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..schedule.power_system import PowerSystem
 from ..simulate import simulate
+from ._common import positive_float
 
 
 def register(subparsers) -> None:
@@ -34,6 +36,8 @@ def register(subparsers) -> None:
     parser.add_argument("--model", default="genco_rf201a", help="built-in model or model file (default genco_rf201a)")
     parser.add_argument("--mission", default="thesis_fig_7_7", help="mission scenario (default thesis_fig_7_7)")
     parser.add_argument("--precision", default="double", help=f"arithmetic: {' or '.join(PRECISIONS)}")
+    parser.add_argument("--tolerance", default="0.01",
+                        help="largest state difference from the host simulation accepted, K (default 0.01)")
     parser.add_argument("--flight", help="also fly this two-generator fault scenario (e.g. blockage_large) "
                         "with the onboard manager in C")
     parser.set_defaults(func=run)
@@ -43,6 +47,7 @@ def run(args) -> int:
     """Build, run, compare, report."""
     if args.precision not in PRECISIONS:
         raise InputError("--precision", args.precision, f"must be one of {', '.join(PRECISIONS)}")
+    tolerance = positive_float("--tolerance", args.tolerance)
     model, mission = load_model(args.model), load_mission(args.mission)
     inputs = mission.to_inputs(10.0)
     program = build_mission_program(model, inputs, args.out, args.precision)
@@ -53,7 +58,8 @@ def run(args) -> int:
     stack, _ = toolchain.worst_case_stack(program.build)
     print(f"{model.name} on {toolchain.MACHINE} (Cortex-M4F, {args.precision} precision): {mission.name}, "
           f"{program.n_steps} steps")
-    print(f"  largest state difference from the host simulation: {np.max(np.abs(result.states - host)):.3g} K")
+    error = check_accuracy(result, host, args.precision, tolerance)
+    print(f"  largest state difference from the host simulation: {error:.3g} K (tolerance {tolerance:g} K)")
     print(f"  flash {flash} B (without the mission's {program.mission_data_bytes} B input table), "
           f"RAM {sizes.get('data', 0) + sizes['bss']} B, stack {result.stack_bytes} B used "
           f"({stack} B static bound without library routines), heap functions linked: {toolchain.heap_symbols(program.build) or 'none'}")

@@ -99,13 +99,31 @@ class Flight:
 
 @dataclasses.dataclass
 class FlightRecord:
-    """Per sample: the manager's decisions and the temperatures (what ``flight_target.c`` prints)."""
+    """Per sample: the manager's decisions and the temperatures (what ``flight_target.c`` prints).
 
-    flags: np.ndarray          # (n, 6) resting, decided, rest_remaining, displaced, hot, infeasible
-    currents_A: np.ndarray     # (n, 2)
-    plant_winding_C: np.ndarray    # (n, 2) true winding temperature at the sample
-    filtered_winding_C: np.ndarray  # (n, 2)
-    predicted_peak_C: np.ndarray   # (n, 2) of the last decision
+    Attributes
+    ----------
+    flags : numpy.ndarray
+        (n, 6) resting, decided, rest_remaining (samples), displaced, hot, infeasible.
+    currents_A : numpy.ndarray
+        (n, 2) phase currents applied over the sample, A RMS.
+    plant_winding_C : numpy.ndarray
+        (n, 2) true winding temperature at the sample, °C.
+    filtered_winding_C : numpy.ndarray
+        (n, 2) the filters' winding estimates, °C.
+    predicted_peak_C : numpy.ndarray
+        (n, 2) winding peaks of the last decision's last prediction, °C.
+    instructions : dict
+        On the target: ``manager_max`` (longest ``gtm_step``) and ``manager_total``, instructions.
+    stack_bytes : int
+        On the target: deepest stack used, bytes.
+    """
+
+    flags: np.ndarray
+    currents_A: np.ndarray
+    plant_winding_C: np.ndarray
+    filtered_winding_C: np.ndarray
+    predicted_peak_C: np.ndarray
     instructions: dict = dataclasses.field(default_factory=dict)
     stack_bytes: int = 0
 

@@ -129,6 +129,26 @@ def build_mission_program(model: ThermalModel, inputs: pd.DataFrame, out_dir, pr
     return MissionProgram(built, len(U) - 1, int(predict_steps), 8 * U.size)
 
 
+class PrecisionError(InputError):
+    """The target's arithmetic misses the accuracy asked for."""
+
+
+def check_accuracy(run: MissionRun, host_states: np.ndarray, precision: str, tolerance_K: float) -> float:
+    """Largest state difference between the target and the host (K); raise if above ``tolerance_K``.
+
+    Raises
+    ------
+    PrecisionError
+        Naming the precision, the difference reached and the tolerance.
+    """
+    error = float(np.max(np.abs(run.states - host_states)))
+    if not error <= tolerance_K:
+        raise PrecisionError("precision", precision, f"the target's states differ from the host simulation by "
+                             f"{error:.3g} K, more than the tolerance {tolerance_K:g} K; use double precision "
+                             "or accept a larger tolerance")
+    return error
+
+
 def winding_state(model: ThermalModel) -> int:
     """Index of the state the winding sensor measures."""
     return model.state_names.index(model.spec.sensors["T_winding"])

@@ -1,6 +1,6 @@
 /* mission_target.c -- run a mission through the generated model on a bare-metal Cortex-M4F.
  *
- * Built by genthermal.embedded (codegen/ABI.md, "Cortex-M") for one
+ * Built by genthermal.embedded (codegen/ABI.md, "Cortex-M4F (bare metal) and single precision") for one
  * precision: casadi_real is double, or float with -Dcasadi_real=float -fsingle-precision-constant.
  * The generated CasADi functions are called directly with casadi_real arrays, so both variants
  * run the same code; the mission inputs (mission_data.c) are stored in double and converted.
