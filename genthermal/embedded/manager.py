@@ -50,7 +50,9 @@ class ManagerSettings:
     winding_state : int
         State the winding sensor measures.
     cycle_steps, rest_quantum_steps, max_rest_steps : int
-        Samples between decisions, samples of rest added at a time, most rest pending.
+        Samples between decisions (default 30: the thesis's 5-minute management cycle, 7.2), samples
+        of rest added at a time (default 6: 1 minute, assumed as the rule's "fine step") and most
+        rest pending (default 360: 1 h, the ``max_rest_s`` of the closed loop's settings).
     dt_s : float
         Sample time, s.
     field_no_load_A, field_gain : float
