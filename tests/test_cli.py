@@ -72,7 +72,7 @@ def test_bad_scenarios_name_the_field(document, named, tmp_path, capsys):
     assert named in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "synth", "estimate", "sysid",
+@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "fmu", "cortex-m4", "synth", "estimate", "sysid",
                                      "compare-models", "compare", "calibrate", "diagnose", "plan", "fly"])
 def test_every_command_documents_itself(command, capsys):
     with pytest.raises(SystemExit) as stopped:
