@@ -210,8 +210,14 @@ def _quadratic_copper(network, roles, weight):
     return _replace_copper(network, rewrite)
 
 
-def _flow_reduction(network, roles, k_flow):
-    return network.scale_air_streams(k_flow)
+def _flow_reduction(network, roles, k_flow, n_flow):
+    r"""Coolant flow :math:`\dot m \to k\,\dot m`; the internal convection coefficients follow
+    the flow velocity, :math:`h \to h\,k^{n}` (forced convection :math:`Nu \propto Re^{n}`:
+    n = 0.8 turbulent, Dittus-Boelter; 0.5 laminar). At :math:`k = 1` the model is unchanged for any n."""
+    symbols = {symbol.name: symbol for link in network.links for symbol in link.resistance.free_symbols}
+    convection = {symbols[name]: symbols[name] * k_flow ** n_flow
+                  for name in roles.get("internal_convection", ()) if name in symbols}
+    return network.scale_air_streams(k_flow).substitute_in_links(convection)
 
 
 def _phase_short(network, roles, R_short):
@@ -250,9 +256,13 @@ for _effect in (
            (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0),), _quadratic_copper,
            "error changes sign between low and high currents: the loss is quadratic in current",
            _needs_symbol("I2_slope", "the quadratic copper loss")),
-    Effect("coolant_flow_reduction", "fan mass flow reduced by a factor (blockage)",
-           r"\dot m \to k_{flow}\,\dot m",
-           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),), _flow_reduction,
+    Effect("coolant_flow_reduction",
+           "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
+           r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),
+            # n: not an on/off switch (k_flow = 1 is neutral for any n); default 0.8 from the
+            # Dittus-Boelter correlation Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection
+            EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8)), _flow_reduction,
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow"),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",

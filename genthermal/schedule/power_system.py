@@ -21,10 +21,9 @@ validated here)::
       - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
       - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
 
-Blockage mapping (assumed): the thesis calls the 10 mm outlet "20 % of the non-fault state" (50 mm),
-read here as the coolant flow fraction :math:`k_{flow} = d/d_0` (0.2 at 10 mm). A pure orifice at
-fixed pressure would give the area ratio :math:`(d/d_0)^2 = 0.04`; the fan raises its pressure when
-throttled, so the flow falls much less, and 0.2-0.3 is the plausible range.
+Blockage mapping: an outlet plate of diameter ``outlet_diameter_mm`` gives the coolant flow fraction
+of the orifice relation :func:`genthermal.coolant.outlet_flow_fraction` (0.11 for the thesis's
+10 mm plate on the 50 mm outlet); the blockage effect lowers the internal convection with it.
 """
 
 from __future__ import annotations
@@ -36,6 +35,7 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
+from ..coolant import OUTLET_DIAMETER_MM, outlet_flow_fraction
 from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
 from ..effects import get_effect
@@ -50,8 +50,6 @@ DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
 DEFAULT_LIMIT_C = 110.0
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
-#: Unblocked coolant outlet diameter of the thesis rig, mm (thesis 7.3.1).
-OUTLET_DIAMETER_MM = 50.0
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
                    "plant_mismatch", "machine")
@@ -145,7 +143,7 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
         if "k_flow" in entry:
             k_flow = _number(entry, "k_flow", path, 0.05, 1.0, "(flow fraction)")
         else:
-            k_flow = _number(entry, "outlet_diameter_mm", path, 2.5, OUTLET_DIAMETER_MM, "mm") / OUTLET_DIAMETER_MM
+            k_flow = outlet_flow_fraction(_number(entry, "outlet_diameter_mm", path, 7.0, OUTLET_DIAMETER_MM, "mm"))
         return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", {"k_flow": k_flow})
     try:
         effect = get_effect(entry.get("effect"))
