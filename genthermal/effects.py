@@ -86,6 +86,10 @@ class Effect:
         The residual pattern the effect explains, for diagnosis reports.
     requires : callable or None
         ``requires(model) -> str | None``: why the effect cannot apply to ``model`` (None if it can).
+    shape_parameters : tuple of EffectParameter
+        Parameters that shape the effect but do not switch it on (the exponent of a power law).
+        A diagnosis search holds them at their default (``neutral``); ``calibrate`` fits them when
+        named. ``transform`` takes their symbols after those of ``parameters``.
     """
 
     name: str
@@ -95,12 +99,18 @@ class Effect:
     transform: Callable[..., Network]
     signature: str = ""
     requires: Callable | None = None
+    shape_parameters: tuple[EffectParameter, ...] = ()
+
+    @property
+    def all_parameters(self) -> tuple[EffectParameter, ...]:
+        """The switching parameters followed by the shape parameters."""
+        return self.parameters + self.shape_parameters
 
     def unavailable_reason(self, model) -> str | None:
         """Why this effect cannot be added to ``model``, or None when it can."""
         if self.name in model.spec.effects:
             return "already applied"
-        clash = [p.name for p in self.parameters if p.name in model.parameters]
+        clash = [p.name for p in self.all_parameters if p.name in model.parameters]
         if clash:
             return f"parameter {clash[0]} already in the model"
         return self.requires(model) if self.requires else None
@@ -143,13 +153,13 @@ def apply_effect(model, effect, provenance: str = "assumed", source: str = "", *
     reason = effect.unavailable_reason(model)
     if reason:
         raise InputError("effect", effect.name, f"cannot be added to {model.name}: {reason}")
-    known = {p.name for p in effect.parameters}
+    known = {p.name for p in effect.all_parameters}
     unknown = set(values) - known
     if unknown:
         raise InputError(f"{effect.name} parameter", sorted(unknown)[0],
                          f"unknown; {effect.name} takes {', '.join(sorted(known)) or 'no parameters'}")
     new = [p.as_parameter(float(values.get(p.name, p.neutral)), effect.name, provenance, source)
-           for p in effect.parameters]
+           for p in effect.all_parameters]
     network = effect.transform(model.network, model.spec.roles, *[p.symbol for p in new])
     return model.with_network(network, model.parameters.with_parameters(*new),
                               effects=model.spec.effects + (effect.name,))
@@ -259,11 +269,11 @@ for _effect in (
     Effect("coolant_flow_reduction",
            "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
            r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
-           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),
-            # n: not an on/off switch (k_flow = 1 is neutral for any n); default 0.8 from the
-            # Dittus-Boelter correlation Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection
-            EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8)), _flow_reduction,
-           "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow"),
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),), _flow_reduction,
+           "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
+           # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
+           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
+           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",
            (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3),), _phase_short,

@@ -135,7 +135,7 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
         Effect name → onset in s, recorded with the effect (informative).
     """
     defaults = build_model(model.spec.name).parameters
-    effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].parameters}
+    effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].all_parameters}
     parameters = {}
     for name in model.parameter_names:
         if name in effect_parameters or name in _DESIGN_PARAMETERS:
@@ -147,7 +147,7 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
                                 "source": parameter.source}
     effects = []
     for effect in model.spec.effects:
-        names = [p.name for p in CATALOGUE[effect].parameters]
+        names = [p.name for p in CATALOGUE[effect].all_parameters]
         first = model.parameters[names[0]] if names else None
         entry = {"name": effect, "parameters": {n: model.parameters.value(n) for n in names}}
         if first is not None:

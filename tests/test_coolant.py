@@ -70,3 +70,11 @@ def test_internal_convection_scales_as_flow_to_the_n(plant_model):
 def test_flow_exponent_outside_its_range_is_refused(plant_model):
     with pytest.raises(InputError, match="n_flow"):
         plant_model.with_effect("coolant_flow_reduction", k_flow=0.5, n_flow=3.0)
+
+
+def test_flow_exponent_survives_a_model_file(plant_model, tmp_path):
+    from genthermal.model_file import load_model, save_model
+
+    blocked = plant_model.with_effect("coolant_flow_reduction", k_flow=0.3, n_flow=0.55)
+    loaded = load_model(save_model(blocked, tmp_path / "blocked.yaml"))
+    assert loaded.parameters.value("n_flow") == 0.55 and loaded.parameters.value("k_flow") == 0.3

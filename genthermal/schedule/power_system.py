@@ -42,7 +42,8 @@ from ..effects import get_effect
 from ..errors import InputError
 from ..losses import INPUT_NAMES
 from ..machines import MACHINES, build_model
-from ..mission import EXCITATION_GAIN_A_PER_A, EXCITATION_NO_LOAD_A, Mission
+from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
+from ..mission import Mission
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -166,7 +167,9 @@ class AffineGenerator:
     r"""A linear design model as matrices: :math:`\dot x = Lx + Bu + c`, :math:`y = C_yx + D_yu + e_y`.
 
     The phase current :math:`I` enters affinely, :math:`u = u_0 + I\,e_I` with
-    :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases, assumed exciter). ``L`` has real
+    :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases; :math:`I_{exc} \approx I_{exc,0} + g_{exc} I`,
+    the least-squares line of the AVR exciter law at the load's power factor,
+    :func:`genthermal.exciter.exciter_line`). ``L`` has real
     eigenvalues :math:`L = V\Lambda V^{-1}`, so a rest of free length :math:`h` at constant input
     is exactly :math:`x(h) = x_{ss} + V e^{\Lambda h}V^{-1}(x(0) - x_{ss})`.
 
@@ -174,9 +177,13 @@ class AffineGenerator:
     ----------
     model : ThermalModel
         An affine (linear design) model.
+    power_factor : float
+        Lagging load power factor, (0, 1].
+    rated_current_A : float
+        Rated phase current, A.
     """
 
-    def __init__(self, model):
+    def __init__(self, model, power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0):
         if not model.is_affine:
             raise InputError("model", model.name, "the scheduler plans on the linear design model")
         nx, nu = model.n_states, len(INPUT_NAMES)
@@ -189,7 +196,7 @@ class AffineGenerator:
         self.model, self.L, self.B, self.c, self.Cy, self.Dy, self.ey = model, L, B, c.ravel(), Cy, Dy, ey.ravel()
         self.e_I = np.zeros(nu)
         self.e_I[[INPUT_NAMES.index(p) for p in ("I_u", "I_v", "I_w")]] = 1.0
-        self.e_I[INPUT_NAMES.index("I_exc")] = EXCITATION_GAIN_A_PER_A
+        self.exciter_no_load_A, self.e_I[INPUT_NAMES.index("I_exc")] = exciter_line(power_factor, rated_current_A)
         eigenvalues, self.V = np.linalg.eig(L)
         if np.max(np.abs(eigenvalues.imag)) > 0 or np.max(eigenvalues.real) >= 0:
             raise InputError("model", model.name, "the design model needs real, negative eigenvalues")
@@ -200,7 +207,7 @@ class AffineGenerator:
     def input(self, current_A, inlet_C: float, ambient_C: float) -> np.ndarray:
         """Input vectors for phase currents ``current_A`` (A RMS), shape ``(..., n_inputs)``."""
         u0 = np.zeros(len(INPUT_NAMES))
-        u0[INPUT_NAMES.index("I_exc")] = EXCITATION_NO_LOAD_A
+        u0[INPUT_NAMES.index("I_exc")] = self.exciter_no_load_A
         u0[INPUT_NAMES.index("T_inlet")] = inlet_C
         u0[INPUT_NAMES.index("T_ambient")] = ambient_C
         return u0 + np.multiply.outer(np.asarray(current_A, dtype=float), self.e_I)
@@ -397,7 +404,8 @@ class PowerSystem:
 
         def build():
             design = _nominal_models(self.machine)[1]
-            return AffineGenerator(self._with_faults(design, generator, relevant))
+            return AffineGenerator(self._with_faults(design, generator, relevant), self.mission.power_factor,
+                                   self.rated_current_A)
         return self._cached(("affine", effects), build)
 
     def describe(self) -> str:
