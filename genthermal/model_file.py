@@ -13,7 +13,9 @@
         source: "diagnosis on flight_12.csv"
         onset_s: 3960             # optional, informative: when the effect appeared in the data
 
-:func:`load_model` also takes a built-in name: ``genco_rf201a`` or ``genco_rf201a:linear``.
+:func:`load_model` also takes a built-in name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
+parameter set, ``genco_rf201a:chapter7`` (the calibration fitted to the thesis's chapter-7 outcomes,
+:mod:`genthermal.machines.chapter7`; a model file inside the package).
 """
 
 from __future__ import annotations
@@ -31,13 +33,15 @@ from .model import ThermalModel
 from .parameters import PROVENANCES
 
 VARIANTS = ("nonlinear", "linear")
+#: Shipped parameter sets: ``machine:name`` → model file inside the package.
+PARAMETER_SETS = ("chapter7",)
 _TOP_KEYS = ("machine", "variant", "parameters", "effects")
 #: Parameters the linear design model adds; saved through the variant, not as values.
 _DESIGN_PARAMETERS = ("I2_slope", "I2_intercept", "theta_ref")
 
 
 def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
-    """Build a model from a built-in name (``genco_rf201a[:linear]``) or a YAML model file.
+    """Build a model from a built-in name (``genco_rf201a[:linear|:chapter7]``) or a YAML model file.
 
     Raises
     ------
@@ -47,11 +51,15 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     """
     text = str(spec_or_path)
     name, _, variant = text.partition(":")
+    if name in MACHINES and variant in PARAMETER_SETS and not Path(text).is_file():
+        from .machines.chapter7 import parameter_file
+
+        return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
     if name in MACHINES and not Path(text).is_file():
         return _build(name, variant or "nonlinear", from_file=False)
     path = Path(text)
     if not path.is_file():
-        known = ", ".join(f"{m}, {m}:linear" for m in MACHINES)
+        known = ", ".join(f"{m}, {m}:linear, " + ", ".join(f"{m}:{v}" for v in PARAMETER_SETS) for m in MACHINES)
         raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
     try:
         document = yaml.safe_load(path.read_text())

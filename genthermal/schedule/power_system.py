@@ -14,10 +14,10 @@ validated here)::
       limit_C: 110                 # temperature limit theta_max, degC (thesis 7.3.1)
       current_limit_percent: 100   # highest phase current a generator may carry, % of rated
       plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
-      machine: genco_rf201a
+      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration)
     faults:                        # optional list
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
-      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10}
+      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
       - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
       - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
 
@@ -41,7 +41,8 @@ from ..design import linear_design_model
 from ..effects import get_effect
 from ..errors import InputError
 from ..losses import INPUT_NAMES
-from ..machines import MACHINES, build_model
+from ..machines import MACHINES
+from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
 
@@ -54,7 +55,7 @@ DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
                    "plant_mismatch", "machine")
-_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "inlet_rise_C"),
+_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C"),
                "inlet_rise": ("inlet_rise_C",), "effect": ("effect", "values", "inlet_rise_C")}
 
 
@@ -145,7 +146,10 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
             k_flow = _number(entry, "k_flow", path, 0.05, 1.0, "(flow fraction)")
         else:
             k_flow = outlet_flow_fraction(_number(entry, "outlet_diameter_mm", path, 7.0, OUTLET_DIAMETER_MM, "mm"))
-        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", {"k_flow": k_flow})
+        values = {"k_flow": k_flow}
+        if "n_flow" in entry:  # exponent of the internal convection, h ∝ flow^n (effect default 0.8)
+            values["n_flow"] = _number(entry, "n_flow", path, 0.0, 1.5, "(convection exponent)")
+        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values)
     try:
         effect = get_effect(entry.get("effect"))
     except InputError as error:
@@ -238,7 +242,7 @@ class AffineGenerator:
 def _nominal_models(machine: str):
     """The nominal simulation model and its linear design model (built once per machine; models
     are not changed after they are built)."""
-    model = build_model(machine)
+    model = load_model(machine)
     return model, linear_design_model(model)
 
 
@@ -306,8 +310,11 @@ class PowerSystem:
                 raise InputError("generators.count", count, "must be a whole number 2..8")
             names = tuple(f"gen{i + 1}" for i in range(count))
         machine = config.get("machine", "genco_rf201a")
-        if machine not in MACHINES:
-            raise InputError("generators.machine", machine, f"unknown machine; built in: {', '.join(MACHINES)}")
+        if not isinstance(machine, str) or machine.partition(":")[0] not in MACHINES or \
+                machine.partition(":")[2] not in ("", "nonlinear", *PARAMETER_SETS):
+            raise InputError("generators.machine", machine,
+                             f"unknown machine; built in: {', '.join(MACHINES)}, optionally with a parameter set "
+                             f"({', '.join(f'{m}:{v}' for m in MACHINES for v in PARAMETER_SETS)})")
         mismatch = config.get("plant_mismatch", DEFAULT_PLANT_MISMATCH)
         if not isinstance(mismatch, Mapping):
             raise InputError("generators.plant_mismatch", mismatch, "must map parameter names to factors")
