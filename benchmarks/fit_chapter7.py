@@ -22,7 +22,7 @@ from genthermal.coolant import OUTLET_DIAMETER_MM
 from genthermal.machines import build_model
 from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE, SOURCE, fit_chapter7
 
-MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0")
+MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron")
 
 
 def main() -> None:

@@ -13,7 +13,7 @@ from genthermal.model_file import load_model
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.simulate import simulate
 
-FITTED_MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0")
+FITTED_MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron")
 
 
 @pytest.fixture(scope="module")

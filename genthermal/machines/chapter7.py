@@ -65,12 +65,13 @@ FIT_BOUNDS = {
     "h_end_air": (4.0, 40.0, "W/(m^2 K)", "end-region convection of a small enclosed machine"),
     "R0": (0.9, 2.0, "ohm", "phase resistance at 0 °C: 0.03-0.06 per unit of the 34 ohm base"),
     "h_air_gap": (20.0, 120.0, "W/(m^2 K)", "rotating air gap at 1500 rpm"),
+    "P_iron": (20.0, 120.0, "W", "iron loss: ~10 kg of stator steel at 2-10 W/kg (50 Hz, 1.5 T)"),
     "h_ambient": (5.0, 25.0, "W/(m^2 K)", "natural convection outside the frame"),
     "n_flow": (0.5, 1.0, "1", "forced-convection exponent: 0.5 laminar, 0.8 turbulent"),
     "k_flow": (0.056, 0.3, "1", "flow through the 10 mm plate: outlet loss share 0.5-0.016 of the circuit"),
 }
-#: Fitted values: three machine parameters and the blockage's flow fraction and exponent.
-FITTED = ("h_top_air", "h_end_air", "R0", "n_flow", "k_flow")
+#: Fitted values: four machine parameters and the blockage's flow fraction and exponent.
+FITTED = ("h_top_air", "h_end_air", "R0", "P_iron", "n_flow", "k_flow")
 #: Sample period of the proxy simulations, s.
 DT_S = 30.0
 #: Smoothness of the smooth maximum, K.
