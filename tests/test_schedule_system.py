@@ -25,7 +25,7 @@ def test_large_blockage_scenario_states_its_flow_and_exponent():
     system = PowerSystem.from_mission(load_mission("blockage_large"))
     (fault,) = system.faults
     assert system.generator_names == ("gen1", "gen2")
-    assert fault.effect == "coolant_flow_reduction" and fault.values == {"k_flow": 0.3, "n_flow": 0.5}
+    assert fault.effect == "coolant_flow_reduction" and fault.values == {"k_flow": 0.2, "n_flow": 0.0}
     assert system.inlet_C(0, [0.0, 66 * 60.0]).tolist() == [20.0, 51.0]
     assert system.inlet_C(1, 66 * 60.0) == 20.0
     assert system.rest_current_A == pytest.approx(0.273 * 7.0)

@@ -21,9 +21,9 @@ from ..simulate import simulate
 
 DEMO_MISSION = "thesis_fig_7_7"
 #: Thesis 7.3.3 large blockage: outlet 50 mm → 10 mm at 1.1 h, inlet air ≈ 51 °C. Flow fraction and
-#: convection exponent as in scenarios/blockage_large.yaml: fitted to the thesis's chapter-7 outcomes.
+#: convection exponent as in scenarios/blockage_large.yaml (its description says why).
 BLOCKAGE_ONSET_S = 66 * 60.0
-BLOCKAGE_EFFECT = {"k_flow": 0.3, "n_flow": 0.5}
+BLOCKAGE_EFFECT = {"k_flow": 0.2, "n_flow": 0.0}
 BLOCKAGE_INLET_C = 51.0
 LIMIT_C = 110.0
 #: The rig is not the model: the demo's "measured" generator has parameters off by these factors
