@@ -70,7 +70,8 @@ def _steady_winding(model, **inputs):
 
 def test_library_terms_are_the_physics_they_name(plant_model):
     """An I_u² heat flow into the slot winding is the catalogue's shorted turn; the air-stream
-    conductance factor is its blockage; neutral values leave the model unchanged."""
+    conductance factor is its blockage with the internal convection held (n_flow 0); neutral values
+    leave the model unchanged."""
     groups = node_groups(plant_model)
     inputs = dict(I_u=6.0, I_v=5.0, I_w=4.0, I_exc=1.5, T_inlet=25.0, T_ambient=22.0)
     short = plant_model.with_effect(heat_flow_effect("slot winding", groups["slot winding"], "I_u2"),
@@ -80,7 +81,7 @@ def test_library_terms_are_the_physics_they_name(plant_model):
                                atol=1e-9)
     blocked = plant_model.with_effect(conductance_effect("air_streams"), k_conductance_air_streams=0.5)
     np.testing.assert_allclose(_steady_winding(blocked, **inputs),
-                               _steady_winding(plant_model.with_effect("coolant_flow_reduction", k_flow=0.5), **inputs),
+                               _steady_winding(plant_model.with_effect("coolant_flow_reduction", k_flow=0.5, n_flow=0.0), **inputs),
                                atol=1e-9)
     library = heat_flow_library(plant_model)
     for name in ("heat_I2_theta_slot_winding", "heat_constant_frame", "conductance_frame_to_ambient"):
