@@ -56,7 +56,7 @@ def scenario_mission(mission: tuple, onset_min: float, severity: tuple) -> Missi
     label, k_flow, rise = severity
     fault = ({"generator": 1, "kind": "inlet_rise", "onset_min": onset_min, "inlet_rise_C": rise} if k_flow >= 1.0 else
              {"generator": 1, "kind": "coolant_blockage", "onset_min": onset_min, "k_flow": k_flow,
-              "inlet_rise_C": rise})
+              "n_flow": 0.0, "inlet_rise_C": rise})  # air streams only, as the README's figures were measured
     return Mission.from_dict({"name": f"{name}@{onset_min:g}min/{label}",
                               "actions": [{"condition": c, "duration_min": m} for c, m in actions],
                               "faults": [fault]})

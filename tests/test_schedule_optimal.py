@@ -42,7 +42,7 @@ def test_milp_plan_is_certified_and_feasible(open_loop_plans):
 
 @pytest.fixture(scope="module")
 def tiny(design_model):
-    faulty = AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2))
+    faulty = AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2, n_flow=0.0))
     healthy = AffineGenerator(design_model)
     inlets = np.array([51.0, 20.0])
     x0 = np.array([g.steady_state(g.input(4.5, t, 20.0)) for g, t in zip((faulty, healthy), inlets)])

@@ -308,7 +308,8 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     model = system.plant_model(g, system.faults_known_at(t0))
     _, switches = system.plant_switches(g)
     later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
-    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C)
+    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C,
+                             system.mission.power_factor, system.rated_current_A)
     run = simulate(model, frame, x0=x0, switches=later)
     states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
     return run[["T_winding", "T_iron"]].to_numpy()[1:].T, states[-1]
