@@ -28,6 +28,7 @@ import numpy as np
 
 from ..estimation.kalman import THESIS_R_K2, KalmanFilter
 from ..simulate import simulate
+from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
@@ -35,7 +36,7 @@ from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, genera
                    predict, remaining_after)
 from .power_system import PowerSystem
 
-SCHEDULERS = ("heuristic", "optimal", "milp")
+SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Default back-off margin below θmax, K.
 DEFAULT_MARGIN_K = 2.5
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
@@ -65,7 +66,7 @@ class ManagerSettings:
         A prediction above the planning limit by more than this triggers a re-plan, K.
     seed : int
         Seed of the measurement noise.
-    heuristic, optimal, milp
+    heuristic, engineer, optimal, milp
         Settings of each scheduler.
     """
 
@@ -77,6 +78,7 @@ class ManagerSettings:
     replan_tolerance_K: float = 0.05
     seed: int = 0
     heuristic: HeuristicSettings = HeuristicSettings()
+    engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
 
@@ -130,20 +132,30 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
 
     Parameters
     ----------
-    scheduler : {"heuristic", "optimal", "milp"}
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
     problem : PlanningProblem
         Its ``limit_C`` is the planning limit (θmax minus the margin).
     settings : ManagerSettings
     names : sequence of str
         Generator names, for the messages.
     limit_C : float
-        θmax, °C: ``feasible`` of the result says whether the plan keeps it.
+        θmax, °C.
     previous : Schedule, optional
         Warm start of the optimal scheduler.
+
+    Returns
+    -------
+    PlanResult
+        ``feasible`` is True only when the plan's own prediction, with its back-off (the margin and
+        the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
+        reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
+        (``planned_peak_C``) and what the manager does about it (``response``).
     """
     def run(p):
         if scheduler == "heuristic":
             return heuristic_plan(p, settings.heuristic)
+        if scheduler == "engineer":
+            return engineer_plan(p, settings.engineer)
         if scheduler == "optimal":
             return optimal_plan(p, settings.optimal, previous)
         return milp_plan(p, settings.milp)
@@ -154,17 +166,20 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     segment = problem.segments[lowest.peak_segment]
     where = (f"the lowest reachable peak is {lowest.peak_C:.1f} °C, on {names[lowest.peak_generator]} during "
              f"action {segment.action_index + 1} ({segment.label})")
-    if lowest.peak_C > limit_C:
-        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; flying the lowest-peak schedule"
+    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
+    response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
+                f"{relaxed.schedule.displaced_Ah(problem.segments):.2f} A·h to the other generators")
+    if relaxed.peak_C > limit_C:
+        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}"
     else:
         message = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C; "
-                   f"{where}, within θmax {limit_C:g} °C")
-    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
-    relaxed.feasible = lowest.peak_C <= limit_C
+                   f"{where}, within θmax {limit_C:g} °C; {response}")
+    relaxed.feasible = False
     relaxed.solve_s += result.solve_s + lowest.solve_s
     relaxed.warnings.append(message)
     relaxed.details.update(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
-                           lowest_peak_action=segment.action_index + 1)
+                           lowest_peak_action=segment.action_index + 1, planned_peak_C=relaxed.peak_C,
+                           response=response)
     return relaxed
 
 
@@ -320,7 +335,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     Parameters
     ----------
     system : PowerSystem
-    scheduler : {"heuristic", "optimal", "milp"}
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
     settings : ManagerSettings
 
     Returns
