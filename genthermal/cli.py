@@ -29,6 +29,7 @@ COMMAND_MODULES = (
     "diagnose",
     "plan",
     "fly",
+    "sweep",
 )
 
 
