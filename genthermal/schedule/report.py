@@ -118,6 +118,14 @@ def plot_flight(result: FlightResult, title: str = "", path=None):
         for start, end in zip(edges[::2], edges[1::2]):
             ax.axvspan(steps[start], hours[end], color="tab:green", alpha=0.15, lw=0)
         ax.grid(alpha=0.3)
+    monitor = result.monitor
+    for found in (monitor.identifications if monitor is not None else []):
+        label = (f"{system.generator_names[found.generator]}: {found.effect} identified" if found.effect else
+                 f"{system.generator_names[found.generator]}: alarm, nothing significant")
+        for ax in axes:
+            ax.axvline(found.detected_at_s / 3600.0, color="k" if found.effect else "grey", ls="-.", lw=1)
+        axes[1].annotate(label, (found.detected_at_s / 3600.0, axes[1].get_ylim()[0]), rotation=90, fontsize=7,
+                         va="bottom", ha="right")
     for panel, output in zip(axes[1:], OUTPUT_LABELS):
         panel.axhline(system.limit_C, color="red", ls="--", lw=1, label=f"limit {system.limit_C:g} °C")
         panel.set_ylabel(f"{output} [°C]")
