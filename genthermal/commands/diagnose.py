@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 from ..model_file import load_model, save_model
@@ -30,7 +31,8 @@ def run(args) -> int:
     from ..diagnose.discover import diagnose
 
     model = load_model(args.model)
-    result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args))
+    result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args),
+                      progress=lambda line: print(f"  ... {line}", file=sys.stderr, flush=True))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:
@@ -38,10 +40,14 @@ def run(args) -> int:
         print(f"  {c['effect']:>32s}: {params:<22s} onset {c['onset_s'] / 3600:5.2f} h  RMSE "
               f"{c['rmse_before']:.3f} -> {c['rmse_after']:.3f} K  ΔBIC {c['delta_ic']:9.1f}"
               f"{'  *' if c['significant'] else ''}")
+    for p in document["pairs"][:3]:
+        print(f"  {' + '.join(p['effects']):>66s}: RMSE {p['rmse_after']:.3f} K  ΔBIC {p['delta_ic']:9.1f}"
+              f"{'  *' if p['significant'] else ''}")
     for k, iteration in enumerate(document["iterations"][1:], start=2):
         print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
     print(f"verdict: {document['verdict']}")
     print(document["explanation"])
+    print(document["residual"]["summary"])
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(document, indent=2))
