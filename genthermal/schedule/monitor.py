@@ -332,7 +332,8 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
     from ..diagnose import diagnose
 
     started = time.perf_counter()
-    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects))
+    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects),
+                         pairs=False, design_experiment=False)  # one fault at a time, no rig test in flight
     ranked = diagnosis.iterations[0].ranked
     best = ranked[0] if ranked and ranked[0].significant else None
     runner_up = (f"{ranked[1].effect} (ΔBIC +{ranked[1].delta_bic - ranked[0].delta_bic:.0f})"
