@@ -31,6 +31,7 @@ COMMAND_MODULES = (
     "diagnose",
     "plan",
     "fly",
+    "sweep",
 )
 
 

@@ -217,7 +217,7 @@ class Mission:
         -------
         pandas.DataFrame
             Float columns ``time_s`` (s), ``I_u, I_v, I_w`` (A RMS), ``I_exc`` (A, from
-            :func:`excitation_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
+            :func:`genthermal.exciter.exciter_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
         """
         step = checked_number(dt_s, "dt_s", "a positive number of seconds")
         if step <= 0:

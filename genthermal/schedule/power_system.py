@@ -267,6 +267,12 @@ class PowerSystem:
         Parameter name → factor applied to the nominal value in the true plant.
     machine : str
         Built-in machine of every generator.
+    model : ThermalModel, optional
+        The model the manager plans on and filters with (``--model``: a calibrated or identified
+        model file); default the machine's nominal simulation model.
+    plant : ThermalModel, optional
+        The true plant of every generator before its faults (``--plant``); default the planning
+        model with ``plant_mismatch`` applied.
     """
 
     mission: Mission
@@ -277,6 +283,8 @@ class PowerSystem:
     current_limit_percent: float = 100.0
     plant_mismatch: Mapping[str, float] = dataclasses.field(default_factory=lambda: dict(DEFAULT_PLANT_MISMATCH))
     machine: str = "genco_rf201a"
+    model: Any = None
+    plant: Any = None
 
     def __post_init__(self):
         if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
@@ -386,10 +394,18 @@ class PowerSystem:
         """Nonlinear simulation model of the machine with its nominal parameters."""
         return _nominal_models(self.machine)[0]
 
+    @property
+    def planning_model(self):
+        """The model the manager plans on (``model``, default the nominal simulation model)."""
+        return self.nominal_model if self.model is None else self.model
+
     def plant_model(self, generator: int, fault_indices=()):
-        """True plant: the nominal model with ``plant_mismatch`` and the given faults applied."""
+        """True plant: ``plant`` (default the planning model with ``plant_mismatch``) with the
+        given faults applied."""
         def build():
-            base = self.nominal_model
+            if self.plant is not None:
+                return self._with_faults(self.plant, generator, fault_indices)
+            base = self.planning_model
             try:
                 values = {name: base.parameters.value(name) * factor for name, factor in self.plant_mismatch.items()}
                 plant = base.with_parameters("assumed", "plant mismatch of the closed-loop test", **values)
@@ -405,15 +421,39 @@ class PowerSystem:
         return self.plant_model(generator), [(t, self.plant_model(generator, self.faults_known_at(t))) for t in onsets]
 
     def design_generator(self, generator: int, fault_indices=()) -> AffineGenerator:
-        """Linear design model (thesis 5.2) of the nominal machine with the given faults, as matrices."""
-        relevant = tuple(i for i in fault_indices if self.faults[i].generator == generator and self.faults[i].effect)
-        effects = tuple((self.faults[i].effect, tuple(self.faults[i].values.items())) for i in relevant)
+        """Design model (thesis 5.2) of the planning model with the given faults, as matrices."""
+        relevant = [self.faults[i] for i in fault_indices
+                    if self.faults[i].generator == generator and self.faults[i].effect]
+        return self.design_generator_for(tuple((f.effect, tuple(f.values.items())) for f in relevant))
 
-        def build():
-            design = _nominal_models(self.machine)[1]
-            return AffineGenerator(self._with_faults(design, generator, relevant), self.mission.power_factor,
-                                   self.rated_current_A)
-        return self._cached(("affine", effects), build)
+    def design_generator_for(self, effects=(), base=None) -> AffineGenerator:
+        """Design model of ``base`` (default the planning model) with ``effects`` (``(name,
+        ((parameter, value), ...))`` pairs, applied in order), linearised by
+        :func:`~genthermal.schedule.linearise.planning_design_model`. ``base`` may differ from the
+        planning model in parameter values only (a recalibration): its values are set on the
+        planning model's design model, which shares its compiled functions."""
+        from .linearise import planning_design_model
+
+        def build_planning():
+            if not effects and self.model is None:
+                return AffineGenerator(_nominal_models(self.machine)[1], *self._exciter_operating_point())
+            model = self.planning_model
+            for name, values in effects:
+                model = model.with_effect(name, **dict(values))
+            return AffineGenerator(planning_design_model(model), *self._exciter_operating_point())
+        planning = self._cached(("affine", tuple(effects)), build_planning)
+        if base is None or base is self.planning_model:
+            return planning
+        changed = {name: value for name, value in base.parameters.values().items()
+                   if value != self.planning_model.parameters.value(name)}
+        self._models.setdefault(("base", id(base)), base)  # keeps ``base`` alive while its key is used
+        return self._cached(("affine", tuple(effects), id(base)), lambda: AffineGenerator(
+            planning.model.with_parameters("fitted", "recalibrated in flight", **changed),
+            *self._exciter_operating_point()))
+
+    def _exciter_operating_point(self) -> tuple[float, float]:
+        """Power factor and rated current (A) the AVR exciter law of every design generator uses."""
+        return self.mission.power_factor, self.rated_current_A
 
     def describe(self) -> str:
         """Several lines: generators, rest mode, limit, faults."""
