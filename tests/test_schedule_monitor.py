@@ -13,7 +13,7 @@ from genthermal.schedule.power_system import AffineGenerator
 SHORT = """name: short_blockage
 generators: {count: 2, plant_mismatch: {h_end_air: 0.8, R0: 1.2}}
 faults:
-  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, inlet_rise_C: 31}
+  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
 actions:
   - {condition: taxi, duration_min: 15}
   - {condition: cruise_combat, duration_min: 30}
