@@ -33,11 +33,10 @@ import casadi as ca
 from . import __version__
 from .errors import GenthermalError, InputError
 from .model import ThermalModel
+from .resources import TEMPLATE_DIR, shipped_file
 
 #: Version of the C interface written into ``<PREFIX>_ABI_VERSION``.
 ABI_VERSION = 1
-#: Directory of the ABI templates, the example program and its Makefile.
-TEMPLATE_DIR = Path(__file__).resolve().parents[1] / "codegen"
 #: Continuous-model functions of (x, u, p) generated as they are (``jac_p`` is built from rows).
 MODEL_FUNCTIONS = ("rhs", "jac_x", "jac_u", "outputs")
 #: Names of the fixed entry points and metadata; extra functions may not take them (nor start
@@ -381,10 +380,7 @@ def _extra_definition(prefix: str, signature: Signature) -> str:
 
 def _fill_template(template_name: str, fields: dict, target: Path) -> Path:
     """Replace every ``@NAME@`` of a template in ``codegen/`` and write ``target``."""
-    template = TEMPLATE_DIR / template_name
-    if not template.is_file():
-        raise CodegenError(f"ABI template {template} not found: genthermal must be installed from its "
-                           "source tree (pip install -e .) to generate C")
+    template = shipped_file(TEMPLATE_DIR / template_name)
 
     def field(match):
         if match.group(1) not in fields:

@@ -4,7 +4,8 @@ A :class:`Mission` is a list of :class:`Action` objects, each a load condition (
 see :mod:`genthermal.conditions`) or a constant load in % (for step tests) held for a duration.
 :meth:`Mission.to_inputs` turns it into the input time series of a thermal model.
 
-Missions are stored as YAML under ``scenarios/`` at the top of the repository::
+Missions are stored as YAML under ``scenarios/`` at the top of the repository (installed as
+``genthermal/data/scenarios``, see :mod:`genthermal.resources`)::
 
     name: thesis_fig_3_2                 # required, text
     description: Example flight ...      # optional, text
@@ -39,6 +40,7 @@ import yaml
 
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
+from .resources import SCENARIO_DIR
 
 __all__ = [
     "Action",
@@ -49,8 +51,6 @@ __all__ = [
     "load_mission",
 ]
 
-#: Directory of the shipped scenario files (the package is installed in editable mode).
-SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
 #: Columns of :meth:`Mission.to_inputs`: s, A RMS (three phases), A (field), degC, degC.
 INPUT_COLUMNS = ("time_s", "I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
 #: Accepted range of inlet and ambient temperatures, degC.

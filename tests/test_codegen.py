@@ -18,7 +18,8 @@ import pytest
 from genthermal import ccompile
 from genthermal.ccompile import CompiledModel, compile_library, compile_objects, find_compiler
 from genthermal.cli import main
-from genthermal.codegen import TEMPLATE_DIR, forbidden_constructs, generate_c
+from genthermal.codegen import forbidden_constructs, generate_c
+from genthermal.resources import TEMPLATE_DIR
 from genthermal.errors import CompilerNotFoundError, InputError
 from genthermal.mission import load_mission
 from genthermal.simulate import simulate

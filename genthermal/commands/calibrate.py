@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..model_file import load_model, save_model
+from ..outputs import report_json
 from .compare import add_model_and_data_arguments, data_step
 
 
@@ -44,7 +42,5 @@ def run(args) -> int:
     if args.out:
         print(f"wrote {save_model(result.model, args.out)}")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(summary, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, summary)
     return 0

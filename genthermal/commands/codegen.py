@@ -12,9 +12,10 @@ import shutil
 from pathlib import Path
 
 from ..ccompile import compile_library
-from ..codegen import TEMPLATE_DIR, generate_c
+from ..codegen import generate_c
 from ..design import linear_design_model
 from ..estimation.kalman import embedded_functions
+from ..resources import TEMPLATE_DIR, shipped_file
 from ._common import add_model_arguments, model_from_args, positive_float
 
 #: Files of ``codegen/`` copied next to the generated sources so that ``make -C DIR`` works.
@@ -50,7 +51,7 @@ def run(args) -> int:
         design = model if model.is_affine else linear_design_model(model)
         extra = embedded_functions(design, dt_s=dt, predict_steps=steps)
     generated = generate_c(model, out, dt_s=dt, extra_functions=extra)
-    companions = [Path(shutil.copyfile(TEMPLATE_DIR / name, out / name)) for name in COMPANION_FILES]
+    companions = [Path(shutil.copyfile(shipped_file(TEMPLATE_DIR / name), out / name)) for name in COMPANION_FILES]
     step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"
     print(f"{model.name}: C code with dt = {dt:g} s ({step}) in {out}")
     for signature in generated.extra_functions:

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..model_file import load_model
+from ..outputs import report_json
 from ._common import positive_float
 
 
@@ -47,9 +45,7 @@ def run(args) -> int:
         print(f"  {name}: RMSE {m['rmse']:.3f} K, MAE {m['mae']:.3f} K, max {m['max_abs']:.3f} K, "
               f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(comparison.metrics, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, comparison.metrics)
     if args.report:
         from ..diagnose.report import write_compare_report
 

@@ -3,11 +3,9 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..estimation.comparison import compare_design_models
 from ..measurements import load_measurements
+from ..outputs import report_json
 from ._common import positive_float
 
 
@@ -34,9 +32,6 @@ def run(args) -> int:
     print(f"design models on {args.validation} (ARX fitted on {args.train}), open loop:")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"train": str(args.train), "validation": str(args.validation), "dt_s": dt,
-                                    "models": table.to_dict(orient="records")}, indent=2))
-        print(f"wrote {path}")
+        report_json(args.json, {"train": str(args.train), "validation": str(args.validation), "dt_s": dt,
+                                "models": table.to_dict(orient="records")})
     return 0

@@ -6,7 +6,6 @@ folder and returns its figures for ``summary.json``.
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
@@ -16,6 +15,7 @@ from ..design import current_squared_fit, linear_design_model
 from ..errors import CompilerNotFoundError
 from ..machines import build_model
 from ..mission import load_mission
+from ..outputs import write_csv, write_json
 from ..plots import plot_comparison, plot_simulation
 from ..simulate import simulate
 
@@ -58,7 +58,7 @@ def run(args) -> int:
     summary["load_management"] = load_management(out)
     summary["discovery"] = discovery(out)
     summary["elapsed_s"] = round(time.perf_counter() - started, 1)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_plain))
+    write_json(out / "summary.json", summary)
     print(f"\nwrote {out / 'summary.json'} and the plots in {out}/ ({summary['elapsed_s']} s)")
     return 0
 
@@ -151,7 +151,7 @@ def estimation(plant, design, inputs, out: Path) -> dict:
     rig = plant.with_parameters(provenance="assumed", source="demo rig: parameters off by RIG_MISMATCH",
                                 **{k: plant.parameters.value(k) * f for k, f in RIG_MISMATCH.items()})
     data = synthesize(rig, inputs, seed=1)
-    data.to_csv(out / "rig_data.csv", index=False, float_format="%.4f")
+    write_csv(data, out / "rig_data.csv", float_format="%.4f")
     study = prediction_study(design, data)
     study.plot(path=out / "prediction.png")
     study.filter_result.plot(path=out / "kalman_filter.png")
@@ -184,11 +184,3 @@ def discovery(out: Path) -> dict:
           f"{result['rmse_after']:.3f} K (sensor noise {result['noise_std_K']:.3f} K)")
     print(result["explanation"])
     return {key: result[key] for key in ("verdict", "params", "rmse_before", "rmse_after", "noise_std_K")}
-
-
-def _plain(value):
-    """JSON fallback for numpy scalars."""
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
-    raise TypeError(type(value).__name__)
-

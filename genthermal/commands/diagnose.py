@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..model_file import load_model, save_model
+from ..outputs import report_json
 from .compare import add_model_and_data_arguments, data_step
 
 
@@ -43,9 +41,7 @@ def run(args) -> int:
     print(f"verdict: {document['verdict']}")
     print(document["explanation"])
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(document, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, document)
     if args.report:
         from ..diagnose.report import write_diagnosis_report
 

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from ..estimation.prediction import (
 )
 from ..machines import build_model
 from ..measurements import load_measurements
+from ..outputs import report_json
 from ._common import positive_float
 
 
@@ -87,10 +87,8 @@ def run(args) -> int:
               "missing_counts": result.missing_counts, "steady_state_gain": bool(args.steady_state),
               "R_K2": [kalman.R[i, i] for i in range(len(kalman.output_names))], **study.to_json()}
     print_summary(report, result)
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2))
-    print(f"wrote {path}")
+    if args.json:
+        report_json(args.json, report)
     if args.plot:
         plot = Path(args.plot)
         filter_plot = plot.with_name(f"{plot.stem}_filter{plot.suffix or '.png'}")

@@ -8,11 +8,10 @@ current per generator and rest before each action) is planned for the rest of th
 from __future__ import annotations
 
 import dataclasses
-import json
-from pathlib import Path
 
 from ..errors import InputError
 from ..mission import load_mission
+from ..outputs import report_json
 from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
@@ -63,10 +62,7 @@ def write_outputs(args, summary: dict, result, limit_C: float) -> None:
     """Print the summary, write the JSON and the plot when asked."""
     print(summary_text(summary, limit_C))
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(summary, indent=2))
-        print(f"wrote {path}")
+        report_json(args.json, summary)
     if args.plot:
         plot_flight(result, path=args.plot)
         print(f"wrote {args.plot}")

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from ..errors import InputError
 from ..machines import build_model
 from ..mission import load_mission
+from ..outputs import write_csv
 from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
 from ._common import non_negative_float, parse_assignments, positive_float
 
@@ -57,9 +56,7 @@ def run(args) -> int:
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
     frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
                        switches=switches)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    frame.to_csv(out, index=False, float_format="%.5f")
+    out = write_csv(frame, args.out, float_format="%.5f")
     changed = ", ".join(f"{name}={value:g}" for name, value in overrides.items()) or "default parameters"
     print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} ({changed}), seed {seed}")
     if fault_text:

@@ -9,10 +9,6 @@ validation record with a different load profile. The two models are stacked into
 
 from __future__ import annotations
 
-import json
-import math
-from pathlib import Path
-
 import numpy as np
 
 from ..errors import InputError
@@ -27,6 +23,7 @@ from ..estimation.arx_search import (
     training_record,
 )
 from ..measurements import load_measurements, resample
+from ..outputs import report_json
 from ._common import non_negative_float, positive_float
 
 #: Largest order or delay accepted on the command line (the search grows as the product of ranges).
@@ -94,10 +91,8 @@ def run(args) -> int:
     report["state_space"] = {"outputs": [f"T_{output} - y_offset" for output in OUTPUTS],
                              "inputs": [report[output]["input"] for output in OUTPUTS],
                              "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist()}
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_finite_or_null(report), indent=2))
-    print(f"\nwrote {path}")
+    print()
+    report_json(args.json, report)
     return 0
 
 
@@ -141,14 +136,3 @@ def identify_output(train, validation, output: str, input_choice: str, discard_b
 
 def _candidate(row) -> dict:
     return {"na": int(row.na), "nb": int(row.nb), "nk": int(row.nk), "R2": float(row.R2), "AIC": float(row.AIC)}
-
-
-def _finite_or_null(value):
-    """``value`` with every non-finite float replaced by None (JSON has no inf or NaN)."""
-    if isinstance(value, dict):
-        return {key: _finite_or_null(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [_finite_or_null(item) for item in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
