@@ -36,7 +36,7 @@ FOLDER_OUTPUT_OPTIONS = ("report",)
 #: Commands whose ``--out`` is a folder, not a file.
 FOLDER_OUT_COMMANDS = ("codegen", "demo")
 #: Option and argument destinations that name files a command reads.
-INPUT_OPTIONS = ("scenario", "data", "train", "validation", "validate", "model", "baseline")
+INPUT_OPTIONS = ("scenario", "data", "train", "validation", "model", "baseline")
 #: Figure formats a ``--plot`` file may have (matplotlib's, without the raw buffer formats).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".eps", ".ps")
 

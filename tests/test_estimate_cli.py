@@ -56,7 +56,7 @@ BAD = [
     (["--predict-from", "50,abc"], "--predict-from"),
     (["--predict-from", "500"], "--predict-from"),
     (["--dt", "0"], "--dt"),
-    (["--margin", "-1"], "--margin"),
+    (["--min-improvement", "-1"], "--min-improvement"),
 ]
 
 

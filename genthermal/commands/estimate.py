@@ -1,4 +1,4 @@
-"""``genthermal estimate DATA.csv --json out.json``: Kalman filter and n-step prediction study
+"""``genthermal estimate DATA.csv [--json out.json]``: Kalman filter and n-step prediction study
 (thesis 6.3) of the design model on rig data."""
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ def register(subparsers) -> None:
         "run the model open loop, predict from each start time, and report the RMS errors and how "
         "long each prediction beats the open-loop model.")
     parser.add_argument("data", help="rig data CSV (genthermal.measurements schema)")
-    parser.add_argument("--json", required=True, metavar="OUT.json", help="JSON file to write")
+    parser.add_argument("--json", metavar="OUT.json", help="write the errors and periods of increased accuracy as JSON")
     parser.add_argument("--predict-from", default=",".join(str(s) for s in THESIS_STARTS_MIN), metavar="MIN,...",
                         help="prediction start times, min after the first sample (default 50,75,100,125,150,175)")
     parser.add_argument("--dt", default="10",
@@ -41,7 +41,7 @@ def register(subparsers) -> None:
     parser.add_argument("--steady-state", action="store_true", help="use the converged (steady-state) gain")
     parser.add_argument("--estimate-noise", action="store_true",
                         help="estimate R from the data (thesis 6.2.2) instead of using eq. 6.10")
-    parser.add_argument("--margin", default=str(DEFAULT_MARGIN_K), metavar="K",
+    parser.add_argument("--min-improvement", default=str(DEFAULT_MARGIN_K), metavar="K",
                         help=f"smallest improvement over the open loop that counts, K (default {DEFAULT_MARGIN_K:g})")
     parser.set_defaults(func=run)
 
@@ -66,11 +66,11 @@ def run(args) -> int:
     dt = positive_float("--dt", args.dt)
     starts = parse_starts(args.predict_from)
     try:
-        margin = float(args.margin)
+        margin = float(args.min_improvement)
     except ValueError:
-        raise InputError("--margin", args.margin, "must be a number of kelvin >= 0") from None
+        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0") from None
     if not (math.isfinite(margin) and margin >= 0):
-        raise InputError("--margin", args.margin, "must be a number of kelvin >= 0")
+        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0")
     data = on_grid(load_measurements(args.data), dt)
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
     for flag in data.flags:

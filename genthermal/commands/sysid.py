@@ -1,4 +1,4 @@
-"""``genthermal sysid TRAIN.csv --validate VAL.csv --json out.json``: ARX models from rig data.
+"""``genthermal sysid TRAIN.csv VAL.csv [--json out.json]``: ARX models from rig data.
 
 The thesis 5.3 procedure: for each output (stator winding, stator iron) try every ARX structure
 (and, with ``--input auto``, every input signal) on the training record, list the ten best
@@ -39,8 +39,8 @@ def register(subparsers) -> None:
         "schema), list the best candidate structures, validate the best on a second record and write "
         "JSON. The validation simulation starts from the first measured temperature of that record.")
     parser.add_argument("train", help="training data CSV")
-    parser.add_argument("--validate", required=True, metavar="VAL.csv", help="validation data CSV")
-    parser.add_argument("--json", required=True, metavar="OUT.json", help="JSON file to write")
+    parser.add_argument("validation", help="validation data CSV (the selected models are scored on it)")
+    parser.add_argument("--json", metavar="OUT.json", help="write the candidates, models and scores as JSON")
     parser.add_argument("--input", default="auto",
                         help=f"input signal: {', '.join(INPUT_SIGNALS)} or auto (try each; default)")
     parser.add_argument("--integrate", action="store_true",
@@ -51,7 +51,7 @@ def register(subparsers) -> None:
     parser.add_argument("--na", default="1-3", help="numbers of A parameters to try, e.g. 1-3 (default)")
     parser.add_argument("--nb", default="1-3", help="numbers of B parameters to try, e.g. 1-3 (default)")
     parser.add_argument("--nk", default="0-4", help="input delays in samples to try, e.g. 0-4 (default)")
-    parser.add_argument("--ts", default="10", help="sample time in s the data are resampled to (default 10)")
+    parser.add_argument("--dt", default="10", help="sample time in s the data are resampled to (default 10)")
     parser.set_defaults(func=run)
 
 
@@ -70,7 +70,7 @@ def parse_range(option: str, text: str, smallest: int) -> range:
 
 def run(args) -> int:
     """Search, select and validate a model per output; print the tables and write the JSON."""
-    ts_s = positive_float("--ts", args.ts)
+    ts_s = positive_float("--dt", args.dt)
     search_options = {"na_range": parse_range("--na", args.na, 1), "nb_range": parse_range("--nb", args.nb, 1),
                       "nk_range": parse_range("--nk", args.nk, 0), "integrate_input": args.integrate,
                       "ts_s": ts_s}
@@ -78,10 +78,10 @@ def run(args) -> int:
     if args.input != "auto" and args.input not in INPUT_SIGNALS:
         raise InputError("--input", args.input, f"choose one of {', '.join(INPUT_SIGNALS)} or auto")
     train = resample(load_measurements(args.train), ts_s)
-    validation = resample(load_measurements(args.validate), ts_s)
+    validation = resample(load_measurements(args.validation), ts_s)
     for flag in (*train.flags, *validation.flags):
         print(f"warning: {flag}")
-    report = {"ts_s": ts_s, "train": str(args.train), "validate": str(args.validate),
+    report = {"ts_s": ts_s, "train": str(args.train), "validation": str(args.validation),
               "integrate_input": bool(args.integrate), "discard_before_s": discard_before_s}
     models = {}
     for output in OUTPUTS:
@@ -91,8 +91,9 @@ def run(args) -> int:
     report["state_space"] = {"outputs": [f"T_{output} - y_offset" for output in OUTPUTS],
                              "inputs": [report[output]["input"] for output in OUTPUTS],
                              "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist()}
-    print()
-    report_json(args.json, report)
+    if args.json:
+        print()
+        report_json(args.json, report)
     return 0
 
 
