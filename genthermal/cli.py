@@ -28,9 +28,11 @@ import os
 import sys
 import tempfile
 import traceback
+import warnings
 
 from . import __version__
 from .errors import GenthermalError
+from .measurements import DataWarning
 from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, check_output_paths
 
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
@@ -90,7 +92,10 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         command = f"genthermal {args.command}"
         check_output_paths(args, args.command)
-        code = int(args.func(args) or 0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", DataWarning)
+            warnings.showwarning = _warning_printer(command)
+            code = int(args.func(args) or 0)
         sys.stdout.flush()
         return code
     except GenthermalError as exc:
@@ -116,6 +121,13 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: internal error: {type(exc).__name__}: {exc}\n{BUG_REPORT_HINT} "
                f"(genthermal {__version__}); traceback saved in {_save_traceback()}")
         return EXIT_INTERNAL_ERROR
+
+
+def _warning_printer(command: str):
+    """A ``warnings.showwarning`` that prints one line, ``<command>: warning: <message>``, on stderr."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        _error(f"{command}: warning: {message}")
+    return show
 
 
 def _error(text: str) -> None:

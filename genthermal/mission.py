@@ -29,7 +29,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import difflib
-import math
 import os
 from pathlib import Path
 from typing import Any, Mapping
@@ -41,6 +40,7 @@ import yaml
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
 from .resources import SCENARIO_DIR
+from .sizes import check_grid
 
 __all__ = [
     "Action",
@@ -230,7 +230,8 @@ class Mission:
         Parameters
         ----------
         dt_s : float
-            Sample period, s (> 0).
+            Sample period, s (> 0); the grid may have at most
+            :data:`genthermal.sizes.MAX_GRID_SAMPLES` samples.
 
         Returns
         -------
@@ -241,7 +242,7 @@ class Mission:
         step = checked_number(dt_s, "dt_s", "a positive number of seconds")
         if step <= 0:
             raise InputError("dt_s", dt_s, "the sample period must be positive, s")
-        n_steps = int(math.floor(self.duration_s / step + 1e-9))
+        n_steps = check_grid(self.duration_s, step, f"mission {self.name} at dt_s", dt_s) - 1
         times = np.arange(n_steps + 1, dtype=float) * step
         currents = self.phase_currents(np.minimum(times, self.duration_s))
         columns = {

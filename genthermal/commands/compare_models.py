@@ -26,8 +26,6 @@ def run(args) -> int:
     """Compare the models, print the table and write the JSON."""
     dt = positive_float("--dt", args.dt)
     train, validation = load_measurements(args.train), load_measurements(args.validation)
-    for flag in (*train.flags, *validation.flags):
-        print(f"warning: {flag}")
     table = compare_design_models(train, validation, dt_s=dt)
     print(f"design models on {args.validation} (ARX fitted on {args.train}), open loop:")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))

@@ -73,8 +73,6 @@ def run(args) -> int:
         raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0")
     data = on_grid(load_measurements(args.data), dt)
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
-    for flag in data.flags:
-        print(f"warning: {flag}")
     design = linear_design_model(build_model())
     kalman = KalmanFilter(design, dt)
     if args.estimate_noise:

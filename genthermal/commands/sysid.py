@@ -79,8 +79,6 @@ def run(args) -> int:
         raise InputError("--input", args.input, f"choose one of {', '.join(INPUT_SIGNALS)} or auto")
     train = resample(load_measurements(args.train), ts_s)
     validation = resample(load_measurements(args.validation), ts_s)
-    for flag in (*train.flags, *validation.flags):
-        print(f"warning: {flag}")
     report = {"ts_s": ts_s, "train": str(args.train), "validation": str(args.validation),
               "integrate_input": bool(args.integrate), "discard_before_s": discard_before_s}
     models = {}
