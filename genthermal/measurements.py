@@ -195,7 +195,7 @@ def _decode(content, source: str) -> tuple[str, list[str]]:
     if isinstance(content, str):
         return content, []
     if content.startswith((b"\xff\xfe", b"\xfe\xff")):
-        return content.decode("utf-16"), ["decoded as UTF-16"]
+        return content.decode("utf-16"), []
     if b"\x00" in content[:4096]:
         raise InputError("file", source, "is not a text CSV file (it holds binary data)")
     try:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from ..model_file import load_model, save_model
 from ..outputs import report_json
-from .compare import add_model_and_data_arguments, data_step
+from ..progress import working
+from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
 def register(subparsers) -> None:
@@ -27,7 +28,9 @@ def run(args) -> int:
 
     model = load_model(args.model)
     names = check_parameter_names(model, args.params.split(","), "--params")
-    result = calibrate(model, args.data, names, data_step(args))
+    data = fitting_data(args.data, model, args)
+    with working("calibrate"):
+        result = calibrate(model, data, names, data_step(args))
     summary = result.to_dict()
     print(f"{model.name}: {len(names)} parameter(s) fitted to {args.data} "
           f"({'converged' if result.converged else 'NOT converged'})")

@@ -21,6 +21,21 @@ def data_step(args) -> float | None:
     return None if args.dt is None else positive_float("--dt", args.dt)
 
 
+def fitting_data(path: str, model, args):
+    """Measurements of ``path`` checked against ``model``'s rating, block-averaged when long and no
+    ``--dt`` was given (:mod:`genthermal.long_records`; the note is printed)."""
+    from ..long_records import decimate_for_fitting
+    from ..measurements import load_measurements
+
+    data = load_measurements(path, rated_current_A=model.spec.rated_current_A)
+    if args.dt is not None:
+        return data
+    data, note = decimate_for_fitting(data)
+    if note:
+        print(f"note: {note}")
+    return data
+
+
 def register(subparsers) -> None:
     """Add the ``compare`` sub-command."""
     parser = subparsers.add_parser("compare", help="compare a model with measurements",

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from ..model_file import load_model, save_model
 from ..outputs import report_json
-from .compare import add_model_and_data_arguments, data_step
+from ..progress import working
+from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
 def register(subparsers) -> None:
@@ -28,7 +29,10 @@ def run(args) -> int:
     from ..diagnose.discover import diagnose
 
     model = load_model(args.model)
-    result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args))
+    data = fitting_data(args.data, model, args)
+    baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
+    with working("diagnose"):
+        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:
