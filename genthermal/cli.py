@@ -99,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.stdout.flush()
         return code
     except GenthermalError as exc:
-        _error(f"{command}: error: {exc}")
+        _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         _error(f"\n{command}: interrupted; no partial output file was left")
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
                "a longer --dt")
         return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - the last resort: one line and a traceback file, never a dump
-        _error(f"{command}: internal error: {type(exc).__name__}: {exc}\n{BUG_REPORT_HINT} "
+        _error(f"{command}: internal error: {type(exc).__name__}: {_one_line(exc)}\n{BUG_REPORT_HINT} "
                f"(genthermal {__version__}); traceback saved in {_save_traceback()}")
         return EXIT_INTERNAL_ERROR
 
@@ -128,6 +128,11 @@ def _warning_printer(command: str):
     def show(message, category, filename, lineno, file=None, line=None):
         _error(f"{command}: warning: {message}")
     return show
+
+
+def _one_line(exc: BaseException) -> str:
+    """The message of ``exc`` on one line (a message quoting a file may span several)."""
+    return "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
 
 
 def _error(text: str) -> None:

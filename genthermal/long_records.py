@@ -8,9 +8,13 @@ iteration, so its cost grows with the number of samples. :func:`decimate_for_fit
 averages the record in blocks down to at most :data:`MAX_FITTING_SAMPLES` samples, on the first
 of :data:`FITTING_STEPS_S` that is long enough, and says so.
 
-Block averages keep what the model needs: currents are averaged as RMS values (the copper and
-excitation losses go with the current squared, so the mean loss of the block is kept),
-temperatures as means of the valid samples (a block without any valid sensor sample is missing).
+Block averages keep what the model needs. Inputs are held over a step ``[t_k, t_k + step)`` by
+the simulation, so they are averaged over that block: currents as RMS values (the copper and
+excitation losses go with the current squared, so the mean loss of the block is kept), inlet and
+ambient temperatures as means. A sensor is compared with the state *at* ``t_k``, so it is averaged
+over the window centred on ``t_k`` (a linear trend cancels, the noise falls); a window without
+any valid sample is missing. A block inside a gap of the record holds the inputs of the block
+before it, as a resampling does (the gap is flagged when the record is loaded).
 Memory stays bounded: one pass of numpy reductions over the validated columns.
 """
 
@@ -20,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .losses import PHASE_CURRENTS
+from .losses import INPUT_NAMES, PHASE_CURRENTS
 from .measurements import MeasurementData
 
 #: Most samples a record given to calibration or diagnosis keeps (one week at 60 s is 10 080).
@@ -56,26 +60,30 @@ def fitting_step(data: MeasurementData) -> float | None:
 
 
 def block_average(data: MeasurementData, step_s: float) -> MeasurementData:
-    """Average ``data`` over consecutive blocks of ``step_s`` seconds (see the module docstring).
-
-    The time of a block is its start; inputs are constant over a block (zero-order hold), as a
-    simulation reads them.
+    """Average ``data`` on the grid ``t0, t0 + step_s, ...`` (see the module docstring): inputs over
+    the block that starts at each grid time, sensors over the window centred on it.
     """
     time_s = data.time_s
-    block = np.floor((time_s - time_s[0]) / step_s + 1e-9).astype(np.int64)
-    starts = np.flatnonzero(np.r_[True, np.diff(block) > 0])
-    columns = {"time_s": time_s[0] + step_s * block[starts]}
+    elapsed = time_s - time_s[0]
+    n_blocks = int(np.floor(elapsed[-1] / step_s + 1e-9)) + 1
+    columns = {"time_s": time_s[0] + step_s * np.arange(n_blocks)}
+    input_block = np.floor(elapsed / step_s + 1e-9).astype(np.int64)
+    sensor_block = np.minimum(np.floor(elapsed / step_s + 0.5).astype(np.int64), n_blocks - 1)
     for name in data.frame.columns:
         if name == "time_s":
             continue
+        block = input_block if name in INPUT_NAMES else sensor_block
         values = data.frame[name].to_numpy(dtype=float)
         valid = np.isfinite(values)
         squared = name in RMS_COLUMNS
-        sums = np.add.reduceat(np.where(valid, values ** 2 if squared else values, 0.0), starts)
-        counts = np.add.reduceat(valid.astype(np.int64), starts)
+        sums = np.bincount(block, np.where(valid, values ** 2 if squared else values, 0.0), n_blocks)
+        counts = np.bincount(block, valid, n_blocks)
         with np.errstate(invalid="ignore", divide="ignore"):
             mean = sums / counts
-        columns[name] = np.sqrt(mean) if squared else mean
+        mean = np.sqrt(mean) if squared else mean
+        if name in INPUT_NAMES:  # a block inside a gap (flagged on loading) holds the last input
+            mean = pd.Series(mean).ffill().to_numpy()
+        columns[name] = mean
     frame = pd.DataFrame(columns)
     missing = {name: int(frame[name].isna().sum()) for name in data.missing_counts}
     return MeasurementData(frame, f"{data.source} averaged over {step_s:g} s blocks", missing,

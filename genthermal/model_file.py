@@ -62,7 +62,10 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     except UnicodeDecodeError:
         raise InputError("model file", str(path), "not a text file (UTF-8 YAML expected)") from None
     except yaml.YAMLError as exc:
-        raise InputError("model file", str(path), f"not valid YAML: {exc}") from None
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        raise InputError("model file", str(path), f"not valid YAML{where}: "
+                         f"{getattr(exc, 'problem', None) or exc}; check indentation, colons and brackets") from None
     return model_from_document(document, str(path))
 
 
@@ -122,7 +125,7 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
             model = apply_effect(model, entry["name"], provenance=provenance,
                                  source=str(entry.get("source", "")) or f"model file {source}", **values)
         except InputError as exc:
-            raise InputError(f"effects[{i}] ({entry['name']})", exc.value, exc.reason) from None
+            raise InputError(f"effects[{i}] ({entry['name']}) {exc.field}", exc.value, exc.reason) from None
     return model
 
 
