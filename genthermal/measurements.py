@@ -267,9 +267,9 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: 
 def _rated_current(rated_current_A: float | None) -> float:
     if rated_current_A is not None:
         return float(rated_current_A)
-    from .machines import MACHINES, build_model
+    from .machines import MACHINES
 
-    return build_model(next(iter(MACHINES))).spec.rated_current_A
+    return float(next(iter(MACHINES.values())).RATED_CURRENT_A)  # the default machine's
 
 
 def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A: float) -> None:

@@ -96,6 +96,7 @@ def _same_file(a: Path, b: Path) -> bool:
 def _check_file(option: str, path: Path, force: bool) -> None:
     if path.is_dir():
         raise InputError(option, str(path), "is a folder; give a file name")
+    _check_writable(option, path.parent, path)
     if path.exists() and not force:
         raise InputError(option, str(path), "exists; add --force to replace it, or choose another name")
 
@@ -103,9 +104,17 @@ def _check_file(option: str, path: Path, force: bool) -> None:
 def _check_folder(option: str, path: Path, force: bool) -> None:
     if path.exists() and not path.is_dir():
         raise InputError(option, str(path), "is a file; give a folder name")
+    _check_writable(option, path, path)
     if path.is_dir() and any(path.iterdir()) and not force:
         raise InputError(option, str(path), "is a folder that is not empty; add --force to replace the files "
                          "genthermal writes into it, or choose another folder")
+
+
+def _check_writable(option: str, folder: Path, path: Path) -> None:
+    """The nearest existing folder at or above ``folder`` must be a folder genthermal may write in."""
+    existing = next((p for p in (folder, *folder.parents) if p.exists()), None)
+    if existing is not None and not (existing.is_dir() and os.access(existing, os.W_OK | os.X_OK)):
+        raise InputError(option, str(path), f"cannot be written: {existing} is not a writable folder")
 
 
 @contextmanager
