@@ -60,8 +60,9 @@ REQUIRED_COLUMNS = ("time_s", *INPUT_NAMES, *SENSOR_COLUMNS)
 INPUT_TEMPERATURES = ("T_inlet", "T_ambient")
 #: Measuring range of the rig's PT100 channels, °C (thesis Table 3.4).
 PT100_RANGE_C = (-50.0, 300.0)
-#: A phase current above this multiple of the machine's rated current is refused (no generator of
-#: this kind carries it for longer than a fault clears; the model's losses are not valid there).
+#: A phase or field current above this multiple of the machine's rated phase current is refused (no
+#: generator of this kind carries it for longer than a fault clears; the model's losses are not
+#: valid there; its exciter needs about 1 A of field current at rated load).
 MAX_CURRENT_FACTOR = 3.0
 #: Median temperatures above these (°C) mean the column is in kelvin: inputs are cooling air,
 #: sensors a machine whose insulation fails near 200 °C.
@@ -275,7 +276,7 @@ def _rated_current(rated_current_A: float | None) -> float:
 def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A: float) -> None:
     """Temperatures in kelvin and currents far above the rating are errors with the likely fix."""
     limit = MAX_CURRENT_FACTOR * rated_current_A
-    for name in PHASE_CURRENTS:
+    for name in (*PHASE_CURRENTS, "I_exc"):
         values = frame[name].to_numpy()
         above = np.flatnonzero(values > limit)
         if above.size:

@@ -58,6 +58,8 @@ REFUSED = [
     ("current of 1e300", csv_bytes(rows(I_w=lambda i, v: 1e300 if i == 5 else v)), "rated"),
     ("currents in mA", csv_bytes(rows(I_u=lambda i, v: v * 1000, I_v=lambda i, v: v * 1000,
                                       I_w=lambda i, v: v * 1000)), "mA"),
+    ("field current of 1e300", csv_bytes(rows(I_exc=lambda i, v: 1e300 if i == 5 else v)), "I_exc"),
+    ("field current in mA", csv_bytes(rows(I_exc=lambda i, v: v * 1000)), "mA"),
     ("negative current", csv_bytes(rows(I_u=lambda i, v: -1.0 if i == 2 else v)), "negative"),
     ("temperatures in kelvin", csv_bytes(rows(**{c: (lambda i, v: v + 273.15) for c in
                                                  ("T_inlet", "T_ambient", "T_winding_u", "T_winding_v",
