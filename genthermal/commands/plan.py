@@ -15,7 +15,6 @@ from ..outputs import report_json
 from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
-from ._common import positive_float
 
 
 def add_schedule_arguments(parser) -> None:
@@ -50,7 +49,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
     margin = _number_in("--margin", args.margin, 0.0, 50.0, "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
-    settings = ManagerSettings(cycle_s=60.0 * positive_float("--cycle-min", args.cycle_min), margin_K=margin,
+    cycle_min = _number_in("--cycle-min", args.cycle_min, 1.0, 60.0, "a number of minutes")  # 1 plan per cycle
+    settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin,
                                rise_backoff=backoff)
     if getattr(args, "seed", None) is not None:
         settings = dataclasses.replace(settings, seed=int(args.seed))
