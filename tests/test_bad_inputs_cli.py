@@ -41,6 +41,7 @@ BAD_OPTIONS = [
     ("variant unknown", ["describe", "--variant", "cubic"], "--variant"),
     ("parameter without value", ["describe", "--param", "R0"], "NAME=VALUE"),
     ("parameter not physical", ["describe", "--param", "R0=-1"], "R0"),
+    ("predict steps a billion", ["codegen", "--out", "{out}/g", "--predict-steps", "1e9"], "--predict-steps"),
     ("predict steps fractional", ["codegen", "--out", "{out}/g", "--predict-steps", "1.5"], "predict_steps"),
     ("prediction start text", ["estimate", "{rig}", "--predict-from", "soon"], "--predict-from"),
     ("min improvement negative", ["estimate", "{rig}", "--min-improvement", "-1"], "--min-improvement"),
