@@ -258,8 +258,8 @@ class Action:
                        for i, value in enumerate(share))
         for i, value in enumerate(values):
             if not 0 < value <= MAX_PHASE_SHARE:
-                raise InputError(f"phase_share[{i}]", share[i], "phase multipliers must lie in "
-                                 f"0 < share <= {MAX_PHASE_SHARE:g}, e.g. [1.1, 1.0, 0.9]")
+                raise InputError(f"phase_share[{i}]", share[i], "phase multipliers must be positive and at "
+                                 f"most {MAX_PHASE_SHARE:g}, e.g. [1.1, 1.0, 0.9]")
         return values
 
     def load_steps(self) -> tuple[tuple[float, float], ...]:
