@@ -55,10 +55,16 @@ def run(args) -> int:
     model = load_model(args.model)
     comparison = compare(model, args.data, data_step(args))
     print(f"{model.name} on {comparison.source}: {comparison.metrics['samples']} samples")
+    total = comparison.metrics["samples"]
     for name, m in comparison.metrics["overall"].items():
+        if m["n"] == 0:
+            print(f"  {name}: no sample with both a measurement and a finite model value; no metrics")
+            continue
         r2 = "n/a" if m["r2"] is None else f"{m['r2']:.4f}"
+        counted = "" if m["n"] == total else f" (on the {m['n']} of {total} samples measured)"
         print(f"  {name}: RMSE {m['rmse']:.3f} K, MAE {m['mae']:.3f} K, max {m['max_abs']:.3f} K, "
-              f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h")
+              f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h"
+              f"{counted}")
     if args.json:
         report_json(args.json, comparison.metrics)
     if args.report:
