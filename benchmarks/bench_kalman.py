@@ -46,7 +46,7 @@ int main(void)
     long k;
     clock_gettime(CLOCK_MONOTONIC, &start);
     for (k = 0; k < %(n)d; ++k) {
-        gt_kalman_update(x, u, y, filtered, next, work);
+        gt_kalman_update(x, u, y, filtered, next, work, GT_WORK_SIZE);
         x[0] = next[0] - 1e-9 * (double)(k & 1);  /* keep the loop from being hoisted */
         checksum += next[3];
     }
