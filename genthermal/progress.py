@@ -7,6 +7,7 @@ and the tests see nothing; ``GENTHERMAL_PROGRESS=0`` turns it off on a terminal 
 from __future__ import annotations
 
 import os
+import shutil
 import sys
 import threading
 from contextlib import contextmanager
@@ -31,7 +32,14 @@ def enabled() -> bool:
 def track(items: Iterable, description: str, total: int | None = None) -> Iterator:
     """Iterate over ``items`` with a progress bar (count, rate, time left) on a terminal."""
     return iter(tqdm(items, desc=description, total=total, disable=not enabled(), leave=False,
-                     file=sys.stderr, dynamic_ncols=True))
+                     file=sys.stderr, **_size()))
+
+
+def _size() -> dict:
+    """Terminal width and height, 80 x 24 where the terminal reports 0 x 0 (tqdm would then print
+    nothing)."""
+    size = shutil.get_terminal_size()
+    return {"ncols": size.columns, "nrows": size.lines}
 
 
 @contextmanager
@@ -44,7 +52,7 @@ def working(description: str) -> Iterator[None]:
         yield
         return
     bar = tqdm(desc=description, total=None, bar_format="{desc}: working, {elapsed} elapsed", leave=False,
-               file=sys.stderr)
+               file=sys.stderr, **_size())
     stop = threading.Event()
 
     def refresh() -> None:
