@@ -168,7 +168,11 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> M
     delimiter = _delimiter(text)
     header = text.lstrip().split("\n", 1)[0]
     if header.strip():
-        _require_columns([cell.strip().strip('"') for cell in header.split(delimiter)], source)
+        names = [cell.strip().strip('"') for cell in header.split(delimiter)]
+        _require_columns(names, source)
+        twice = sorted({name for name in names if names.count(name) > 1 and name})
+        if twice:
+            raise InputError("column", twice[0], f"appears more than once in the header of {source}")
     _check_row_lengths(text, delimiter)
     try:
         raw = pd.read_csv(io.StringIO(text), sep=delimiter, dtype=str, skipinitialspace=True)
@@ -339,8 +343,9 @@ def _numeric_column(raw: pd.Series, name: str, from_file: bool) -> np.ndarray:
     bad = np.flatnonzero(given & ~np.isfinite(values))
     if bad.size:
         row = int(bad[0])
+        hint = "; write decimals with '.'" if _DECIMAL_COMMA.match(str(raw.iloc[row])) else ""
         raise InputError(f"column {name}, {_row_label(row, from_file)}", raw.iloc[row],
-                         "not a finite number")
+                         f"not a finite number{hint}")
     return values
 
 

@@ -51,6 +51,8 @@ REFUSED = [
     ("row with an extra cell", ragged(1), "line 9"),
     ("row with a missing cell", ragged(-1), "line 9"),
     ("decimal commas, comma separated", csv_bytes(separator=",", decimal=","), "decimal commas"),
+    ("quoted decimal comma", csv_bytes(rows(I_u=lambda i, v: '"5,5"' if i == 2 else v)), "decimals with '.'"),
+    ("column twice", csv_bytes([r + ["1"] for r in rows()], header=[*REQUIRED_COLUMNS, "T_iron"]), "more than once"),
     ("missing column", csv_bytes([r[:-1] for r in rows()], header=REQUIRED_COLUMNS[:-1]), "T_iron"),
     ("misspelt column", csv_bytes(header=[*REQUIRED_COLUMNS[:-1], "T_irn"]), "did you mean 'T_irn'"),
     ("text in a current", csv_bytes(rows(I_u=lambda i, v: "high" if i == 3 else v)), "column I_u, data row 4"),
