@@ -54,6 +54,7 @@ BAD_OPTIONS = [
     ("data file missing", ["compare", "genco_rf201a", "{out}/none.csv"], "none.csv"),
     ("data file is a folder", ["compare", "genco_rf201a", "{out}"], "Is a directory"),
     ("scheduler unknown", ["plan", "blockage_large", "--scheduler", "magic"], "--scheduler"),
+    ("fly with a negative seed", ["fly", "blockage_large", "--seed", "-1"], "--seed"),
     ("management cycle of a millisecond", ["plan", "blockage_large", "--cycle-min", "1e-5"], "--cycle-min"),
 ]
 

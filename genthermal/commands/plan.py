@@ -53,6 +53,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin,
                                rise_backoff=backoff)
     if getattr(args, "seed", None) is not None:
+        if int(args.seed) < 0:
+            raise InputError("--seed", args.seed, "must be a whole number >= 0")
         settings = dataclasses.replace(settings, seed=int(args.seed))
     system = PowerSystem.from_mission(load_mission(args.scenario))
     return system, settings
