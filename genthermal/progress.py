@@ -11,7 +11,7 @@ import shutil
 import sys
 import threading
 from contextlib import contextmanager
-from typing import Iterable, Iterator
+from typing import Iterator
 
 from tqdm import tqdm
 
@@ -27,12 +27,6 @@ def enabled() -> bool:
         return sys.stderr.isatty()
     except (AttributeError, ValueError):
         return False
-
-
-def track(items: Iterable, description: str, total: int | None = None) -> Iterator:
-    """Iterate over ``items`` with a progress bar (count, rate, time left) on a terminal."""
-    return iter(tqdm(items, desc=description, total=total, disable=not enabled(), leave=False,
-                     file=sys.stderr, **_size()))
 
 
 def _size() -> dict:

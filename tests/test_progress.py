@@ -14,7 +14,6 @@ class FakeTerminal(io.StringIO):
 def test_quiet_when_stderr_is_not_a_terminal(capsys):
     with progress.working("diagnose"):
         time.sleep(0.01)
-    assert list(progress.track(range(3), "candidates")) == [0, 1, 2]
     assert capsys.readouterr().err == ""
 
 
