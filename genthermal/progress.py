@@ -29,6 +29,12 @@ def enabled() -> bool:
         return False
 
 
+def say(text: str) -> None:
+    """Print one progress line on stderr, above any :func:`working` display; only on a terminal."""
+    if enabled():
+        tqdm.write(text, file=sys.stderr)
+
+
 def _size() -> dict:
     """Terminal width and height, 80 x 24 where the terminal reports 0 x 0 (tqdm would then print
     nothing)."""

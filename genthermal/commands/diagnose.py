@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..model_file import load_model, save_model
 from ..outputs import report_json
-from ..progress import working
+from ..progress import say, working
 from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
@@ -32,7 +32,8 @@ def run(args) -> int:
     data = fitting_data(args.data, model, args)
     baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
     with working("diagnose"):
-        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args))
+        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args),
+                          progress=lambda line: say(f"  ... {line}"))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:
@@ -40,10 +41,14 @@ def run(args) -> int:
         print(f"  {c['effect']:>32s}: {params:<22s} onset {c['onset_s'] / 3600:5.2f} h  RMSE "
               f"{c['rmse_before']:.3f} -> {c['rmse_after']:.3f} K  ΔBIC {c['delta_ic']:9.1f}"
               f"{'  *' if c['significant'] else ''}")
+    for p in document["pairs"][:3]:
+        print(f"  {' + '.join(p['effects']):>66s}: RMSE {p['rmse_after']:.3f} K  ΔBIC {p['delta_ic']:9.1f}"
+              f"{'  *' if p['significant'] else ''}")
     for k, iteration in enumerate(document["iterations"][1:], start=2):
         print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
     print(f"verdict: {document['verdict']}")
     print(document["explanation"])
+    print(document["residual"]["summary"])
     if args.json:
         report_json(args.json, document)
     if args.report:

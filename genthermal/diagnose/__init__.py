@@ -4,8 +4,12 @@
   the model fails;
 * :func:`~genthermal.diagnose.calibrate.calibrate` — least squares (IPOPT, exact derivatives) over
   named parameters with confidence intervals and identifiability warnings;
-* :func:`~genthermal.diagnose.discover.diagnose` — fit every catalogue effect the model lacks,
-  rank by ΔBIC, verdict, ``iterate``;
+* :func:`~genthermal.diagnose.discover.diagnose` — fit every catalogue effect the model lacks and
+  pairs of them jointly, rank by ΔBIC, verdict, "something is still missing", ``iterate``;
+* :func:`~genthermal.diagnose.open_search.open_search` — the same search over a generic library of
+  heat flows and conductance changes, for physics no catalogue names;
+* :func:`~genthermal.diagnose.experiment.separating_experiment` — a short rig test that tells two
+  look-alike explanations apart;
 * :func:`~genthermal.diagnose.hidden.make_hidden_effect_case` — test data with a known hidden effect;
 * :func:`~genthermal.diagnose.report.run_discovery_demo` — compare → diagnose → add → error falls.
 """
@@ -13,9 +17,12 @@
 from .calibrate import CalibrationResult, calibrate
 from .compare import Comparison, compare
 from .discover import Diagnosis, diagnose
+from .experiment import SeparatingExperiment, separating_experiment
 from .hidden import HiddenEffectCase, Injection, make_hidden_effect_case
+from .open_search import describe_term, effect_code, heat_flow_library, open_search
 from .report import run_discovery_demo, write_compare_report, write_diagnosis_report
 
-__all__ = ["CalibrationResult", "Comparison", "Diagnosis", "HiddenEffectCase", "Injection", "calibrate", "compare",
-           "diagnose", "make_hidden_effect_case", "run_discovery_demo", "write_compare_report",
-           "write_diagnosis_report"]
+__all__ = ["CalibrationResult", "Comparison", "Diagnosis", "HiddenEffectCase", "Injection", "SeparatingExperiment",
+           "calibrate", "compare", "describe_term", "diagnose", "effect_code", "heat_flow_library",
+           "make_hidden_effect_case", "open_search", "run_discovery_demo", "separating_experiment",
+           "write_compare_report", "write_diagnosis_report"]

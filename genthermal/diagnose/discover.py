@@ -28,18 +28,35 @@ An effect is *significant* when all four hold:
   that only nibbles at a misfit is not the missing physics.
 
 The verdict is the best-ranked significant effect, else ``"none"``.
+
+Beyond one effect:
+
+* when the best single effect leaves a residual that is not noise, pairs of the best single effects
+  are fitted jointly, values and both onsets (:mod:`genthermal.diagnose.joint`), and a pair that
+  passes the four tests against the model, against each of its effects alone and against the best
+  single effect (:func:`choose_pair`) is the verdict (``"A + B"``);
+* the residual after the chosen effects is tested (:mod:`genthermal.diagnose.residual`): when it is
+  more than noise, ``unexplained`` says so, with where and when it is largest;
+* when another explanation fits about as well (:func:`look_alike`), a short rig test that separates
+  them is designed (:mod:`genthermal.diagnose.experiment`);
+* the catalogue is a parameter: :func:`genthermal.diagnose.open_search.open_search` passes a generic
+  library of heat flows instead.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from ..effects import get_effect
+from ..effects import CATALOGUE, Effect
+from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
+from .experiment import SeparatingExperiment, separating_experiment
+from .joint import JointCandidate, PairSearch
+from .residual import correlation, residual_tests
 from .search import Candidate, EffectSearch, FoundEffect, model_with_effects, noise_std
 
 DELTA_BIC_LIMIT = -10.0
@@ -51,14 +68,33 @@ MIN_EXCESS_EXPLAINED = 0.5
 DEFAULT_BASELINE_PARAMETERS = ("R0", "P_iron", "h_end_air", "h_top_air", "k_cr")
 
 
-def is_significant(candidate: Candidate, noise: float) -> bool:
-    """The four tests of the module docstring."""
-    before, after = candidate.rmse_before, candidate.rmse_after
+def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise: float) -> bool:
+    """The four tests of the module docstring for a change from ``rmse_before`` to ``rmse_after``
+    (K) at a BIC change ``delta_bic``, with sensor noise ``noise`` (K)."""
     noise = noise if np.isfinite(noise) else 0.0
-    return bool(candidate.delta_bic < DELTA_BIC_LIMIT
-                and after <= (1 - MIN_RMSE_REDUCTION) * before
-                and before > NOISE_FLOOR_FACTOR * noise
-                and before ** 2 - after ** 2 >= MIN_EXCESS_EXPLAINED * (before ** 2 - noise ** 2))
+    return bool(delta_bic < DELTA_BIC_LIMIT
+                and rmse_after <= (1 - MIN_RMSE_REDUCTION) * rmse_before
+                and rmse_before > NOISE_FLOOR_FACTOR * noise
+                and rmse_before ** 2 - rmse_after ** 2 >= MIN_EXCESS_EXPLAINED * (rmse_before ** 2 - noise ** 2))
+
+
+def is_significant(candidate: Candidate, noise: float) -> bool:
+    """The four tests of the module docstring, against the model without the candidate."""
+    return passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)
+
+
+def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float) -> JointCandidate | None:
+    """The best-ranked pair that passes the four tests against the model without effects, against
+    each of its two effects alone and against the best single effect (each effect must earn its
+    place, and the pair must beat the best answer with one effect); None if no pair does."""
+    by_name = {c.effect: c for c in singles}
+    best_single = min(singles, key=lambda c: c.delta_bic)
+    for pair in sorted(pairs, key=lambda p: p.delta_bic):
+        rivals = [by_name[e] for e in pair.effects] + [best_single]
+        if passes_tests(pair.rmse_before, pair.rmse_after, pair.delta_bic, noise) and all(
+                passes_tests(r.rmse_after, pair.rmse_after, pair.delta_bic - r.delta_bic, noise) for r in rivals):
+            return pair
+    return None
 
 
 def series_for(model: ThermalModel, data, dt_s: float | None = None) -> MeasuredSeries:
@@ -79,8 +115,13 @@ class Iteration:
     predicted_before : numpy.ndarray
         Its outputs, (n_outputs, N), °C.
     added : Candidate or None
-        The significant best candidate, if any.
+        The significant best candidate, if any (None when a pair was added).
     explanation : str
+    pairs : list of JointCandidate
+        Pairs fitted jointly in this round, best ΔBIC first (first round only, when one effect
+        leaves more than noise).
+    added_pair : JointCandidate or None
+        The pair chosen by :func:`choose_pair`, if any.
     """
 
     ranked: list
@@ -88,11 +129,32 @@ class Iteration:
     predicted_before: np.ndarray
     added: Candidate | None
     explanation: str
+    pairs: list = dataclasses.field(default_factory=list)
+    added_pair: JointCandidate | None = None
+
+    @property
+    def added_effects(self) -> list[str]:
+        """Names of the effects this round added."""
+        if self.added_pair:
+            return list(self.added_pair.effects)
+        return [self.added.effect] if self.added else []
+
+    @property
+    def rmse_after(self) -> float:
+        """RMSE at the end of the round, K."""
+        chosen = self.added_pair or self.added
+        return chosen.rmse_after if chosen else self.rmse_before
+
+    @property
+    def predicted_after(self) -> np.ndarray:
+        """Outputs at the end of the round, (n_outputs, N), °C."""
+        chosen = self.added_pair or self.added
+        return chosen.predicted if chosen else self.predicted_before
 
     def to_dict(self) -> dict:
-        return {"rmse_before": self.rmse_before, "added": self.added.effect if self.added else None,
-                "rmse_after": self.added.rmse_after if self.added else self.rmse_before,
-                "explanation": self.explanation, "ranked": [c.to_dict() for c in self.ranked]}
+        return {"rmse_before": self.rmse_before, "added": " + ".join(self.added_effects) or None,
+                "rmse_after": self.rmse_after, "explanation": self.explanation,
+                "ranked": [c.to_dict() for c in self.ranked], "pairs": [p.to_dict() for p in self.pairs]}
 
 
 @dataclasses.dataclass
@@ -108,9 +170,17 @@ class Diagnosis:
         Sensor noise estimated from the data, K.
     iterations : list of Iteration
     found : list of FoundEffect
-        Effects added (one without ``iterate``; the verdict), with their final values.
+        Effects added (one or a pair without ``iterate``; the verdict), with their final values.
     calibration : CalibrationResult or None
         The baseline calibration.
+    residual : dict
+        :func:`~genthermal.diagnose.residual.residual_tests` of the final model: is something
+        still missing, and where and when.
+    catalogue : mapping of str to Effect
+        The effects searched.
+    experiment : SeparatingExperiment or None
+        When another explanation fits about as well as the verdict (:func:`look_alike`): the short
+        rig test that tells them apart (:mod:`genthermal.diagnose.experiment`).
     """
 
     model: ThermalModel
@@ -119,16 +189,24 @@ class Diagnosis:
     iterations: list
     found: list
     calibration: object = None
+    residual: dict = dataclasses.field(default_factory=dict)
+    catalogue: Mapping[str, Effect] = dataclasses.field(default_factory=lambda: CATALOGUE)
+    experiment: SeparatingExperiment | None = None
 
     @property
     def verdict(self) -> str:
-        """The best significant effect of the first round, or ``"none"``."""
-        first = self.iterations[0].added
-        return first.effect if first else "none"
+        """The effect (or ``"A + B"`` pair) added in the first round, or ``"none"``."""
+        return " + ".join(self.iterations[0].added_effects) or "none"
+
+    @property
+    def unexplained(self) -> bool:
+        """True when the residual after the found effects is not sensor noise."""
+        return bool(self.residual.get("unexplained", False))
 
     def improved_model(self) -> ThermalModel:
         """The model with every found effect at its fitted values (provenance ``fitted``)."""
-        return model_with_effects(self.model, self.found, source=f"diagnosis on {self.series.source}")
+        return model_with_effects(self.model, self.found, source=f"diagnosis on {self.series.source}",
+                                  catalogue=self.catalogue)
 
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""
@@ -137,19 +215,47 @@ class Diagnosis:
             "model": self.model.name, "data": self.series.source, "samples": int(self.series.time_s.size),
             "dt_s": self.series.dt_s, "noise_std_K": self.noise_std, "verdict": self.verdict,
             "explanation": first.explanation, "ranked": [c.to_dict() for c in first.ranked],
+            "pairs": [p.to_dict() for p in first.pairs],
             "thresholds": {"delta_bic_below": DELTA_BIC_LIMIT, "min_rmse_reduction": MIN_RMSE_REDUCTION,
                            "rmse_before_above_noise_factor": NOISE_FLOOR_FACTOR,
                            "min_excess_variance_explained": MIN_EXCESS_EXPLAINED},
             "found": [{"effect": f.effect, "params": f.values, "onset_s": f.onset_s} for f in self.found],
             "iterations": [it.to_dict() for it in self.iterations],
-            "rmse_final": self.iterations[-1].added.rmse_after if self.iterations[-1].added
-            else self.iterations[-1].rmse_before,
+            "rmse_final": self.iterations[-1].rmse_after,
+            "unexplained": self.unexplained, "residual": self.residual,
+            "experiment": self.experiment.to_dict() if self.experiment else None,
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
 
-#: A runner-up closer than this in ΔBIC is reported as indistinguishable from the verdict.
+#: A runner-up closer than this in ΔBIC is reported as indistinguishable from the verdict ...
 AMBIGUITY_BIC = 10.0
+#: ... and so is one whose RMSE is within this share of the verdict's (with thousands of samples,
+#: a ΔBIC of a few hundred can separate fits whose errors differ by 1 %, well below what a model
+#: error of the plant can do).
+AMBIGUITY_RMSE = 0.02
+
+
+def look_alike(chosen, other) -> bool:
+    """True when ``other`` (a Candidate or JointCandidate) explains the data about as well as
+    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`."""
+    return bool(other.delta_bic - chosen.delta_bic < AMBIGUITY_BIC
+                or other.rmse_after <= (1 + AMBIGUITY_RMSE) * chosen.rmse_after)
+
+
+def _explanations(candidate) -> dict:
+    """Effect → fitted values of a Candidate or JointCandidate."""
+    return dict(candidate.values) if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.values}
+
+
+def rival(iteration: "Iteration"):
+    """The best other explanation that looks alike the one ``iteration`` added, or None."""
+    chosen = iteration.added_pair or iteration.added
+    if chosen is None:
+        return None
+    pool = iteration.pairs if iteration.added_pair else iteration.ranked
+    others = [c for c in pool if c is not chosen and look_alike(chosen, c)]
+    return min(others, key=lambda c: c.delta_bic) if others else None
 
 
 def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candidate | None = None) -> str:
@@ -162,7 +268,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
         return (f"No effect is significant: the model explains the data to RMSE {search.rmse_before:.3f} K "
                 f"against an estimated sensor noise of {search.noise:.3f} K; no catalogue effect passes the "
                 "tests of evidence (ΔBIC), size (RMSE reduction) and share of the misfit explained.")
-    effect = get_effect(candidate.effect)
+    effect = search.effect(candidate.effect)
     after = np.arange(series.time_s.size) >= candidate.onset_index
     when = (f"after t = {candidate.onset_s / 3600:.2f} h" if candidate.onset_index > 0 else "from the start")
     biases = ", ".join(f"{'hot' if b > 0 else 'cold'} by {abs(b):.2f} K in {n}" for n, b in
@@ -174,7 +280,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
                   "dθ/dt": winding_rate_K_per_min(series.time_s, series.outputs[0])}
     links = []
     for name, e in zip(outputs, residual):
-        scores = {r: _correlation(e[after], v[after]) for r, v in regressors.items()}
+        scores = {r: correlation(e[after], v[after]) for r, v in regressors.items()}
         top = max(scores, key=lambda r: abs(scores[r]))
         links.append(f"the {name} error follows {top} (r = {scores[top]:+.2f})")
     values = ", ".join(f"{n} = {v:.4g} {p.unit}" for (n, v), p in zip(candidate.values.items(), effect.parameters))
@@ -186,25 +292,37 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
             + _ambiguity(candidate, runner_up))
 
 
+def explain_pair(pair: JointCandidate, search: EffectSearch, best_single: Candidate) -> str:
+    """Plain language: the two effects fitted together and what one effect alone left."""
+    parts = []
+    for name in pair.effects:
+        effect = search.effect(name)
+        onset = pair.onsets_s[name]
+        values = ", ".join(f"{n} = {v:.4g} {p.unit}" for (n, v), p in zip(pair.values[name].items(),
+                                                                         effect.parameters))
+        parts.append(f"{name} ({effect.summary}; {values}, "
+                     f"{'from the start' if pair.onset_indices[name] == 0 else f'from t = {onset / 3600:.2f} h'})")
+    return (f"Two effects at once: {' and '.join(parts)}, fitted jointly (values and both onsets). RMSE "
+            f"{pair.rmse_before:.3f} → {pair.rmse_after:.3f} K against an estimated noise of {search.noise:.3f} K "
+            f"(ΔBIC = {pair.delta_bic:.0f}); the best single effect, {best_single.effect}, only reached "
+            f"{best_single.rmse_after:.3f} K (ΔBIC = {best_single.delta_bic:.0f}), and each effect of the pair is "
+            f"needed: the pair passes the significance tests against either effect alone.")
+
+
 def _ambiguity(candidate: Candidate, runner_up: Candidate | None) -> str:
-    if runner_up is None or runner_up.delta_bic - candidate.delta_bic >= AMBIGUITY_BIC:
+    if runner_up is None or not look_alike(candidate, runner_up):
         return ""
     return (f" Caution: {runner_up.effect} explains the data almost as well (RMSE {runner_up.rmse_after:.3f} K, "
             f"ΔBIC only {runner_up.delta_bic - candidate.delta_bic:.1f} higher): these data cannot tell the two "
             f"apart (e.g. with balanced phase currents a loss in I_u² grows like one in ΣI²); a test that "
-            f"separates their signatures would.")
-
-
-def _correlation(a: np.ndarray, b: np.ndarray) -> float:
-    ok = np.isfinite(a) & np.isfinite(b)
-    if ok.sum() < 3 or np.std(a[ok]) == 0 or np.std(b[ok]) == 0:
-        return 0.0
-    return float(np.corrcoef(a[ok], b[ok])[0, 1])
+            f"separates their signatures would (see the designed experiment).")
 
 
 def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
              iterate: bool = False, dt_s: float | None = None, effects: Sequence[str] | None = None,
-             max_iterations: int = 4, cache: dict | None = None) -> Diagnosis:
+             max_iterations: int = 4, cache: dict | None = None, pairs: bool = True,
+             catalogue: Mapping[str, Effect] = CATALOGUE,
+             progress: Callable[[str], None] | None = None, design_experiment: bool = True) -> Diagnosis:
     """Find the catalogue effect(s) ``model`` lacks to explain ``data``.
 
     Parameters
@@ -222,12 +340,23 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     dt_s : float, optional
         Resample the data (and baseline) to this period first, s.
     effects : sequence of str, optional
-        Restrict the candidates to these catalogue effects.
+        Restrict the candidates to these effects of ``catalogue``.
     max_iterations : int
         Bound on the rounds with ``iterate``.
     cache : dict, optional
         Share one dict between diagnoses of the same ``model`` (no ``baseline``) on series of the
         same length to reuse the models and simulators built for the candidates.
+    pairs : bool
+        In the first round, when the residual after the best single effect fails the tests of
+        :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes
+        :func:`choose_pair`.
+    catalogue : mapping of str to Effect
+        The effects searched (default: the catalogue of :mod:`genthermal.effects`).
+    progress : callable, optional
+        Called with one line of text as each stage of the search finishes.
+    design_experiment : bool
+        When another explanation fits about as well as the verdict, design the rig test that
+        separates them (:func:`genthermal.diagnose.experiment.separating_experiment`).
 
     Returns
     -------
@@ -236,31 +365,63 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     from .calibrate import calibrate
 
     for name in effects or ():
-        get_effect(name)
+        if name not in catalogue:
+            raise InputError("effects", name, f"not in the catalogue: {', '.join(catalogue)}")
+    report = progress or (lambda text: None)
     series = series_for(model, data, dt_s)
     calibration = None
     if baseline is not None:
         names = [n for n in baseline_parameters if n in model.parameters]
         calibration = calibrate(model, baseline, names, dt_s)
         model = calibration.model
+        report(f"baseline calibrated: {', '.join(names)}")
     cache = {} if cache is None or baseline is not None else cache
     found: list[FoundEffect] = []
     iterations: list[Iteration] = []
     while True:
-        search = EffectSearch(model, series, found, cache)
+        search = EffectSearch(model, series, found, cache, catalogue)
         names = [n for n in search.candidates() if effects is None or n in effects]
         ranked = search.rank(names) if names else []
         for candidate in ranked:
             candidate.significant = is_significant(candidate, search.noise)
+        report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
+               + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
         best = ranked[0] if ranked and ranked[0].significant else None
         runner_up = ranked[1] if len(ranked) > 1 else None
-        iterations.append(Iteration(ranked, search.rmse_before, search.predicted_before, best,
-                                    explain(best, search, runner_up)))
-        if best is None:
+        iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
+                              explain(best, search, runner_up))
+        if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
+                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names)["unexplained"]):
+            iteration.pairs = PairSearch(search).rank(
+                ranked, progress=lambda done, total, label: report(f"pair {done}/{total} fitted: {label}"))
+            chosen = choose_pair(iteration.pairs, ranked, search.noise)
+            if chosen is not None:
+                chosen.significant = True
+                iteration.added, iteration.added_pair = None, chosen
+                iteration.explanation = explain_pair(chosen, search, ranked[0])
+        iterations.append(iteration)
+        if iteration.added_pair:
+            chosen = iteration.added_pair
+            found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e])
+                     for e in chosen.effects]
+        elif best is None:
             break
-        found = [FoundEffect(f.effect, best.found_values[f.effect], search.elapsed_s(best.found_onsets[f.effect]),
-                             best.found_onsets[f.effect]) for f in found]
-        found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
+        else:
+            found = [FoundEffect(f.effect, best.found_values[f.effect], search.elapsed_s(best.found_onsets[f.effect]),
+                                 best.found_onsets[f.effect]) for f in found]
+            found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
         if not iterate or len(iterations) >= max_iterations:
             break
-    return Diagnosis(model, series, noise_std(series.outputs), iterations, found, calibration)
+    noise = noise_std(series.outputs)
+    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names)
+    report(residual["summary"])
+    experiment, other = None, rival(iterations[0])
+    if other is not None and design_experiment:
+        chosen = iterations[0].added_pair or iterations[0].added
+        experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)
+        report(f"look-alike: {' + '.join(_explanations(other))}; designed a {experiment.mission.duration_s / 60:.0f}-min "
+               f"test that separates them by {experiment.separation_sigma:.0f} σ")
+        if iterations[0].added_pair:
+            iterations[0].explanation += (f" Caution: {' + '.join(other.effects)} explains the data almost as well "
+                                          f"(RMSE {other.rmse_after:.3f} K): these data cannot tell them apart.")
+    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment)

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from ..outputs import write_json
+from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from ..resources import DEMO_DATA_DIR
 from .compare import REGRESSORS, Comparison, compare
 from .discover import Diagnosis
@@ -129,9 +129,18 @@ def write_diagnosis_report(diagnosis: Diagnosis, out_dir) -> Path:
              f"Verdict: **{document['verdict']}**. Estimated sensor noise {diagnosis.noise_std:.3f} K.", "",
              document["explanation"], "", "| round | RMSE before [K] | added | RMSE after [K] |", "|---|---|---|---|"]
     for k, iteration in enumerate(diagnosis.iterations, start=1):
-        added = iteration.added
-        lines.append(f"| {k} | {iteration.rmse_before:.3f} | {added.effect if added else '–'} | "
-                     f"{(added.rmse_after if added else iteration.rmse_before):.3f} |")
+        lines.append(f"| {k} | {iteration.rmse_before:.3f} | {' + '.join(iteration.added_effects) or '–'} | "
+                     f"{iteration.rmse_after:.3f} |")
+    lines += ["", "## Is something still missing?", "", diagnosis.residual["summary"]]
+    if diagnosis.experiment:
+        scenario = diagnosis.experiment.write(out / "separating_test.yaml")
+        experiment = diagnosis.experiment
+        lines += ["", "## A test that tells the look-alikes apart", "",
+                  f"{experiment.candidates[0]} and {experiment.candidates[1]} explain these data about equally well. "
+                  f"The {experiment.mission.duration_s / 60:.0f}-min test [{scenario.name}]({scenario.name}) (within "
+                  f"the ratings, winding at most {experiment.peak_winding_C:.1f} °C) separates their predicted "
+                  f"{experiment.sensor} by {experiment.separation_sigma:.0f} × the noise at "
+                  f"{experiment.at_time_min:.0f} min: run it on the rig and diagnose the record."]
     lines += ["", "## Ranking (first round)", "", "| effect | parameters | onset [h] | RMSE after [K] | ΔBIC | significant |",
               "|---|---|---|---|---|---|"]
     for c in diagnosis.iterations[0].ranked:
@@ -139,14 +148,15 @@ def write_diagnosis_report(diagnosis: Diagnosis, out_dir) -> Path:
         lines.append(f"| {c.effect} | {params} | {c.onset_s / 3600:.2f} | {c.rmse_after:.3f} | {c.delta_bic:.0f} | "
                      f"{'yes' if c.significant else 'no'} |")
     for k, iteration in enumerate(diagnosis.iterations, start=1):
-        if iteration.added is None:
+        if not iteration.added_effects:
             continue
-        predictions = {"before": iteration.predicted_before, f"with {iteration.added.effect}": iteration.added.predicted}
+        added = " + ".join(iteration.added_effects)
+        predictions = {"before": iteration.predicted_before, f"with {added}": iteration.predicted_after}
         overlay = plot_overlay(series.time_s, series.outputs, predictions, names, out / f"round_{k}_overlay.png",
-                               f"round {k}: adding {iteration.added.effect}")
+                               f"round {k}: adding {added}")
         residual = plot_residuals(series.time_s, {n: p - series.outputs for n, p in predictions.items()}, names,
                                   out / f"round_{k}_residual.png")
-        lines += ["", f"## Round {k}: {iteration.added.effect}", "", iteration.explanation, "",
+        lines += ["", f"## Round {k}: {added}", "", iteration.explanation, "",
                   f"![overlay]({overlay})", "", f"![residual]({residual})"]
     (out / "report.md").write_text("\n".join(lines) + "\n")
     return out / "report.md"

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from ..effects import CATALOGUE, apply_effect, get_effect
+from ..effects import CATALOGUE, Effect, apply_effect
+from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, initial_coefficients
 from .trajectory import ParametricSimulator, Scaling, parameter_scaling
@@ -120,13 +121,15 @@ class Candidate:
 
 
 def model_with_effects(model: ThermalModel, found: Sequence[FoundEffect], extra: str | None = None,
-                       neutral: bool = False, source: str = "") -> ThermalModel:
+                       neutral: bool = False, source: str = "",
+                       catalogue: Mapping[str, Effect] = CATALOGUE) -> ThermalModel:
     """``model`` with the found effects at their fitted values (``neutral``: at neutral values,
-    the structure only) and the effect ``extra`` at neutral."""
+    the structure only) and the effect ``extra`` at neutral; names are looked up in ``catalogue``."""
     for item in found:
-        model = (model.with_effect(item.effect) if neutral else
-                 apply_effect(model, item.effect, provenance="fitted", source=source, **item.values))
-    return model.with_effect(extra) if extra else model
+        effect = catalogue[item.effect]
+        model = (model.with_effect(effect) if neutral else
+                 apply_effect(model, effect, provenance="fitted", source=source, **item.values))
+    return model.with_effect(catalogue[extra]) if extra else model
 
 
 def _regimes(groups: Sequence[tuple[list[str], dict]]) -> list[dict]:
@@ -263,9 +266,8 @@ class _Structure:
     def indicator(self, onsets):
         return _indicator(self.series.time_s.size, onsets)
 
-    def fit(self, onsets, z0, x0_coefficients):
-        return self.problem.gauss_newton(z0, x0_coefficients, self.indicator(onsets), _SEARCH_ITERATIONS,
-                                         _SEARCH_TOLERANCE)
+    def fit(self, onsets, z0, x0_coefficients, iterations: int = _SEARCH_ITERATIONS):
+        return self.problem.gauss_newton(z0, x0_coefficients, self.indicator(onsets), iterations, _SEARCH_TOLERANCE)
 
     def search_onset(self, onsets, position, z_start, x0_coefficients, low=None, high=None):
         """Best index for ``onsets[position]`` (the others held) with its (z, RSS): a grid over the
@@ -330,11 +332,15 @@ class EffectSearch:
     cache : dict, optional
         Models with effects at neutral values and their simulators, reused by searches on the same
         ``model`` and series length (building them takes most of a search's time).
+    catalogue : mapping of str to Effect
+        The effects to search (default the catalogue of :mod:`genthermal.effects`); the found
+        effects are looked up in it too.
     """
 
     def __init__(self, model: ThermalModel, series: MeasuredSeries, found: Sequence[FoundEffect] = (),
-                 cache: dict | None = None):
+                 cache: dict | None = None, catalogue: Mapping[str, Effect] = CATALOGUE):
         self.model, self.series, self.found = model, series, list(found)
+        self.catalogue = catalogue
         self._cache = {} if cache is None else cache
         self.coarse = decimated(series, GRID_DT_S)
         self.noise = noise_std(series.outputs)
@@ -358,21 +364,28 @@ class EffectSearch:
         self.found_values = {f.effect: {n: float(next(values)) for n in f.values} for f in self.found}
         self._full: dict[str, _Structure] = {}
 
+    def effect(self, name: str) -> Effect:
+        """The effect called ``name`` in this search's catalogue."""
+        if name not in self.catalogue:
+            raise InputError("effect", name, f"not in the catalogue searched: {', '.join(self.catalogue)}")
+        return self.catalogue[name]
+
     def elapsed_s(self, index: int) -> float:
         """Time of sample ``index`` from the start of the record, s."""
         return float(self.series.time_s[index] - self.series.time_s[0])
 
     def neutral_model(self, extra: str | None = None) -> ThermalModel:
         """The model with the found effects and ``extra`` at neutral values (cached)."""
-        key = ("model", id(self.model), tuple(f.effect for f in self.found), extra)
+        key = ("model", self.model, tuple(f.effect for f in self.found), extra)
         if key not in self._cache:
-            self._cache[key] = model_with_effects(self.model, self.found, extra, neutral=True)
+            self._cache[key] = model_with_effects(self.model, self.found, extra, neutral=True,
+                                                  catalogue=self.catalogue)
         return self._cache[key]
 
     def simulator(self, extra: str | None, series: MeasuredSeries, fitted, groups) -> ParametricSimulator:
         """Simulator of :meth:`neutral_model` on ``series`` (cached by structure and length)."""
         regimes = _regimes(groups)
-        key = ("simulator", id(self.model), tuple(f.effect for f in self.found), extra, tuple(fitted), repr(regimes),
+        key = ("simulator", self.model, tuple(f.effect for f in self.found), extra, tuple(fitted), repr(regimes),
                series.time_s.size, series.dt_s)
         if key not in self._cache:
             self._cache[key] = ParametricSimulator(self.neutral_model(extra), series.dt_s, series.input_matrix,
@@ -387,10 +400,10 @@ class EffectSearch:
     def candidates(self) -> list[str]:
         """Catalogue effects the model (with the found effects) can still take."""
         current = self.neutral_model()
-        return [name for name, effect in CATALOGUE.items() if effect.unavailable_reason(current) is None]
+        return [name for name, effect in self.catalogue.items() if effect.unavailable_reason(current) is None]
 
     def _structure(self, effect_name: str, series: MeasuredSeries) -> _Structure:
-        effect = get_effect(effect_name)
+        effect = self.effect(effect_name)
         model = self.neutral_model(effect_name)
         names = [p.name for p in effect.parameters]
         groups = [(list(v), dict(v)) for v in self.found_values.values()] + [(names, {n: n for n in names})]
@@ -399,7 +412,7 @@ class EffectSearch:
 
     def search(self, effect_name: str) -> Candidate:
         """Fit ``effect_name`` and its onset on the coarse grid; score it on the full series."""
-        effect = get_effect(effect_name)
+        effect = self.effect(effect_name)
         coarse = self._structure(effect_name, self.coarse)
         z_start = [s.decision(p.typical if p.typical is not None else p.neutral)
                    for s, p in zip(coarse.problem.scalings, effect.parameters)]
@@ -419,7 +432,7 @@ class EffectSearch:
         """Refine the onset on the full series (±one grid step, values refitted), then refit the
         candidate's and the found effects' values and the initial state together by Gauss-Newton
         with the exact Jacobian."""
-        effect = get_effect(candidate.effect)
+        effect = self.effect(candidate.effect)
         full = self._full[candidate.effect]
         factor = int(round(self.coarse.dt_s / self.series.dt_s))
         z = [s.decision(candidate.values[p.name]) for s, p in zip(full.problem.scalings, effect.parameters)]

@@ -1,0 +1,227 @@
+r"""Joint search over pairs of effects: parameters and both onsets fitted together.
+
+A greedy search adds the single effect that explains most, then the next: the first effect
+absorbs part of the second one's signature (a blockage from 1.3 h fitted from the start because
+an end-winding loss present from the start warms the winding too), and the second round cannot
+undo it. Here every pair of the best single effects is fitted as one model:
+
+1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
+   effect with each of the others (pruning: an effect that explains little alone belongs to the
+   answer mostly next to the effect that dominates the record, as a slow insulation change under a
+   strong excitation-dependent iron loss does);
+2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
+   the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
+   effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
+   neighbour: the grid only has to find the basin);
+3. from the best grid point, coordinate descent: each onset by golden section between its grid
+   neighbours with the values refitted, twice;
+4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
+   the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
+   stay on the decimated grid, a resolution of one minute); the others are scored on the full
+   series at their values from the decimated fit.
+
+The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
+effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
+applied against each of its members alone and against the best single effect
+(:func:`genthermal.diagnose.discover.choose_pair`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from .search import (Candidate, EffectSearch, _bic_delta, _indicator, _Problem, _regimes, _Structure,
+                     parameter_scaling)
+from .trajectory import ParametricSimulator
+
+#: Single effects (best ΔBIC first) whose pairs are fitted.
+PAIR_POOL = 4
+#: Onsets per effect in the coarse grid of a pair.
+PAIR_GRID = 5
+#: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
+_GRID_ITERATIONS = 2
+#: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
+POLISHED_PAIRS = 3
+#: Rounds of coordinate descent over the two onsets.
+_DESCENT_ROUNDS = 2
+
+
+@dataclasses.dataclass
+class JointCandidate:
+    """Two effects fitted together.
+
+    Attributes
+    ----------
+    effects : tuple of str
+        The two effects, earlier onset first.
+    values : dict
+        Effect → fitted parameter values (model units).
+    onsets_s : dict
+        Effect → onset from the start of the record, s.
+    onset_indices : dict
+        Effect → onset sample index.
+    rss : float
+        Residual sum of squares, K².
+    k : int
+        Fitted parameters of both effects plus the two onsets.
+    rmse_before, rmse_after : float
+        RMSE without effects and with the pair, K.
+    delta_bic : float
+        ΔBIC against the model without effects.
+    predicted : numpy.ndarray
+        Model outputs with the pair, (n_outputs, N), °C.
+    significant : bool
+        Chosen by :func:`genthermal.diagnose.discover.choose_pair`.
+    """
+
+    effects: tuple
+    values: dict
+    onsets_s: dict
+    onset_indices: dict
+    rss: float
+    k: int
+    rmse_before: float
+    rmse_after: float
+    delta_bic: float
+    predicted: np.ndarray
+    significant: bool = False
+
+    def to_dict(self) -> dict:
+        """The JSON entry of the pair ranking."""
+        return {"effects": list(self.effects), "params": self.values, "onset_s": self.onsets_s,
+                "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
+                "k": self.k, "significant": self.significant}
+
+
+def _start(scaling, value: float, parameter) -> float:
+    """Start of a pair fit: the value fitted alone, or the typical value when that fit ended on a
+    bound (the effect alone could not explain the record, and its value says nothing)."""
+    at_bound = min(abs(value - parameter.lower), abs(value - parameter.upper)) <= 1e-6 * max(abs(value), 1.0)
+    value = parameter.typical if at_bound and parameter.typical is not None else value
+    return float(np.clip(value, scaling.lower, scaling.upper))
+
+
+class PairSearch:
+    """Fit pairs of catalogue effects jointly on the series of a first-round :class:`EffectSearch`.
+
+    Parameters
+    ----------
+    search : EffectSearch
+        The first round (no effects found yet): its model, series, decimated series, initial state
+        coefficients, cache and score before.
+    """
+
+    def __init__(self, search: EffectSearch):
+        if search.found:
+            raise InputError("search.found", [f.effect for f in search.found],
+                             "a pair search starts from the model without found effects")
+        self.search = search
+
+    def _structure(self, pair: Sequence[str], series) -> _Structure:
+        search = self.search
+        key = ("pair model", search.model, tuple(pair))
+        if key not in search._cache:
+            model = search.model
+            for name in pair:
+                model = model.with_effect(search.effect(name))
+            search._cache[key] = model
+        model = search._cache[key]
+        groups = [[p.name for p in search.effect(name).parameters] for name in pair]
+        names = [n for group in groups for n in group]
+        simulator_key = ("pair simulator", search.model, tuple(pair), series.time_s.size, series.dt_s)
+        if simulator_key not in search._cache:
+            regimes = _regimes([(g, {n: n for n in g}) for g in groups])
+            search._cache[simulator_key] = ParametricSimulator(model, series.dt_s, series.input_matrix, names, regimes)
+        simulator = search._cache[simulator_key].with_inputs(series.input_matrix)
+        scalings = [parameter_scaling(model, p.name, typical=p.typical)
+                    for name in pair for p in search.effect(name).parameters]
+        return _Structure(simulator, series, scalings)
+
+    def _starts(self, single: Candidate):
+        """(value fitted alone, EffectParameter) of each parameter of ``single``."""
+        return [(single.values[p.name], p) for p in self.search.effect(single.effect).parameters]
+
+    def _coarse_fit(self, first: Candidate, second: Candidate):
+        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
+        search = self.search
+        coarse = self._structure((first.effect, second.effect), search.coarse)
+        z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
+                      zip(coarse.problem.scalings, [*self._starts(first), *self._starts(second)])])
+        n = search.coarse.time_s.size
+        last = n - max(3, int(0.05 * n))
+        grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
+        best = (math.inf, None, z)
+        for i, a in enumerate(grid):
+            z_row = z
+            for b in grid:
+                z_row, rss = coarse.fit([int(a), int(b)], z_row, search.x0_coefficients, _GRID_ITERATIONS)
+                if rss < best[0]:
+                    best = (rss, (i, int(np.searchsorted(grid, b))), z_row)
+        _, (i, j), z = best
+        onsets = [int(grid[i]), int(grid[j])]
+        ranges = [(int(grid[max(g - 1, 0)]), int(grid[min(g + 1, grid.size - 1)])) for g in (i, j)]
+        rss = best[0]
+        for _ in range(_DESCENT_ROUNDS):
+            for position, (low, high) in enumerate(ranges):
+                onsets[position], z, rss = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+        return onsets, z, rss
+
+    def _finish(self, pair: tuple, onsets, z, polish: bool) -> JointCandidate:
+        """Step 4 on the full series (``polish``), or the coarse values scored on it."""
+        search = self.search
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        full = self._structure(pair, search.series)
+        onsets = [o * factor for o in onsets]
+        indicator = _indicator(search.series.time_s.size, onsets)
+        problem = _Problem(full.problem.simulator, search.series, full.problem.scalings, exact=True,
+                           fit_initial_state=True)
+        z = np.concatenate([z, [0.0, 0.0]])
+        if polish:
+            z, _ = problem.gauss_newton(z, search.x0_coefficients, indicator)
+        theta = problem.theta(z)
+        predicted = problem.simulator.outputs(theta, problem.initial(z, search.x0_coefficients), indicator)
+        rss = max(float(np.nansum((predicted - search.series.outputs) ** 2)), 1e-300)
+        values, position = {}, 0
+        for name in pair:
+            names = [p.name for p in search.effect(name).parameters]
+            values[name] = {p: float(theta[position + i]) for i, p in enumerate(names)}
+            position += len(names)
+        order = sorted(range(2), key=lambda m: onsets[m])
+        effects = tuple(pair[m] for m in order)
+        k = len(theta) + 2
+        return JointCandidate(effects, {e: values[e] for e in effects},
+                              {pair[m]: search.elapsed_s(onsets[m]) for m in order},
+                              {pair[m]: int(onsets[m]) for m in order}, rss, k, search.rmse_before,
+                              math.sqrt(rss / search.n_valid), _bic_delta(rss, search.rss_before, search.n_valid, k),
+                              predicted)
+
+    def fit(self, first: Candidate, second: Candidate, polish: bool = True) -> JointCandidate:
+        """Fit the effects of two single candidates jointly (started from their single fits)."""
+        onsets, z, _ = self._coarse_fit(first, second)
+        return self._finish((first.effect, second.effect), onsets, z, polish)
+
+    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
+        """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
+        each other one on the decimated series,
+        polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
+        there at their coarse values; best ΔBIC first.
+
+        ``progress(done, total, label)`` is called after each pair when given."""
+        ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
+        pairs = list(itertools.combinations(ranked_singles[:pool], 2))
+        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:]]
+        coarse = []
+        for done, (first, second) in enumerate(pairs, start=1):
+            coarse.append(((first.effect, second.effect), *self._coarse_fit(first, second)))
+            if progress:
+                progress(done, len(pairs), f"{first.effect} + {second.effect}")
+        coarse.sort(key=lambda item: item[3])
+        ranked = [self._finish(pair, onsets, z, rank < POLISHED_PAIRS)
+                  for rank, (pair, onsets, z, _) in enumerate(coarse)]
+        return sorted(ranked, key=lambda c: c.delta_bic)

@@ -1,0 +1,200 @@
+r"""Open search for a heat flow no catalogue names: a generic library of small effects.
+
+When the catalogue does not explain the data, the missing physics may still be a simple heat flow.
+:func:`heat_flow_library` builds, for a model, one :class:`~genthermal.effects.Effect` per
+(node group, form):
+
+* node groups: the slot winding, the end windings (shared equally), the stator iron (teeth and
+  yoke, shared by heat capacity), the rotor, the frame — taken from the machine's ``roles`` and
+  node names;
+* forms of an extra heat flow :math:`q = k\,f` (:math:`k` signed: a flow in or out):
+  ``constant`` (:math:`f = 1`, W), ``I2`` (:math:`\sum_p I_p^2`, W/A²), ``I_exc2``
+  (:math:`I_{exc}^2`, W/A²), and into the slot winding also the per-phase ``I_u2``, ``I_v2``,
+  ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
+  W/(A²K));
+* a change of a conductance by a factor: the winding insulation, the frame to ambient, the
+  coolant air streams.
+
+Each is an ordinary :class:`~genthermal.effects.Effect`, so the search is the catalogue search
+with this library in place of the catalogue (:func:`open_search` calls
+:func:`~genthermal.diagnose.discover.diagnose` with ``catalogue=heat_flow_library(model)``): a few
+terms, chosen by the same criterion and tests, singles and jointly fitted pairs — a sparse
+selection. :func:`describe_term` says what was found in plain language and :func:`effect_code` writes
+it out as a few lines of Python that register it as a new effect the user can keep.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import sympy
+
+from ..effects import Effect, EffectParameter
+from ..errors import InputError
+from ..losses import PHASE_CURRENTS, input_symbol, mass_shares
+from ..model import ThermalModel
+from ..network import HeatSource
+from .search import FoundEffect
+
+#: Extra heat-flow forms: name → (plain-language factor, unit of k, bound on |k|, typical k).
+HEAT_FORMS = {
+    "constant": ("", "W", 500.0, 20.0),
+    "I2": ("ΣI²", "W/A^2", 5.0, 0.2),
+    "I_exc2": ("I_exc²", "W/A^2", 200.0, 20.0),
+    "I_u2": ("I_u²", "W/A^2", 5.0, 0.3),
+    "I_v2": ("I_v²", "W/A^2", 5.0, 0.3),
+    "I_w2": ("I_w²", "W/A^2", 5.0, 0.3),
+    "I2_theta": ("ΣI² (θ − 20 °C)", "W/(A^2 K)", 0.05, 0.003),
+}
+#: Forms tried on every node group; the others only on the slot winding.
+COMMON_FORMS = ("constant", "I2", "I_exc2")
+#: Conductances that can change: name → plain language.
+CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
+                "frame_to_ambient": "the frame-to-ambient conductance",
+                "air_streams": "the coolant air flow"}
+
+
+def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
+    """Node groups of ``model`` for extra heat flows: plain name → capacitive nodes."""
+    roles, states = model.spec.roles, set(model.state_names)
+    groups = {"slot winding": (roles.get("slot_winding"),), "end windings": tuple(roles.get("end_windings", ())),
+              "stator iron": tuple(roles.get("iron", ())), "rotor": ("rotor",), "frame": ("frame",)}
+    return {g: nodes for g, nodes in groups.items() if nodes and all(n in states for n in nodes)}
+
+
+def _factor(form: str, temperature):
+    squares = sum(input_symbol(p) ** 2 for p in PHASE_CURRENTS)
+    return {"constant": sympy.Integer(1), "I2": squares, "I_exc2": input_symbol("I_exc") ** 2,
+            "I_u2": input_symbol("I_u") ** 2, "I_v2": input_symbol("I_v") ** 2, "I_w2": input_symbol("I_w") ** 2,
+            "I2_theta": squares * (temperature - 20)}[form]
+
+
+def _slug(group: str) -> str:
+    return group.replace(" ", "_")
+
+
+def heat_flow_effect(group: str, nodes: tuple[str, ...], form: str, name: str | None = None) -> Effect:
+    """An extra heat flow :math:`k f` (``form`` of :data:`HEAT_FORMS`) into ``nodes``.
+
+    Parameters
+    ----------
+    group : str
+        Plain name of the node group (``"end windings"``).
+    nodes : tuple of str
+        Capacitive nodes; the flow is shared by heat capacity.
+    form : str
+        A key of :data:`HEAT_FORMS`.
+    name : str, optional
+        Effect name (default ``heat_<form>_<group>``); its parameter is ``k_<name>``.
+    """
+    if form not in HEAT_FORMS:
+        raise InputError("form", form, f"must be one of {', '.join(HEAT_FORMS)}")
+    label, unit, bound, typical = HEAT_FORMS[form]
+    name = name or f"heat_{form}_{_slug(group)}"
+
+    def transform(network, roles, k):
+        shares = mass_shares(network, nodes)
+        return network.with_heat_sources(
+            [HeatSource(n, shares[n] * k * _factor(form, network.temperature_symbol(n)), name) for n in nodes])
+
+    return Effect(name, f"extra heat flow k {label or '(constant)'} into the {group}".replace("  ", " "),
+                  rf"q_{{{_slug(group)}}} \mathrel{{+}}= k\,{label or '1'}",
+                  (EffectParameter(f"k_{name}", 0.0, unit, -bound, bound, typical),), transform,
+                  f"residual follows {label or 'a constant heat input'} and is largest near the {group}")
+
+
+def conductance_effect(role: str, name: str | None = None) -> Effect:
+    """A change of a conductance (``role`` of :data:`CONDUCTANCES`) by a factor :math:`k`."""
+    if role not in CONDUCTANCES:
+        raise InputError("conductance", role, f"must be one of {', '.join(CONDUCTANCES)}")
+    name = name or f"conductance_{role}"
+
+    def transform(network, roles, k):
+        if role == "air_streams":
+            return network.scale_air_streams(k)
+        for a, b in roles[role]:
+            network = network.scale_links(a, b, k)
+        return network
+
+    return Effect(name, f"{CONDUCTANCES[role]} multiplied by a factor", r"G \to k\,G",
+                  (EffectParameter(f"k_{name}", 1.0, "1", 0.05, 20.0, 0.5),), transform,
+                  f"{CONDUCTANCES[role]} changed")
+
+
+def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
+    """The generic library for ``model``: heat flows (node group × form) and conductance changes."""
+    library = {}
+    for group, nodes in node_groups(model).items():
+        forms = HEAT_FORMS if group == "slot winding" else COMMON_FORMS
+        for form in forms:
+            effect = heat_flow_effect(group, nodes, form)
+            library[effect.name] = effect
+    for role in CONDUCTANCES:
+        if role == "air_streams" or role in model.spec.roles:
+            effect = conductance_effect(role)
+            library[effect.name] = effect
+    return library
+
+
+def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
+    """Plain language for one found term of the library, e.g. "about 0.6 W/A² × I_v² into the slot
+    winding from 0.90 h"."""
+    (parameter,) = catalogue[found.effect].parameters
+    value = found.values[parameter.name]
+    when = "from the start" if found.onset_index == 0 else f"from {found.onset_s / 3600:.2f} h"
+    if found.effect.startswith("conductance_"):
+        return f"{CONDUCTANCES[found.effect[len('conductance_'):]]} multiplied by about {value:.2f} {when}"
+    form, group = _form_and_group(found.effect)
+    label, unit = HEAT_FORMS[form][:2]
+    return (f"about {abs(value):.3g} {unit.replace('^2', '²')}{' × ' + label if label else ''} "
+            f"{'into' if value > 0 else 'out of'} the {group} {when}")
+
+
+def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) -> str:
+    """Python source that registers the found term as a new effect called ``name``."""
+    effect = catalogue[found.effect]
+    (parameter,) = effect.parameters
+    value = found.values[parameter.name]
+    if found.effect.startswith("conductance_"):
+        role = found.effect[len("conductance_"):]
+        build = f"conductance_effect({role!r}, name={name!r})"
+    else:
+        form, group = _form_and_group(found.effect)
+        build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
+    lines = ["from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups",
+             "from genthermal.effects import register_effect", ""]
+    if "NODES" in build:
+        lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
+    lines += [f"effect = register_effect({build})",
+              f"model = model.with_effect(effect, k_{name}={value:.6g})   # fitted: {describe_term(found, catalogue)}"]
+    return "\n".join(lines) + "\n"
+
+
+def _form_and_group(effect_name: str) -> tuple[str, str]:
+    rest = effect_name[len("heat_"):]
+    for form in sorted(HEAT_FORMS, key=len, reverse=True):
+        if rest.startswith(form + "_"):
+            return form, rest[len(form) + 1:].replace("_", " ")
+    raise InputError("effect", effect_name, "not a heat-flow term of the open library")
+
+
+def open_search(model: ThermalModel, data, **options):
+    """Search the generic library (:func:`heat_flow_library`) instead of the catalogue.
+
+    Parameters
+    ----------
+    model : ThermalModel
+    data : MeasurementData, pandas.DataFrame or path
+    **options
+        Passed to :func:`~genthermal.diagnose.discover.diagnose` (``iterate``, ``dt_s``, ``cache``,
+        ``progress``, ``pairs``, ...).
+
+    Returns
+    -------
+    Diagnosis
+        With ``catalogue`` the library; :func:`describe_term` and :func:`effect_code` turn each of
+        its ``found`` terms into words and code.
+    """
+    from .discover import diagnose
+
+    return diagnose(model, data, catalogue=heat_flow_library(model), **options)

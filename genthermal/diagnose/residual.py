@@ -1,0 +1,121 @@
+r"""Is something still missing? Tests of the residual left after the chosen effects.
+
+With the effects found, the residual :math:`e = y_{model} - y_{meas}` of a complete model is close
+to the sensor noise and unrelated to the inputs and temperatures. Three tests:
+
+* **level**: the RMSE over all sensors is at most :data:`LEVEL_FACTOR` :math:`\hat\sigma` (the
+  noise estimated from the data alone, :func:`genthermal.diagnose.search.noise_std`);
+* **whiteness**, per sensor: the lag-1 autocorrelation of :math:`e`. For :math:`e = s + w` with a
+  slow model error :math:`s` and white noise :math:`w` it is about
+  :math:`\operatorname{var}s / (\operatorname{var}s + \operatorname{var}w)`: above
+  :data:`MAX_AUTOCORRELATION` the slow error is larger than the noise;
+* **correlation**, per sensor: :math:`|r|` of :math:`e` with each of mean :math:`I^2`,
+  :math:`I_{exc}`, :math:`T_{inlet}`, :math:`T_{ambient}` and the measured sensor temperatures.
+
+A complete model does not leave white residuals: the measured currents carry noise (1 % per sample
+on the rig) that the model turns into a slow winding error of zero mean, about 1-2 × the noise at
+60 s samples on the shipped missions, and unrelated to any regressor. So the data are
+*unexplained* when the level test fails, or when on some sensor the residual is at once above
+:data:`STRUCTURE_LEVEL_FACTOR` :math:`\hat\sigma`, not white, and follows a regressor with
+:math:`|r| >` :data:`MAX_CORRELATION`: a slow error that tracks the load or a temperature is
+missing physics, one that does not is input noise. Where and when: the sensor and time of the
+largest residual smoothed over :data:`SMOOTHING_S` (so one noisy sample does not decide).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..losses import PHASE_CURRENTS
+from .compare import MeasuredSeries
+
+LEVEL_FACTOR = 2.0
+STRUCTURE_LEVEL_FACTOR = 1.3
+MAX_AUTOCORRELATION = 0.5
+MAX_CORRELATION = 0.3
+#: Window of the moving average that locates the largest residual, s.
+SMOOTHING_S = 600.0
+
+
+def correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Pearson correlation of ``a`` and ``b`` over the samples where both are finite (0 if undefined)."""
+    ok = np.isfinite(a) & np.isfinite(b)
+    if ok.sum() < 3 or np.std(a[ok]) == 0 or np.std(b[ok]) == 0:
+        return 0.0
+    return float(np.corrcoef(a[ok], b[ok])[0, 1])
+
+
+def _regressors(series: MeasuredSeries, output_names) -> dict:
+    inputs = series.inputs
+    regressors = {"mean I^2": np.mean([inputs[p].to_numpy(dtype=float) ** 2 for p in PHASE_CURRENTS], axis=0),
+                  "I_exc": inputs["I_exc"].to_numpy(dtype=float),
+                  "T_inlet": inputs["T_inlet"].to_numpy(dtype=float),
+                  "T_ambient": inputs["T_ambient"].to_numpy(dtype=float)}
+    for name, measured in zip(output_names, series.outputs):
+        regressors[f"measured {name}"] = measured
+    return regressors
+
+
+def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names) -> dict:
+    """Run the three tests of the module docstring on ``predicted - series.outputs``.
+
+    Parameters
+    ----------
+    series : MeasuredSeries
+    predicted : numpy.ndarray
+        Model outputs with the chosen effects, (n_outputs, N), °C.
+    noise : float
+        Estimated sensor noise standard deviation, K.
+    output_names : sequence of str
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``unexplained`` (bool), ``per_sensor`` (``rmse_K``, ``rmse_over_noise``,
+        ``lag1_autocorrelation``, ``correlations``, ``follows``, ``level_ok``, ``white``),
+        ``largest`` (``sensor``, ``time_h``, ``residual_K`` of the smoothed residual) and ``summary``.
+    """
+    residual = np.asarray(predicted, dtype=float) - series.outputs
+    regressors = _regressors(series, output_names)
+    window = max(1, int(round(SMOOTHING_S / series.dt_s)))
+    per_sensor, largest = {}, None
+    overall = float(np.sqrt(np.nanmean(residual ** 2)))
+    level_ok = bool(overall <= LEVEL_FACTOR * noise)
+    for name, e in zip(output_names, residual):
+        ok = np.isfinite(e)
+        rmse = float(np.sqrt(np.mean(e[ok] ** 2)))
+        centred = e[ok] - e[ok].mean()
+        lag1 = float(centred[1:] @ centred[:-1] / max(centred @ centred, 1e-300))
+        correlations = {r: correlation(e, v) for r, v in regressors.items()}
+        follows = max(correlations, key=lambda r: abs(correlations[r]))
+        structured = (rmse > STRUCTURE_LEVEL_FACTOR * noise and lag1 > MAX_AUTOCORRELATION
+                      and abs(correlations[follows]) > MAX_CORRELATION)
+        per_sensor[name] = {"rmse_K": rmse, "rmse_over_noise": rmse / noise if noise > 0 else float("inf"),
+                            "lag1_autocorrelation": lag1, "correlations": correlations, "follows": follows,
+                            "structured": bool(structured)}
+        smooth = pd.Series(e).rolling(window, center=True, min_periods=1).mean().to_numpy()
+        k = int(np.nanargmax(np.abs(smooth)))
+        if largest is None or abs(smooth[k]) > abs(largest["residual_K"]):
+            largest = {"sensor": name, "time_h": float((series.time_s[k] - series.time_s[0]) / 3600.0),
+                       "residual_K": float(smooth[k])}
+    unexplained = not level_ok or any(s["structured"] for s in per_sensor.values())
+    return {"unexplained": bool(unexplained), "rmse_K": overall, "rmse_over_noise": overall / noise if noise > 0
+            else float("inf"), "level_ok": level_ok, "per_sensor": per_sensor, "largest": largest,
+            "thresholds": {"rmse_over_noise_at_most": LEVEL_FACTOR, "structure_rmse_over_noise": STRUCTURE_LEVEL_FACTOR,
+                           "lag1_autocorrelation_at_most": MAX_AUTOCORRELATION,
+                           "abs_correlation_at_most": MAX_CORRELATION},
+            "summary": _summary(per_sensor, largest, overall / noise if noise > 0 else float("inf"), unexplained)}
+
+
+def _summary(per_sensor: dict, largest: dict, level: float, unexplained: bool) -> str:
+    if not unexplained:
+        return (f"The residual is {level:.1f}× the sensor noise and follows no input or temperature: nothing "
+                "is left for another effect to explain.")
+    failing = [f"{name} (RMSE {s['rmse_over_noise']:.1f}× noise, lag-1 autocorrelation "
+               f"{s['lag1_autocorrelation']:.2f}, follows {s['follows']} r = {s['correlations'][s['follows']]:+.2f})"
+               for name, s in per_sensor.items()]
+    return (f"Something is still missing: the residual is {level:.1f}× the sensor noise; {'; '.join(failing)}. "
+            f"It is largest on {largest['sensor']} at t = {largest['time_h']:.2f} h "
+            f"({'model hot' if largest['residual_K'] > 0 else 'model cold'} by {abs(largest['residual_K']):.2f} K, "
+            f"{SMOOTHING_S / 60:.0f}-min average). Do not read the effects found as the whole answer.")
