@@ -1,4 +1,4 @@
-"""One Kalman filter update: generated C next to Python, side by side in one process.
+"""One Kalman filter update, linear and extended: generated C next to Python, side by side.
 
 Run ``python benchmarks/bench_kalman.py --json bench_kalman.json``; prints JSON and writes it.
 
@@ -8,6 +8,10 @@ Run ``python benchmarks/bench_kalman.py --json bench_kalman.json``; prints JSON 
 * ``python_update_ns`` -- :meth:`KalmanFilter.update` + :meth:`KalmanFilter.predict` in numpy
   (steady-state mode), median of repeats.
 * ``casadi_update_ns`` -- the same CasADi function evaluated in-process with numpy arguments.
+* ``ekf_c_update_ns`` -- ``gt_ekf_update`` (the extended Kalman filter on the nonlinear model with
+  two disturbance heat flows: 10 states, full covariance, update and prediction with the exact
+  Jacobian of the discrete step) in the same kind of C loop; ``ekf_python_update_ns`` --
+  :meth:`ExtendedKalmanFilter.update` + :meth:`ExtendedKalmanFilter.predict`.
 
 Target (issue): one filter update in generated C <= 1 µs.
 """
@@ -28,6 +32,8 @@ import numpy as np
 from genthermal.ccompile import COMPILE_FLAGS, find_compiler
 from genthermal.codegen import generate_c
 from genthermal.design import linear_design_model
+from genthermal.estimation.ekf import ExtendedKalmanFilter
+from genthermal.estimation.ekf import embedded_functions as ekf_functions
 from genthermal.estimation.kalman import KalmanFilter, embedded_functions
 from genthermal.machines import build_model
 
@@ -55,13 +61,38 @@ int main(void)
     return 0;
 }
 """
+EKF_DRIVER = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <time.h>
+#include "gt.h"
+static double work[GT_WORK_SIZE];
+int main(void)
+{
+    double z[10] = {40, 60, 58, 70, 69, 70, 35, 33, 5, -2}, u[6] = {5, 5, 5, 0.85, 20, 20}, y[2] = {70.2, 59.9};
+    double measured[2] = {1, 1}, P[100] = {0}, zf[10], Pf[100], zn[10], Pn[100], checksum = 0.0;
+    struct timespec start, stop;
+    long k;
+    for (k = 0; k < 10; ++k) P[11 * k] = k < 8 ? 1.0 : 100.0;
+    clock_gettime(CLOCK_MONOTONIC, &start);
+    for (k = 0; k < %(n)d; ++k) {
+        gt_ekf_update(z, P, u, y, measured, zf, Pf, zn, Pn, work, GT_WORK_SIZE);
+        z[0] = zn[0] - 1e-9 * (double)(k & 1);  /* keep the loop from being hoisted */
+        checksum += zn[3] + Pn[0];
+    }
+    clock_gettime(CLOCK_MONOTONIC, &stop);
+    printf("%%.6f %%.17g\n", ((stop.tv_sec - start.tv_sec) * 1e9 + (stop.tv_nsec - start.tv_nsec)) / %(n)d.0, checksum);
+    return 0;
+}
+"""
 
 
-def c_update_ns(design, build: Path) -> float:
+def c_update_ns(model, build: Path, extra_functions: dict, driver_source: str = DRIVER,
+                iterations: int = ITERATIONS) -> float:
     """Time one generated-C update (ns) in a compiled C loop."""
-    generated = generate_c(design, build, dt_s=10.0, extra_functions=embedded_functions(design, 10.0, 1))
+    generated = generate_c(model, build, dt_s=10.0, extra_functions=extra_functions)
     driver = build / "bench_driver.c"
-    driver.write_text(DRIVER % {"n": ITERATIONS})
+    driver.write_text(driver_source % {"n": iterations})
     program = build / "bench_driver"
     command = [*find_compiler(), *COMPILE_FLAGS, "-I", str(build), str(driver),
                *map(str, generated.sources), "-o", str(program), "-lm"]
@@ -97,7 +128,17 @@ def main(argv=None) -> int:
 
     casadi_update = kalman.update_function()
     with tempfile.TemporaryDirectory() as folder:
-        c_ns = c_update_ns(design, Path(folder))
+        c_ns = c_update_ns(design, Path(folder), embedded_functions(design, 10.0, 1))
+    plant = build_model()
+    ekf = ExtendedKalmanFilter(plant, dt_s=10.0)
+    z, P = np.concatenate([x, [5.0, -2.0]]), np.diag([1.0] * 8 + [100.0] * 2)
+
+    def ekf_python_update():
+        update = ekf.update(z, P, y)
+        ekf.predict(update.x, update.P, u)
+
+    with tempfile.TemporaryDirectory() as folder:
+        ekf_c_ns = c_update_ns(plant, Path(folder), ekf_functions(plant, 10.0, 1), EKF_DRIVER, ITERATIONS // 10)
     result = {
         "benchmark": "kalman_update", "states": design.n_states, "sensors": len(design.output_names),
         "c_update_ns": c_ns,
@@ -105,6 +146,9 @@ def main(argv=None) -> int:
         "casadi_update_ns": median_ns(lambda: casadi_update(x, u, y)),
     }
     result["python_over_c"] = result["python_update_ns"] / c_ns
+    result.update({"ekf_states": len(ekf.state_names), "ekf_c_update_ns": ekf_c_ns,
+                   "ekf_python_update_ns": median_ns(ekf_python_update, number=500)})
+    result["ekf_python_over_c"] = result["ekf_python_update_ns"] / ekf_c_ns
     result["targets"] = {"c_update_within_1_us": c_ns <= 1000.0}
     text = json.dumps(result)
     print(text)

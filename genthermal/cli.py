@@ -41,6 +41,8 @@ COMMAND_MODULES = (
     "simulate",
     "describe",
     "codegen",
+    "fmu",
+    "cortex_m4",
     "synth",
     "estimate",
     "sysid",

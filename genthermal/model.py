@@ -75,6 +75,10 @@ class ModelSpec:
         ``"frame_to_ambient"`` (tuples of (node, node) links).
     effects : tuple of str
         Names of the effects applied to this model, in order.
+    onsets : tuple of (str, float)
+        Effects that start during a record: (effect name, onset in s after the record's first
+        sample). Before its onset such an effect is at its neutral values; see
+        :func:`genthermal.onsets.onset_switches`, which :func:`genthermal.simulate.simulate` uses.
     """
 
     name: str
@@ -85,6 +89,11 @@ class ModelSpec:
     variant: str = "nonlinear"
     roles: dict = dataclasses.field(default_factory=dict)
     effects: tuple = ()
+    onsets: tuple = ()
+
+    def structure(self) -> "ModelSpec":
+        """The spec without its onsets: what the compiled functions depend on."""
+        return dataclasses.replace(self, onsets=())
 
 
 def kron_reduce(G: dict, r: dict, massless) -> list:
@@ -155,7 +164,8 @@ class ThermalModel:
         # the symbolic model depends on network and parameter order only, not on the values:
         # a model that differs from another only in parameter values shares its CasADi functions
         same_structure = (_share_from is not None and _share_from.network is network
-                          and _share_from.spec is spec and _share_from.parameter_names == self.parameter_names)
+                          and _share_from.spec.structure() == spec.structure()
+                          and _share_from.parameter_names == self.parameter_names)
         self._shared: dict = _share_from._shared if same_structure else {}
         for output, node in spec.sensors.items():
             network.node(node)
@@ -367,6 +377,30 @@ class ThermalModel:
     def with_parameters(self, provenance: str = "fitted", source: str = "", **values) -> "ThermalModel":
         """Return the same model with new parameter values (checked for physical values)."""
         return ThermalModel(self.network, self.parameters.with_values(provenance, source, **values), self.spec,
+                            _share_from=self)
+
+    def with_onsets(self, onsets) -> "ThermalModel":
+        """Return the same model whose effects ``onsets`` (effect name → s after the first sample
+        of a record) start during the record; an empty mapping removes them.
+
+        Raises
+        ------
+        InputError
+            For an effect the model does not have or an onset that is not a time >= 0.
+        """
+        checked = []
+        for effect, onset in dict(onsets).items():
+            if effect not in self.spec.effects:
+                raise InputError(f"onsets.{effect}", effect, f"not an effect of {self.name} "
+                                 f"(effects: {', '.join(self.spec.effects) or 'none'})")
+            try:
+                onset = float(onset)
+            except (TypeError, ValueError):
+                raise InputError(f"onsets.{effect}", onset, "must be a time in s >= 0") from None
+            if not (np.isfinite(onset) and onset >= 0):
+                raise InputError(f"onsets.{effect}", onset, "must be a time in s >= 0")
+            checked.append((effect, onset))
+        return ThermalModel(self.network, self.parameters, dataclasses.replace(self.spec, onsets=tuple(checked)),
                             _share_from=self)
 
     def with_network(self, network: Network, parameters: ParameterSet | None = None,

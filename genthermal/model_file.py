@@ -11,9 +11,14 @@
         parameters: {k_flow: 0.61}
         provenance: fitted        # optional (default fitted), with source
         source: "diagnosis on flight_12.csv"
-        onset_s: 3960             # optional, informative: when the effect appeared in the data
+        onset_s: 3960             # optional: the effect starts 3960 s after a record's first sample
 
 :func:`load_model` also takes a built-in name: ``genco_rf201a`` or ``genco_rf201a:linear``.
+
+An effect with ``onset_s`` is loaded with its fitted values and the onset recorded on the model
+(``spec.onsets``): :func:`genthermal.simulate.simulate` and ``compare`` hold it at its neutral
+values until the onset, so a model written by ``diagnose --out`` reproduces the diagnosis. Filters
+and generated code use the model with every effect active (the state after the last onset).
 """
 
 from __future__ import annotations
@@ -108,6 +113,7 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
     effects = document.get("effects") or []
     if not isinstance(effects, list):
         raise InputError("effects", effects, "must be a list of {name, parameters}")
+    onsets = {}
     for i, entry in enumerate(effects):
         if not isinstance(entry, dict) or "name" not in entry:
             raise InputError(f"effects[{i}]", entry, "must be a mapping with a name and parameters")
@@ -126,7 +132,13 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
                                  source=str(entry.get("source", "")) or f"model file {source}", **values)
         except InputError as exc:
             raise InputError(f"effects[{i}] ({entry['name']}) {exc.field}", exc.value, exc.reason) from None
-    return model
+        if entry.get("onset_s") is not None:
+            onsets[entry["name"]] = entry["onset_s"]
+            try:
+                model.with_onsets({entry["name"]: entry["onset_s"]})
+            except InputError as exc:
+                raise InputError(f"effects[{i}].onset_s", exc.value, exc.reason) from None
+    return model.with_onsets(onsets) if onsets else model
 
 
 def _number(value, field: str) -> float:
@@ -158,8 +170,10 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
     ----------
     model : ThermalModel
     onsets : dict, optional
-        Effect name → onset in s, recorded with the effect (informative).
+        Effect name → onset in s after a record's first sample; default the onsets the model
+        carries (``spec.onsets``).
     """
+    onsets = dict(model.spec.onsets) if onsets is None else onsets
     defaults = build_model(model.spec.name).parameters
     effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].parameters}
     parameters = {}

@@ -54,7 +54,7 @@ def initial_state(model: ThermalModel, u0: np.ndarray, x0=None) -> np.ndarray:
     return x0
 
 
-def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=()) -> pd.DataFrame:
+def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=None) -> pd.DataFrame:
     """Simulate ``model`` over the input time series.
 
     Parameters
@@ -68,7 +68,8 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=()) ->
     switches : sequence of (float, ThermalModel)
         Models that take over at an onset time in s (a fault, an effect with an onset): from the
         first sample at or after the onset, the state is propagated by that model. All models must
-        have the same states.
+        have the same states. Default: the switches of the effects' onsets the model carries
+        (:func:`genthermal.onsets.onset_switches`, onsets counted from the first sample).
 
     Returns
     -------
@@ -78,8 +79,15 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=()) ->
     time_s = inputs["time_s"].to_numpy(dtype=float) if "time_s" in inputs else None
     U = input_matrix(inputs)
     dt = uniform_step(time_s)
+    if model.spec.onsets:
+        if switches:
+            raise InputError("switches", len(switches), f"{model.name} carries effect onsets already; "
+                             "give either the onsets or switches")
+        from .onsets import onset_switches
+
+        model, switches = onset_switches(model, float(time_s[0]))
     x0 = initial_state(model, U[:, 0], x0)
-    segments = _segments(model, time_s, switches)
+    segments = _segments(model, time_s, switches or ())
     n = U.shape[1]
     X = np.empty((model.n_states, n))
     X[:, 0] = x0

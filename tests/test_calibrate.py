@@ -73,9 +73,9 @@ def test_cli_calibrate_writes_a_model_file(rig, tmp_path, capsys):
     _, case = rig
     case.data.to_csv(tmp_path / "rig.csv", index=False)
     out = tmp_path / "calibrated.yaml"
-    assert main(["calibrate", "genco_rf201a", str(tmp_path / "rig.csv"), "--params", "R0,h_end_air",
+    assert main(["calibrate", str(tmp_path / "rig.csv"), "--params", "R0,h_end_air",
                  "--out", str(out), "--json", str(tmp_path / "fit.json")]) == 0
     assert "95 % CI" in capsys.readouterr().out
     document = yaml.safe_load(out.read_text())
     assert document["parameters"]["R0"]["provenance"] == "fitted"
-    assert main(["compare", str(out), str(tmp_path / "rig.csv")]) == 0
+    assert main(["compare", "--model", str(out), str(tmp_path / "rig.csv")]) == 0

@@ -22,7 +22,7 @@ def test_simulate_runs_on_every_shipped_scenario(scenario, tmp_path, capsys):
 
 
 def test_simulate_linear_variant(tmp_path):
-    assert main(["simulate", "step_rated", "--out", str(tmp_path / "s.csv"), "--variant", "linear"]) == 0
+    assert main(["simulate", "step_rated", "--out", str(tmp_path / "s.csv"), "--model", "genco_rf201a:linear"]) == 0
 
 
 def test_describe_prints_formulas_and_provenance(capsys):
@@ -46,7 +46,7 @@ BAD = [
     (["simulate", "step_rated", "--out", "x.csv", "--param", "h_end_air=abc"], "h_end_air"),
     (["simulate", "step_rated", "--out", "x.csv", "--param", "m_dot_fan=-0.02"], "m_dot_fan"),
     (["simulate", "step_rated", "--out", "x.csv", "--param", "no_such=1"], "no_such"),
-    (["simulate", "step_rated", "--out", "x.csv", "--variant", "quadratic"], "--variant"),
+    (["simulate", "step_rated", "--out", "x.csv", "--model", "genco_rf201a:quadratic"], "--model"),
 ]
 
 
@@ -72,9 +72,18 @@ def test_bad_scenarios_name_the_field(document, named, tmp_path, capsys):
     assert named in err and "Traceback" not in err
 
 
-@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "synth", "estimate", "sysid",
+@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "fmu", "cortex-m4", "synth", "estimate", "sysid",
                                      "compare-models", "compare", "calibrate", "diagnose", "plan", "fly"])
 def test_every_command_documents_itself(command, capsys):
     with pytest.raises(SystemExit) as stopped:
         main([command, "--help"])
     assert stopped.value.code == 0 and "usage: genthermal" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "synth", "estimate",
+                                     "compare-models", "compare", "calibrate", "diagnose"])
+def test_every_model_command_names_the_model_one_way(command, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = capsys.readouterr().out
+    assert "--model NAME|FILE" in text and "--machine" not in text and "--variant" not in text

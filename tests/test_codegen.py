@@ -285,7 +285,8 @@ def test_cli_codegen_writes_sources_library_and_example(libraries, tmp_path, cap
                  "example_mission.c", "Makefile", "ABI.md"):
         assert (tmp_path / name).is_file() and f"wrote {name}" in out
     header = (tmp_path / "gt.h").read_text()
-    for entry in ("gt_kalman_update", "gt_predict"):  # the filter of the design model comes along
+    # the EKF of the model and the linear filter of its design model come along
+    for entry in ("gt_kalman_update", "gt_predict", "gt_ekf_update", "gt_ekf_predict"):
         assert f"int {entry}(" in header and f"extra entry point {entry}" in out
     library = next(tmp_path.glob("libgt.*"))
     loaded = CompiledModel(library, libraries["nonlinear"][0])

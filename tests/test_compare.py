@@ -88,7 +88,7 @@ def test_bad_model_files_name_the_field(text, field, tmp_path):
 
 def test_cli_compare_writes_report_and_json(healthy, tmp_path, capsys):
     healthy.data.to_csv(tmp_path / "data.csv", index=False)
-    assert main(["compare", "genco_rf201a", str(tmp_path / "data.csv"), "--report", str(tmp_path / "r"),
+    assert main(["compare", str(tmp_path / "data.csv"), "--report", str(tmp_path / "r"),
                  "--json", str(tmp_path / "m.json")]) == 0
     assert "T_winding: RMSE" in capsys.readouterr().out
     assert json.loads((tmp_path / "m.json").read_text())["overall"]["T_iron"]["n"] == len(healthy.data)

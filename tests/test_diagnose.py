@@ -18,6 +18,7 @@ from genthermal.cli import main
 from genthermal.diagnose.compare import compare
 from genthermal.diagnose.discover import diagnose
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
+from genthermal.model_file import load_model
 from genthermal.synth import THESIS_NOISE_VARIANCE_K2
 
 DT_S = 60.0
@@ -78,10 +79,17 @@ def test_baseline_calibration_absorbs_a_different_healthy_machine(plant_model, t
     healthy.data.to_csv(tmp_path / "healthy.csv", index=False)
     faulty.data.to_csv(tmp_path / "faulty.csv", index=False)
     out = tmp_path / "diagnosis.json"
-    assert main(["diagnose", "genco_rf201a", str(tmp_path / "faulty.csv"), "--baseline",
-                 str(tmp_path / "healthy.csv"), "--json", str(out), "--report", str(tmp_path / "report")]) == 0
+    assert main(["diagnose", "--model", "genco_rf201a", str(tmp_path / "faulty.csv"), "--baseline",
+                 str(tmp_path / "healthy.csv"), "--json", str(out), "--report", str(tmp_path / "report"),
+                 "--out", str(tmp_path / "diagnosed.yaml")]) == 0
     document = json.loads(out.read_text())
     assert document["verdict"] == "winding_insulation_degradation"
+    # the model file round-trips, onset included: loaded again it scores what diagnose reported
+    diagnosed = load_model(tmp_path / "diagnosed.yaml")
+    assert [name for name, _ in diagnosed.spec.onsets] == ["winding_insulation_degradation"]
+    rmse = compare(diagnosed, faulty.data).rmse()
+    assert abs(rmse - document["rmse_final"]) <= 0.1 * document["rmse_final"]
+    assert compare(diagnosed.with_onsets({}), faulty.data).rmse() > 2 * rmse  # the effect from t = 0 is wrong
     # calibrated to the noise floor of the healthy record (its own machine does no better)
     floor = compare(machine, healthy.data).rmse()
     assert document["baseline_calibration"]["rmse_after"] <= 1.02 * floor
@@ -89,11 +97,11 @@ def test_baseline_calibration_absorbs_a_different_healthy_machine(plant_model, t
 
 
 @pytest.mark.parametrize("argv, field", [
-    (["diagnose", "genco_rf201x", "DATA"], "model"),
-    (["diagnose", "genco_rf201a", "MISSING_COLUMN"], "column"),
-    (["diagnose", "genco_rf201a", "DATA", "--dt", "-5"], "--dt"),
-    (["calibrate", "genco_rf201a", "DATA", "--params", "k_cr,h_end_ari"], "--params"),
-    (["compare", "genco_rf201a", "NO_SUCH_FILE"], "no_such_file.csv"),
+    (["diagnose", "--model", "genco_rf201x", "DATA"], "--model"),
+    (["diagnose", "MISSING_COLUMN"], "column"),
+    (["diagnose", "DATA", "--dt", "-5"], "--dt"),
+    (["calibrate", "DATA", "--model", "genco_rf201a", "--params", "k_cr,h_end_ari"], "--params"),
+    (["compare", "NO_SUCH_FILE"], "no_such_file.csv"),
 ])
 def test_bad_inputs_exit_2_naming_the_field(argv, field, tmp_path, capsys, plant_model):
     data = _case(None, plant_model, seed=1).data

@@ -1,25 +1,33 @@
-"""Arguments and helpers shared by the sub-commands that build a model."""
+"""Arguments and helpers shared by the sub-commands that build a model.
+
+Every command that uses a model names it the same way: ``--model NAME|FILE`` (a built-in machine,
+optionally with its variant, ``genco_rf201a`` or ``genco_rf201a:linear``, or a model file written
+by ``calibrate --out`` / ``diagnose --out``; :func:`genthermal.model_file.load_model`), and
+``--param NAME=VALUE`` overrides parameters on top of it (to make a mismatched plant for ``synth``
+or a what-if for ``simulate``; provenance ``assumed``).
+"""
 
 from __future__ import annotations
 
 import argparse
 import math
 
-from ..design import linear_design_model
 from ..errors import InputError
-from ..machines import MACHINES, build_model
+from ..machines import MACHINES
 from ..model import ThermalModel
+from ..model_file import load_model
 
-VARIANTS = ("nonlinear", "linear")
+DEFAULT_MODEL = "genco_rf201a"
 
 
-def add_model_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``--machine``, ``--variant`` and ``--param NAME=VALUE`` to ``parser``."""
-    parser.add_argument("--machine", default="genco_rf201a", help=f"built-in machine ({', '.join(MACHINES)})")
-    parser.add_argument("--variant", default="nonlinear", help="nonlinear (simulation model) or linear "
-                        "(design model, thesis 5.2)")
+def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model") -> None:
+    """Add ``--model NAME|FILE`` and ``--param NAME=VALUE`` to ``parser``."""
+    builtin = ", ".join(f"{m}, {m}:linear" for m in MACHINES)
+    parser.add_argument("--model", default=DEFAULT_MODEL, metavar="NAME|FILE",
+                        help=f"{what}: a built-in model ({builtin}) or a YAML model file written by "
+                        f"calibrate --out or diagnose --out (default {DEFAULT_MODEL})")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="override a model parameter (SI units), e.g. --param h_end_air=15; repeatable")
+                        help="override a parameter of the model (SI units), e.g. --param h_end_air=15; repeatable")
 
 
 def parse_assignments(items: list[str], option: str = "--param") -> dict[str, float]:
@@ -36,15 +44,28 @@ def parse_assignments(items: list[str], option: str = "--param") -> dict[str, fl
     return values
 
 
-def model_from_args(args: argparse.Namespace) -> ThermalModel:
-    """Build the model the command-line arguments describe (parameters checked when built)."""
-    if args.variant not in VARIANTS:
-        raise InputError("--variant", args.variant, f"must be one of {', '.join(VARIANTS)}")
-    model = build_model(args.machine)
+def model_from_args(args: argparse.Namespace, source: str = "set on the command line") -> ThermalModel:
+    """Load ``--model`` and apply the ``--param`` overrides (checked for physical values).
+
+    Raises
+    ------
+    InputError
+        Naming ``--model`` for an unknown name or a bad model file, ``--param NAME`` for a bad
+        override.
+    """
+    try:
+        model = load_model(args.model)
+    except InputError as exc:
+        if exc.field == "model":
+            raise InputError("--model", exc.value, exc.reason) from None
+        raise InputError(f"--model {args.model}: {exc.field}", exc.value, exc.reason) from None
     overrides = parse_assignments(args.param)
+    unknown = [name for name in overrides if name not in model.parameters]
+    if unknown:
+        raise InputError(f"--param {unknown[0]}", unknown[0], f"not a parameter of {model.name}")
     if overrides:
-        model = model.with_parameters(provenance="assumed", source="set on the command line", **overrides)
-    return linear_design_model(model) if args.variant == "linear" else model
+        model = model.with_parameters(provenance="assumed", source=source, **overrides)
+    return model
 
 
 def positive_float(option: str, text: str) -> float:

@@ -1,10 +1,11 @@
-"""``genthermal calibrate MODEL DATA.csv --params k_cr,h_end_air --out model.yaml``."""
+"""``genthermal calibrate DATA.csv [--model NAME|FILE] --params k_cr,h_end_air --out model.yaml``."""
 
 from __future__ import annotations
 
-from ..model_file import load_model, save_model
+from ..model_file import save_model
 from ..outputs import report_json
 from ..progress import working
+from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
@@ -26,7 +27,7 @@ def run(args) -> int:
     """Calibrate, print the table and warnings, write the model file."""
     from ..diagnose.calibrate import calibrate, check_parameter_names
 
-    model = load_model(args.model)
+    model = model_from_args(args)
     names = check_parameter_names(model, args.params.split(","), "--params")
     data = fitting_data(args.data, model, args)
     with working("calibrate"):

@@ -1,4 +1,4 @@
-"""``genthermal codegen --out DIR [--variant nonlinear|linear] [--dt 10]``: C code of the model.
+"""``genthermal codegen --out DIR [--model NAME|FILE] [--dt 10]``: C code of the model.
 
 Writes the CasADi-generated sources, their header, the ABI layer (``gt.c``, ``gt.h``), the
 example program with its Makefile and ``ABI.md`` into DIR, then compiles ``libgt.so`` there. The
@@ -15,6 +15,7 @@ from ..ccompile import compile_library
 from ..codegen import generate_c
 from ..design import linear_design_model
 from ..errors import InputError
+from ..estimation.ekf import embedded_functions as ekf_functions
 from ..estimation.kalman import embedded_functions
 from ..resources import TEMPLATE_DIR, shipped_file
 from ._common import add_model_arguments, model_from_args, positive_float
@@ -35,10 +36,12 @@ def register(subparsers) -> None:
     parser.add_argument("--out", required=True, help="directory to write (created)")
     parser.add_argument("--dt", default="10", help="step of gt_step and gt_simulate in s (default 10)")
     parser.add_argument("--no-kalman", dest="kalman", action="store_false",
-                        help="leave out the Kalman filter update and n-step prediction (on the linear "
-                        "design model of the same machine), included by default")
+                        help="leave out the filters: the extended Kalman filter on the model (gt_ekf_update, "
+                        "gt_ekf_predict) and the thesis Kalman filter on its linear design model "
+                        "(gt_kalman_update, gt_predict), included by default")
     parser.add_argument("--predict-steps", default="180",
-                        help="horizon of <prefix>_predict in steps (default 180: 30 min at 10 s)")
+                        help="horizon of <prefix>_predict and <prefix>_ekf_predict in steps (default 180: 30 min "
+                        "at 10 s)")
     add_model_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -55,7 +58,8 @@ def run(args) -> int:
             raise InputError("--predict-steps", args.predict_steps, f"at most {MAX_PREDICT_STEPS} steps (the "
                              "generated code grows with the horizon); predict further by calling it again")
         design = model if model.is_affine else linear_design_model(model)
-        extra = embedded_functions(design, dt_s=dt, predict_steps=steps)
+        extra = {**embedded_functions(design, dt_s=dt, predict_steps=steps),
+                 **ekf_functions(model, dt_s=dt, predict_steps=steps)}
     generated = generate_c(model, out, dt_s=dt, extra_functions=extra)
     companions = [Path(shutil.copyfile(shipped_file(TEMPLATE_DIR / name), out / name)) for name in COMPANION_FILES]
     step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"

@@ -1,16 +1,14 @@
-"""``genthermal compare MODEL DATA.csv [--report DIR] [--json FILE] [--dt S]``."""
+"""``genthermal compare DATA.csv [--model NAME|FILE] [--report DIR] [--json FILE] [--dt S]``."""
 
 from __future__ import annotations
 
-from ..model_file import load_model
 from ..outputs import report_json
-from ._common import positive_float
+from ._common import add_model_arguments, model_from_args, positive_float
 
 
 def add_model_and_data_arguments(parser) -> None:
-    """``MODEL`` (built-in name or model file), ``DATA`` (CSV) and ``--dt``."""
-    parser.add_argument("model", metavar="MODEL",
-                        help="genco_rf201a, genco_rf201a:linear or a YAML model file (genthermal calibrate --out)")
+    """``--model`` (built-in name or model file), ``DATA`` (CSV) and ``--dt``."""
+    add_model_arguments(parser)
     parser.add_argument("data", metavar="DATA", help="measurements CSV (time_s, I_u, I_v, I_w, I_exc, T_inlet, "
                         "T_ambient, T_winding_u, T_winding_v, T_winding_w, T_iron)")
     parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step)")
@@ -39,7 +37,7 @@ def fitting_data(path: str, model, args):
 def register(subparsers) -> None:
     """Add the ``compare`` sub-command."""
     parser = subparsers.add_parser("compare", help="compare a model with measurements",
-                                   description="Simulate MODEL on the measured inputs of DATA from the measured "
+                                   description="Simulate the model (--model) on the measured inputs of DATA from the measured "
                                    "initial temperatures; report RMSE, MAE, max error, bias and R² per sensor, "
                                    "split by load band, temperature band, heating/cooling and hour, with plots.")
     add_model_and_data_arguments(parser)
@@ -52,7 +50,7 @@ def run(args) -> int:
     """Compare and print the per-sensor metrics."""
     from ..diagnose.compare import compare
 
-    model = load_model(args.model)
+    model = model_from_args(args)
     comparison = compare(model, args.data, data_step(args))
     print(f"{model.name} on {comparison.source}: {comparison.metrics['samples']} samples")
     total = comparison.metrics["samples"]

@@ -3,10 +3,11 @@
 
 from __future__ import annotations
 
+from ..errors import InputError
 from ..estimation.comparison import compare_design_models
 from ..measurements import load_measurements
 from ..outputs import report_json
-from ._common import positive_float
+from ._common import add_model_arguments, model_from_args, positive_float
 
 
 def register(subparsers) -> None:
@@ -18,6 +19,7 @@ def register(subparsers) -> None:
     parser.add_argument("train", help="training data CSV (for the ARX models)")
     parser.add_argument("validation", help="validation data CSV (all models are scored on it)")
     parser.add_argument("--json", metavar="OUT.json", help="write the table as JSON")
+    add_model_arguments(parser, what="the nonlinear physics model (its linear design model is derived from it)")
     parser.add_argument("--dt", default="10", help="sample time in s the data are resampled to (default 10)")
     parser.set_defaults(func=run)
 
@@ -26,7 +28,10 @@ def run(args) -> int:
     """Compare the models, print the table and write the JSON."""
     dt = positive_float("--dt", args.dt)
     train, validation = load_measurements(args.train), load_measurements(args.validation)
-    table = compare_design_models(train, validation, dt_s=dt)
+    plant = model_from_args(args)
+    if plant.is_affine:
+        raise InputError("--model", args.model, "give a nonlinear model; its linear design model is compared with it")
+    table = compare_design_models(train, validation, plant=plant, dt_s=dt)
     print(f"design models on {args.validation} (ARX fitted on {args.train}), open loop:")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     if args.json:

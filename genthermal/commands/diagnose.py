@@ -1,10 +1,11 @@
-"""``genthermal diagnose MODEL DATA.csv [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
+"""``genthermal diagnose DATA.csv [--model NAME|FILE] [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
 
 from __future__ import annotations
 
-from ..model_file import load_model, save_model
+from ..model_file import save_model
 from ..outputs import report_json
 from ..progress import say, working
+from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
@@ -28,7 +29,7 @@ def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
     from ..diagnose.discover import diagnose
 
-    model = load_model(args.model)
+    model = model_from_args(args)
     data = fitting_data(args.data, model, args)
     baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
     with working("diagnose"):

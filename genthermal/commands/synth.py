@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from ..machines import build_model
 from ..mission import load_mission
 from ..outputs import write_csv
 from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
-from ._common import non_negative_float, parse_assignments, positive_float
+from ._common import add_model_arguments, model_from_args, non_negative_float, parse_assignments, positive_float
 
 
 #: Largest sensor noise variance accepted, K² (a 10 K standard deviation: no PT100 is that bad).
@@ -40,9 +39,7 @@ def register(subparsers) -> None:
                         help="noise variance of the iron and outlet sensors, K² (default 0.013)")
     parser.add_argument("--current-noise", default=str(DEFAULT_CURRENT_NOISE), metavar="REL",
                         help="relative standard deviation of the measured currents (default 0.01)")
-    parser.add_argument("--machine", default="genco_rf201a", help="built-in machine (default genco_rf201a)")
-    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="plant parameter override (SI units), e.g. --param h_end_air=13; repeatable")
+    add_model_arguments(parser, what="the plant")
     parser.add_argument("--generator", type=int, default=1,
                         help="which generator of a fault scenario to record (1-based, default 1)")
     parser.set_defaults(func=run)
@@ -63,16 +60,14 @@ def run(args) -> int:
                              MAX_CURRENT_NOISE, "(relative)")
     overrides = parse_assignments(args.param)
     mission = load_mission(args.scenario)
-    plant = build_model(args.machine)
-    if overrides:
-        plant = plant.with_parameters(provenance="assumed", source="synthetic plant, set on the command line",
-                                      **overrides)
+    plant = model_from_args(args, source="synthetic plant, set on the command line")
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
     frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
                        switches=switches)
     out = write_csv(frame, args.out, float_format="%.5f")
-    changed = ", ".join(f"{name}={value:g}" for name, value in overrides.items()) or "default parameters"
-    print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} ({changed}), seed {seed}")
+    changed = "".join(f", {name}={value:g}" for name, value in overrides.items())
+    print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} (--model {args.model}{changed}), "
+          f"seed {seed}")
     if fault_text:
         print(f"faults of generator {args.generator}: {fault_text}")
     print(f"noise variances: winding {noise[0]:g} K² per sensor, iron {noise[1]:g} K², currents "

@@ -247,9 +247,12 @@ def compare(model: ThermalModel, data, dt_s: float | None = None) -> Comparison:
     -------
     Comparison
     """
+    from ..onsets import onset_switches
+
     series = measured_series(data, dt_s, model.output_names)
-    coefficients = initial_coefficients(model, series)
-    result = simulate(model, series.inputs, x0=initial_state(model, series, coefficients))
+    first_model, _ = onset_switches(model)
+    coefficients = initial_coefficients(first_model, series)
+    result = simulate(model, series.inputs, x0=initial_state(first_model, series, coefficients))
     frame = series.inputs.copy()
     for i, name in enumerate(model.output_names):
         frame[f"{name}_measured"] = series.outputs[i]

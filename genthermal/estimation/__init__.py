@@ -2,4 +2,7 @@
 
 :mod:`genthermal.estimation.arx` identifies ARX models of the winding and iron temperatures from
 measurements (thesis 5.3); :mod:`genthermal.estimation.arx_search` chooses their structure and input.
+:mod:`genthermal.estimation.kalman` is the thesis's linear Kalman filter on the design model (6.2),
+:mod:`genthermal.estimation.ekf` the extended Kalman filter on any model with disturbance heat
+flows, and :mod:`genthermal.estimation.prediction` the n-step prediction study of either (6.3).
 """

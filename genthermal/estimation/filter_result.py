@@ -20,7 +20,7 @@ class FilterResult:
     Attributes
     ----------
     model : ThermalModel
-        The design model filtered.
+        The model filtered (the linear design model for the Kalman filter, any model for the EKF).
     time_s : numpy.ndarray
         Sample times, s.
     inputs : numpy.ndarray
@@ -40,6 +40,10 @@ class FilterResult:
         Output map :math:`y = Cx + e`.
     steady_state : bool
         True when the constant steady-state gain was used.
+    disturbances : numpy.ndarray
+        Filtered disturbance states, W (n × n_disturbances; no columns for the linear filter).
+    disturbance_names : tuple of str
+        Their names (``q_<node>``: unknown heat flow into that node).
     """
 
     model: ThermalModel
@@ -53,6 +57,14 @@ class FilterResult:
     C: np.ndarray
     e: np.ndarray
     steady_state: bool
+    disturbances: np.ndarray | None = None
+    disturbance_names: tuple = ()
+
+    def filter_state(self, k: int) -> np.ndarray:
+        """The filter's whole state after the update at sample ``k``: nodes (°C) then disturbances (W)."""
+        if self.disturbances is None:
+            return self.states[k]
+        return np.concatenate([self.states[k], self.disturbances[k]])
 
     @property
     def output_names(self) -> list[str]:
@@ -93,6 +105,8 @@ class FilterResult:
         for i, name in enumerate(self.output_names):
             frame[f"measured_{name}"] = self.measured[:, i]
             frame[f"innovation_{name}"] = self.innovations[:, i]
+        for j, name in enumerate(self.disturbance_names):
+            frame[f"{name}_W"] = self.disturbances[:, j]
         return frame
 
     def plot(self, path=None):
@@ -109,7 +123,8 @@ class FilterResult:
             if node not in sensor_nodes:
                 ax_t.plot(minutes, self.states[:, j], lw=0.8, ls="--", label=f"{node} (estimated)")
         mode = "steady-state gain" if self.steady_state else "time-varying gain"
-        ax_t.set(ylabel="temperature [°C]", title=f"Kalman filter on {self.model.name} ({mode})")
+        kind = "extended Kalman filter" if self.disturbance_names else "Kalman filter"
+        ax_t.set(ylabel="temperature [°C]", title=f"{kind} on {self.model.name} ({mode})")
         ax_t.legend(fontsize=7, ncol=2)
         ax_e.set(xlabel="time [min]", ylabel="filtered − measured [K]")
         ax_e.legend(fontsize=7)

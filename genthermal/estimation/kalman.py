@@ -57,8 +57,7 @@ import scipy.signal
 from ..errors import InputError
 from ..losses import INPUT_NAMES
 from ..model import ThermalModel
-from ..simulate import input_matrix, uniform_step
-from .filter_result import FilterResult
+from .filter_base import RecursiveFilter
 
 #: Measurement noise covariance of thesis eq. 6.10, K² (stator winding, stator iron).
 THESIS_R_K2 = (0.0082, 0.013)
@@ -155,7 +154,7 @@ class Update:
     innovation: np.ndarray
 
 
-class KalmanFilter:
+class KalmanFilter(RecursiveFilter):
     """Kalman filter on the discrete design model (module docstring for the equations).
 
     Parameters
@@ -230,61 +229,20 @@ class KalmanFilter:
         x_next = self.A @ x + self.B @ np.asarray(u, dtype=float) + self.c
         return x_next, None if P is None else self.A @ P @ self.A.T + self.Q
 
-    # --- whole records ---------------------------------------------------------------------
-    def run(self, inputs_df: pd.DataFrame, sensors_df: pd.DataFrame, x0=None,
-            steady_state: bool = False) -> "FilterResult":
-        """Filter a record.
+    # --- starting and forecasting ---------------------------------------------------------
+    def initial_state(self, y0, u0) -> np.ndarray:
+        """:func:`initial_state_from_measurements` of the first sample."""
+        return initial_state_from_measurements(self.model, y0, u0)
 
-        Parameters
-        ----------
-        inputs_df : pandas.DataFrame
-            ``time_s`` (uniform, step ``dt_s``) and the model inputs.
-        sensors_df : pandas.DataFrame
-            One row per input row, a column per output name (°C, NaN = no measurement), e.g.
-            :attr:`genthermal.measurements.MeasurementData.sensors`.
-        x0 : array_like, optional
-            Initial state estimate, °C; default :func:`initial_state_from_measurements` of the
-            first row.
-        steady_state : bool
-            Use the constant gain :meth:`steady_state_gain` instead of the time-varying one.
-        """
-        time_s, U, Y = self._record(inputs_df, sensors_df)
-        n, nx = len(time_s), len(self.state_names)
-        x = initial_state_from_measurements(self.model, Y[0], U[:, 0]) if x0 is None else \
-            np.broadcast_to(np.asarray(x0, dtype=float), (nx,)).copy()
-        P = None if steady_state else self.P0
-        X_pred, X, gains, innovations = np.empty((n, nx)), np.empty((n, nx)), [], np.empty(Y.shape)
-        for k in range(n):
-            X_pred[k] = x
-            step = self.update(x, P, Y[k])
-            X[k], innovations[k] = step.x, step.innovation
-            gains.append(step.gain)
-            x, P = self.predict(step.x, step.P, U[:, k])
-        return FilterResult(self.model, time_s, U, X, X_pred, Y, innovations, np.array(gains),
-                            self.C, self.e, bool(steady_state))
-
-    def _record(self, inputs_df, sensors_df):
-        time_s = inputs_df["time_s"].to_numpy(dtype=float) if "time_s" in inputs_df else None
-        U = input_matrix(inputs_df)
-        step = uniform_step(time_s, "inputs.time_s")
-        if abs(step - self.dt_s) > 1e-6 * self.dt_s:
-            raise InputError("inputs.time_s", f"step {step:g} s", f"the filter runs at {self.dt_s:g} s; "
-                             "resample the data (genthermal.measurements.resample)")
-        self._check_sensor_columns(sensors_df)
-        if len(sensors_df) != len(time_s):
-            raise InputError("sensors", f"{len(sensors_df)} rows", f"the inputs have {len(time_s)} rows")
-        return time_s, U, sensors_df[self.output_names].to_numpy(dtype=float)
-
-    def estimate_measurement_noise(self, sensors_df: pd.DataFrame, window_samples: int = 7) -> np.ndarray:
-        """Measurement noise covariance R (K², output order) estimated from a record by
-        :func:`measurement_noise_covariance`; pass it as ``KalmanFilter(..., R=R)``."""
-        self._check_sensor_columns(sensors_df)
-        return measurement_noise_covariance(sensors_df[self.output_names], window_samples).to_numpy()
-
-    def _check_sensor_columns(self, sensors_df: pd.DataFrame) -> None:
-        missing = [name for name in self.output_names if name not in sensors_df.columns]
-        if missing:
-            raise InputError("sensors", missing, f"missing columns; need {', '.join(self.output_names)}")
+    def forecast(self, x_start, U: np.ndarray) -> np.ndarray:
+        """Outputs (°C, n × n_outputs) of the design model run open loop from ``x_start`` at sample
+        0 with inputs ``U`` (n_inputs × n): row k is :math:`C x_k + e`."""
+        x = np.asarray(x_start, dtype=float)
+        Y = np.empty((U.shape[1], len(self.output_names)))
+        for k in range(U.shape[1]):
+            Y[k] = self.C @ x + self.e
+            x, _ = self.predict(x, None, U[:, k])
+        return Y
 
     # --- CasADi functions for code generation ----------------------------------------------
     def update_function(self) -> ca.Function:

@@ -1,0 +1,157 @@
+"""``modelDescription.xml`` of an FMI 2.0 FMU of a ThermalModel (model exchange and co-simulation).
+
+Variables, in value-reference order (the index in ``ModelVariables`` is the value reference + 1):
+
+* the states, one per capacitive node (``x_<node>``, °C, local, start value exact),
+* their derivatives (``der(x_<node>)``, K/s),
+* the inputs as the model names them (``I_u`` ... ``T_ambient``, A and °C),
+* the sensor outputs (``T_winding``, ``T_iron``, °C),
+* every parameter, tunable, its value as start value, its unit, and its provenance in the
+  description.
+
+Units are declared with their SI base-unit exponents; :data:`UNITS` lists those genthermal's
+parameters use. A unit outside it cannot be declared and is refused (:class:`FmuError`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import xml.etree.ElementTree as ET
+
+from ..codegen import CodegenError
+from ..model import ThermalModel
+
+#: FMI unit name -> SI base-unit exponents (and for degC the offset to kelvin).
+UNITS = {
+    "1": {},
+    "m": {"m": 1},
+    "A": {"A": 1},
+    "A^2": {"A": 2},
+    "ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "W": {"kg": 1, "m": 2, "s": -3},
+    "W/(m K)": {"kg": 1, "m": 1, "s": -3, "K": -1},
+    "W/(m^2 K)": {"kg": 1, "s": -3, "K": -1},
+    "J/(kg K)": {"m": 2, "s": -2, "K": -1},
+    "kg/m^3": {"kg": 1, "m": -3},
+    "kg/s": {"kg": 1, "s": -1},
+    "1/K": {"K": -1},
+    "K/s": {"K": 1, "s": -1},
+    "degC": {"K": 1, "offset": 273.15},
+}
+#: Start value of every state, °C (a cold machine at 20 °C); set them before initialisation.
+STATE_START_C = 20.0
+#: Start values of the inputs by name (A, °C).
+INPUT_START = {"T_inlet": 20.0, "T_ambient": 20.0}
+
+
+class FmuError(CodegenError):
+    """The model has something FMI 2.0 (or this export) cannot express."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Variable:
+    """One scalar variable of the FMU: its value reference is its position in the layout."""
+
+    name: str
+    causality: str
+    variability: str
+    unit: str
+    description: str
+    start: float | None = None
+    initial: str | None = None
+    derivative_of: int | None = None
+
+
+def input_unit(name: str) -> str:
+    """Unit of a model input: A for currents (``I_*``), °C for temperatures (``T_*``)."""
+    return "A" if name.startswith("I_") else "degC"
+
+
+def variables(model: ThermalModel) -> list[Variable]:
+    """Every variable of the FMU of ``model``, in value-reference order.
+
+    Raises
+    ------
+    FmuError
+        A parameter whose unit is not in :data:`UNITS`, or two variables with one name.
+    """
+    states = [Variable(f"x_{n}", "local", "continuous", "degC", f"temperature of node {n}",
+                       STATE_START_C, "exact") for n in model.state_names]
+    derivatives = [Variable(f"der(x_{n})", "local", "continuous", "K/s", f"d/dt of the temperature of node {n}",
+                            derivative_of=i + 1) for i, n in enumerate(model.state_names)]
+    inputs = [Variable(n, "input", "continuous", input_unit(n), "RMS current" if n.startswith("I_") else
+                       "temperature", INPUT_START.get(n, 0.0)) for n in model.input_names]
+    outputs = [Variable(n, "output", "continuous", "degC", f"sensor temperature of node {model.spec.sensors[n]}")
+               for n in model.output_names]
+    parameters = []
+    for name in model.parameter_names:
+        parameter = model.parameters[name]
+        if parameter.unit not in UNITS:
+            raise FmuError(f"parameter {name} has unit {parameter.unit!r}, which this FMU export cannot declare "
+                           f"in FMI units (known: {', '.join(UNITS)})")
+        parameters.append(Variable(name, "parameter", "tunable", parameter.unit,
+                                   f"{parameter.provenance}: {parameter.source}", parameter.value, "exact"))
+    every = states + derivatives + inputs + outputs + parameters
+    names = [v.name for v in every]
+    clashes = sorted({n for n in names if names.count(n) > 1})
+    if clashes:
+        raise FmuError(f"FMI variable names must be unique; {model.name} has {', '.join(clashes)} twice")
+    return every
+
+
+def description_xml(model: ThermalModel, model_identifier: str, guid: str, source_files, generation_tool: str) -> str:
+    """The XML text of ``modelDescription.xml``.
+
+    Parameters
+    ----------
+    model : ThermalModel
+    model_identifier : str
+        Name of the shared library in ``binaries/<platform>/`` (a C identifier).
+    guid : str
+        Identifies this FMU; the binary refuses another.
+    source_files : sequence of str
+        Files in ``sources/`` that build the FMU.
+    generation_tool : str
+        E.g. ``genthermal 0.1.0``.
+    """
+    every = variables(model)
+    root = ET.Element("fmiModelDescription", {
+        "fmiVersion": "2.0", "modelName": model.name, "guid": guid, "generationTool": generation_tool,
+        "description": f"lumped-parameter thermal network of {model.spec.name}, {model.spec.variant} model",
+        "variableNamingConvention": "flat", "numberOfEventIndicators": "0"})
+    for kind, extra in (("ModelExchange", {"completedIntegratorStepNotNeeded": "true"}),
+                        ("CoSimulation", {"canHandleVariableCommunicationStepSize": "true"})):
+        element = ET.SubElement(root, kind, {"modelIdentifier": model_identifier,
+                                             "providesDirectionalDerivative": "true", **extra})
+        files = ET.SubElement(element, "SourceFiles")
+        for name in source_files:
+            if name.endswith(".c"):
+                ET.SubElement(files, "File", {"name": name})
+    units = ET.SubElement(root, "UnitDefinitions")
+    for name in sorted({v.unit for v in every}):
+        base = {k: str(v) for k, v in UNITS[name].items()}
+        ET.SubElement(ET.SubElement(units, "Unit", {"name": name}), "BaseUnit", base)
+    ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": "14400", "tolerance": "1e-8"})
+    listed = ET.SubElement(root, "ModelVariables")
+    for reference, variable in enumerate(every):
+        attributes = {"name": variable.name, "valueReference": str(reference), "description": variable.description,
+                      "causality": variable.causality, "variability": variable.variability}
+        if variable.initial:
+            attributes["initial"] = variable.initial
+        scalar = ET.SubElement(listed, "ScalarVariable", attributes)
+        real = {"unit": variable.unit}
+        if variable.start is not None:
+            real["start"] = repr(float(variable.start))
+        if variable.derivative_of is not None:
+            real["derivative"] = str(variable.derivative_of)
+        ET.SubElement(scalar, "Real", real)
+    structure = ET.SubElement(root, "ModelStructure")
+    indices = {kind: [str(i + 1) for i, v in enumerate(every) if test(v)] for kind, test in (
+        ("outputs", lambda v: v.causality == "output"), ("derivatives", lambda v: v.derivative_of is not None))}
+    for tag, kinds in (("Outputs", ["outputs"]), ("Derivatives", ["derivatives"]),
+                       ("InitialUnknowns", ["outputs", "derivatives"])):
+        section = ET.SubElement(structure, tag)
+        for index in sorted((i for kind in kinds for i in indices[kind]), key=int):
+            ET.SubElement(section, "Unknown", {"index": index})
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

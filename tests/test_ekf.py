@@ -1,0 +1,107 @@
+"""Extended Kalman filter with disturbance heat flows, against plants that are not its model."""
+
+import numpy as np
+import pytest
+
+from genthermal.errors import InputError
+from genthermal.estimation.ekf import ExtendedKalmanFilter
+from genthermal.estimation.prediction import prediction_study
+from genthermal.measurements import dataframe_to_measurements
+from genthermal.mission import load_mission
+from genthermal.model import ThermalModel
+from genthermal.synth import synthesize
+
+DT_S = 10.0
+
+
+@pytest.fixture(scope="module")
+def ekf(plant_model):
+    return ExtendedKalmanFilter(plant_model, DT_S)
+
+
+def test_transition_is_the_simulation_step_and_its_jacobian_is_exact(ekf, plant_model):
+    rng = np.random.default_rng(0)
+    step = plant_model.discretise(DT_S).step
+    u = plant_model.input_vector(6.5, 6.5, 6.5, 0.97, 25.0, 22.0)
+    z = np.concatenate([40 + 50 * rng.random(plant_model.n_states), [0.0, 0.0]])
+    z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
+    # no disturbance: exactly the step simulate() takes
+    assert np.max(np.abs(z_next.ravel()[:8] - np.asarray(step(z[:8], u)).ravel())) < 1e-12
+    z[8:] = (25.0, -10.0)
+    z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
+    for j in range(len(z)):  # central differences of the same step
+        dz = np.zeros(len(z))
+        dz[j] = 1e-3
+        column = (np.asarray(ekf.transition(z + dz, u)[0]) - np.asarray(ekf.transition(z - dz, u)[0])).ravel() / 2e-3
+        assert np.allclose(F[:, j], column, rtol=1e-6, atol=1e-9)
+    assert np.any(np.abs(F[:8, 8:]) > 0)  # the disturbances heat their nodes
+
+
+def test_predictions_are_offset_free_under_an_effect_the_model_lacks(plant_model, ekf):
+    """At constant load a missing effect is a constant model error: the disturbances absorb it,
+    so the 60-min prediction lands on the plant, while the open loop stays off."""
+    plant = plant_model.with_effect("coolant_flow_reduction", k_flow=0.7)
+    data = dataframe_to_measurements(synthesize(plant, load_mission("step_rated").to_inputs(DT_S), seed=3), "step")
+    study = prediction_study(plant_model, data, starts_min=(60,), kalman=ekf, every_min=30)
+    late = study.horizon_start_indices >= 6 * 120  # two hours in: the disturbance has settled
+    errors = study.horizon_errors["prediction"]["60"][late]
+    open_loop = study.horizon_errors["open_loop"]["60"][late]
+    assert np.max(np.abs(errors)) < 0.1 * np.min(np.abs(open_loop)) and np.min(np.abs(open_loop)) > 4.0
+    assert study.filter_result.disturbances[-1, 0] > 5.0  # heat the model does not remove from the winding
+
+
+def test_linear_design_model_and_missing_samples(design_model):
+    ekf = ExtendedKalmanFilter(design_model, DT_S)
+    data = dataframe_to_measurements(synthesize(design_model, load_mission("step_rated").to_inputs(DT_S), seed=2), "s")
+    sensors = data.sensors.copy()
+    sensors.iloc[50:80] = np.nan
+    result = ekf.run(data.frame[["time_s", *design_model.input_names]], sensors)
+    assert np.array_equal(result.states[51:80], result.predicted_states[51:80])  # prediction only
+    assert np.all(result.gains[50:80] == 0) and np.all(np.isfinite(result.states))
+    assert set(result.to_pandas().columns) >= {"q_stator_winding_W", "q_stator_iron_W"}
+
+
+def test_bad_inputs_name_the_field(plant_model, ekf):
+    with pytest.raises(InputError, match="dt_s"):
+        ExtendedKalmanFilter(plant_model, 900.0)  # cannot be discretised accurately
+    with pytest.raises(InputError, match="dt_s"):
+        ExtendedKalmanFilter(plant_model, -1.0)
+    with pytest.raises(InputError, match="disturbance_nodes"):
+        ExtendedKalmanFilter(plant_model, DT_S, disturbance_nodes=["no_such_node"])
+    with pytest.raises(InputError, match="disturbance_drift_W"):
+        ExtendedKalmanFilter(plant_model, DT_S, disturbance_drift_W=-1.0)
+    with pytest.raises(InputError, match="P"):
+        ekf.update(np.zeros(10), None, [20.0, 20.0])
+    # a model of another machine: its sensors are not in the data
+    other = ThermalModel(plant_model.network, plant_model.parameters,
+                         plant_model.spec.__class__(**{**plant_model.spec.__dict__, "sensors": {"T_winding": "stator_winding", "T_rotor": "rotor"}}))
+    data = dataframe_to_measurements(synthesize(plant_model, load_mission("step_rated").to_inputs(DT_S)), "s")
+    with pytest.raises(InputError, match="T_rotor"):
+        prediction_study(other, data, starts_min=(60,))
+    with pytest.raises(InputError, match="longest horizon"):
+        prediction_study(plant_model, data.frame.iloc[:300], starts_min=(20,))
+
+
+def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
+    from genthermal.codegen import model_library
+    from genthermal.errors import CompilerNotFoundError
+    from genthermal.estimation.ekf import embedded_functions
+
+    functions = embedded_functions(plant_model, DT_S, predict_steps=30)
+    try:
+        library = model_library(plant_model, dt_s=DT_S, prefix="gte", extra_functions=functions)
+    except CompilerNotFoundError as exc:
+        pytest.skip(str(exc))
+    z = np.concatenate([np.linspace(40.0, 90.0, 8), [12.0, -4.0]])
+    P = ekf.P0 * 0.3 + 0.01
+    u = plant_model.input_vector(6.0, 6.0, 6.0, 0.93, 22.0, 21.0)
+    y = np.array([85.0, 60.0])
+    for measured in ([1.0, 1.0], [1.0, 0.0]):  # the iron sensor missing at this sample
+        compiled = library.call("ekf_update", z, P, u, y, np.array(measured))
+        step = ekf.update(z, P, np.where(np.array(measured) == 1, y, np.nan))
+        z_next, P_next = ekf.predict(step.x, step.P, u)
+        for c_value, python in zip(compiled, (step.x, step.P, z_next, P_next)):
+            assert np.max(np.abs(np.asarray(c_value).reshape(python.shape) - python)) < 1e-9
+    U = np.tile(u[:, None], (1, 30))
+    expected = ekf.forecast(z_next, np.hstack([U, U[:, :1]]))[1:].T  # outputs after each step
+    assert np.max(np.abs(library.call("ekf_predict", z_next, U) - expected)) < 1e-9
