@@ -16,7 +16,7 @@ from genthermal.cli import build_parser, main
 
 # (case, argv with {rig} = a valid data file and {out} = a fresh output folder, text the error must contain)
 BAD_OPTIONS = [
-    ("abbreviated option", ["calibrate", "genco_rf201a", "{rig}", "--param", "R0"], "required: --params"),
+    ("abbreviated option", ["calibrate", "{rig}", "--param", "R0"], "required: --params"),
     ("abbreviated --out", ["simulate", "step_rated", "--ou", "{out}/x.csv"], "required: --out"),
     ("unknown option", ["simulate", "step_rated", "--out", "{out}/x.csv", "--speed", "2"], "unrecognized"),
     ("unknown command", ["simulat", "step_rated"], "invalid choice"),
@@ -33,7 +33,7 @@ BAD_OPTIONS = [
     ("output is a folder", ["simulate", "step_rated", "--out", "{out}"], "is a folder"),
     ("plot with a text suffix", ["simulate", "step_rated", "--out", "{out}/x.csv", "--plot", "{out}/p.txt"],
      "suffixes"),
-    ("report folder not empty", ["compare", "genco_rf201a", "{rig}", "--report", "{full}"], "not empty"),
+    ("report folder not empty", ["compare", "{rig}", "--report", "{full}"], "not empty"),
     ("codegen into a full folder", ["codegen", "--out", "{full}"], "not empty"),
     ("seed negative", ["synth", "step_rated", "--out", "{out}/x.csv", "--seed", "-1"], "--seed"),
     ("seed text", ["synth", "step_rated", "--out", "{out}/x.csv", "--seed", "abc"], "--seed"),
@@ -50,9 +50,9 @@ BAD_OPTIONS = [
     ("prediction start text", ["estimate", "{rig}", "--predict-from", "soon"], "--predict-from"),
     ("min improvement negative", ["estimate", "{rig}", "--min-improvement", "-1"], "--min-improvement"),
     ("sysid order range reversed", ["sysid", "{rig}", "{rig}", "--na", "3-1"], "--na"),
-    ("calibrate unknown parameter", ["calibrate", "genco_rf201a", "{rig}", "--params", "R9"], "R9"),
-    ("data file missing", ["compare", "genco_rf201a", "{out}/none.csv"], "none.csv"),
-    ("data file is a folder", ["compare", "genco_rf201a", "{out}"], "Is a directory"),
+    ("calibrate unknown parameter", ["calibrate", "{rig}", "--params", "R9"], "R9"),
+    ("data file missing", ["compare", "{out}/none.csv"], "none.csv"),
+    ("data file is a folder", ["compare", "{out}"], "Is a directory"),
     ("scheduler unknown", ["plan", "blockage_large", "--scheduler", "magic"], "--scheduler"),
     ("fly with a negative seed", ["fly", "blockage_large", "--seed", "-1"], "--seed"),
     ("management cycle of a millisecond", ["plan", "blockage_large", "--cycle-min", "1e-5"], "--cycle-min"),

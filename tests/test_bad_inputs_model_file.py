@@ -54,7 +54,7 @@ def test_bad_model_file_names_the_field(content, named, tmp_path, capsys):
     with pytest.raises(InputError) as caught:
         load_model(path)
     assert named in str(caught.value)
-    assert main(["compare", str(path), str(tmp_path / "no_data.csv")]) == 2
+    assert main(["compare", str(tmp_path / "no_data.csv"), "--model", str(path)]) == 2
     err = capsys.readouterr().err
     assert named in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
