@@ -67,7 +67,7 @@ DEFAULT_HEAT_NOISE_W = 30.0
 DEFAULT_INITIAL_STD_K = 3.0
 #: A measurement whose magnitude exceeds this (°C) counts as missing in the generated update; NaN
 #: and inf fail the comparison and count as missing too.
-_LARGEST_MEASUREMENT = 1e300
+_LARGEST_MEASUREMENT = 1e30  # fits single precision too (the Cortex-M build uses float)
 
 
 def output_matrices(model: ThermalModel) -> tuple[np.ndarray, np.ndarray]:
