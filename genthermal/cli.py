@@ -52,6 +52,7 @@ COMMAND_MODULES = (
     "diagnose",
     "plan",
     "fly",
+    "sweep",
 )
 EXIT_OK, EXIT_INTERNAL_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 BUG_REPORT_HINT = "this is a bug in genthermal; please report it with the command line you ran"

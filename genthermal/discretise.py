@@ -155,12 +155,12 @@ def check_step_accuracy(model: ThermalModel, dt_s: float, tolerance_K: float = S
     InputError
         Naming ``dt_s`` when it is not a positive number or the difference exceeds ``tolerance_K``.
     """
-    from .mission import excitation_current  # the mission module builds on the model
+    from .exciter import exciter_current
 
     step = model.discretise(dt_s).step
     half = model.discretise(dt_s / 2.0).step
     rated = model.spec.rated_current_A
-    u = model.input_vector(rated, rated, rated, excitation_current(rated), 20.0, 20.0)
+    u = model.input_vector(rated, rated, rated, exciter_current(rated, rated_current_A=rated), 20.0, 20.0)
     x = np.full(model.n_states, 20.0)
     difference = float(np.max(np.abs(np.asarray(step(x, u)) - np.asarray(half(half(x, u), u)))))
     if difference > tolerance_K:

@@ -86,6 +86,10 @@ class Effect:
         The residual pattern the effect explains, for diagnosis reports.
     requires : callable or None
         ``requires(model) -> str | None``: why the effect cannot apply to ``model`` (None if it can).
+    shape_parameters : tuple of EffectParameter
+        Parameters that shape the effect but do not switch it on (the exponent of a power law).
+        A diagnosis search holds them at their default (``neutral``); ``calibrate`` fits them when
+        named. ``transform`` takes their symbols after those of ``parameters``.
     """
 
     name: str
@@ -95,12 +99,18 @@ class Effect:
     transform: Callable[..., Network]
     signature: str = ""
     requires: Callable | None = None
+    shape_parameters: tuple[EffectParameter, ...] = ()
+
+    @property
+    def all_parameters(self) -> tuple[EffectParameter, ...]:
+        """The switching parameters followed by the shape parameters."""
+        return self.parameters + self.shape_parameters
 
     def unavailable_reason(self, model) -> str | None:
         """Why this effect cannot be added to ``model``, or None when it can."""
         if self.name in model.spec.effects:
             return "already applied"
-        clash = [p.name for p in self.parameters if p.name in model.parameters]
+        clash = [p.name for p in self.all_parameters if p.name in model.parameters]
         if clash:
             return f"parameter {clash[0]} already in the model"
         return self.requires(model) if self.requires else None
@@ -143,13 +153,13 @@ def apply_effect(model, effect, provenance: str = "assumed", source: str = "", *
     reason = effect.unavailable_reason(model)
     if reason:
         raise InputError("effect", effect.name, f"cannot be added to {model.name}: {reason}")
-    known = {p.name for p in effect.parameters}
+    known = {p.name for p in effect.all_parameters}
     unknown = set(values) - known
     if unknown:
         raise InputError(f"{effect.name} parameter", sorted(unknown)[0],
                          f"unknown; {effect.name} takes {', '.join(sorted(known)) or 'no parameters'}")
     new = [p.as_parameter(float(values.get(p.name, p.neutral)), effect.name, provenance, source)
-           for p in effect.parameters]
+           for p in effect.all_parameters]
     network = effect.transform(model.network, model.spec.roles, *[p.symbol for p in new])
     return model.with_network(network, model.parameters.with_parameters(*new),
                               effects=model.spec.effects + (effect.name,))
@@ -210,8 +220,14 @@ def _quadratic_copper(network, roles, weight):
     return _replace_copper(network, rewrite)
 
 
-def _flow_reduction(network, roles, k_flow):
-    return network.scale_air_streams(k_flow)
+def _flow_reduction(network, roles, k_flow, n_flow):
+    r"""Coolant flow :math:`\dot m \to k\,\dot m`; the internal convection coefficients follow
+    the flow velocity, :math:`h \to h\,k^{n}` (forced convection :math:`Nu \propto Re^{n}`:
+    n = 0.8 turbulent, Dittus-Boelter; 0.5 laminar). At :math:`k = 1` the model is unchanged for any n."""
+    symbols = {symbol.name: symbol for link in network.links for symbol in link.resistance.free_symbols}
+    convection = {symbols[name]: symbols[name] * k_flow ** n_flow
+                  for name in roles.get("internal_convection", ()) if name in symbols}
+    return network.scale_air_streams(k_flow).substitute_in_links(convection)
 
 
 def _phase_short(network, roles, R_short):
@@ -250,10 +266,14 @@ for _effect in (
            (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0),), _quadratic_copper,
            "error changes sign between low and high currents: the loss is quadratic in current",
            _needs_symbol("I2_slope", "the quadratic copper loss")),
-    Effect("coolant_flow_reduction", "fan mass flow reduced by a factor (blockage)",
-           r"\dot m \to k_{flow}\,\dot m",
+    Effect("coolant_flow_reduction",
+           "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
+           r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
            (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),), _flow_reduction,
-           "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow"),
+           "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
+           # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
+           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
+           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",
            (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3),), _phase_short,

@@ -10,6 +10,7 @@ Missions are stored as YAML under ``scenarios/`` at the top of the repository (i
     name: thesis_fig_3_2                 # required, text
     description: Example flight ...      # optional, text
     rated_current_A: 7.0                 # optional, > 0, A RMS per phase (default 7)
+    power_factor: 0.8                    # optional, (0, 1], lagging load power factor (default 0.8)
     T_inlet_C: 20.0                      # optional, -60..100 degC (default 20)
     T_ambient_C: 20.0                    # optional, -60..100 degC (default 20)
     actions:                             # required, non-empty
@@ -39,6 +40,7 @@ import yaml
 
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
+from .exciter import DEFAULT_POWER_FACTOR, exciter_current
 from .resources import SCENARIO_DIR
 from .sizes import check_grid
 
@@ -47,7 +49,6 @@ __all__ = [
     "LoadCondition",
     "Mission",
     "available_scenarios",
-    "excitation_current",
     "load_mission",
 ]
 
@@ -57,36 +58,8 @@ INPUT_COLUMNS = ("time_s", "I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
 TEMPERATURE_RANGE_C = (-60.0, 100.0)
 #: Top-level keys kept unchecked in :attr:`Mission.extras`.
 EXTRA_KEYS = ("extensions", "faults", "generators")
-#: No-load field current of the assumed exciter, A.
-EXCITATION_NO_LOAD_A = 0.45
-#: Rise of the field current per ampere of phase current of the assumed exciter, A/A.
-EXCITATION_GAIN_A_PER_A = 0.08
-
-_MISSION_KEYS = ("name", "description", "rated_current_A", "T_inlet_C", "T_ambient_C", "actions") + EXTRA_KEYS
-
-
-def excitation_current(I_phase_mean_A):
-    """Field (excitation) current needed to carry a given phase current.
-
-    Assumed, not measured: the thesis gives no field-current data, so a small brushless exciter is
-    assumed whose field current rises linearly from its no-load value,
-    ``I_exc = 0.45 A + 0.08 A/A * I_phase_mean``.
-
-    Parameters
-    ----------
-    I_phase_mean_A : float or array_like
-        Mean of the three RMS phase currents, A (>= 0).
-
-    Returns
-    -------
-    float or numpy.ndarray
-        Field current, A; same shape as the input.
-    """
-    current = np.asarray(I_phase_mean_A, dtype=float)
-    if np.any(~(current >= 0)):
-        raise InputError("I_phase_mean_A", I_phase_mean_A, "phase current must be a number >= 0 A")
-    field_current = EXCITATION_NO_LOAD_A + EXCITATION_GAIN_A_PER_A * current
-    return float(field_current) if field_current.ndim == 0 else field_current
+_MISSION_KEYS = ("name", "description", "rated_current_A", "power_factor", "T_inlet_C", "T_ambient_C",
+                 "actions") + EXTRA_KEYS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,6 +74,9 @@ class Mission:
         The actions in flight order (stored as a tuple); at least one.
     rated_current_A : float
         Rated RMS phase current, A; load percentages refer to it (thesis generator: 7 A).
+    power_factor : float
+        Lagging power factor of the load, in (0, 1]; sets the exciter current
+        (:func:`genthermal.exciter.exciter_current`). Default 0.8, the usual rating point.
     T_inlet_C : float
         Coolant inlet temperature, degC, constant over the mission.
     T_ambient_C : float
@@ -114,6 +90,7 @@ class Mission:
     name: str
     actions: tuple[Action, ...]
     rated_current_A: float = 7.0
+    power_factor: float = DEFAULT_POWER_FACTOR
     T_inlet_C: float = 20.0
     T_ambient_C: float = 20.0
     description: str = ""
@@ -136,6 +113,10 @@ class Mission:
             raise InputError("rated_current_A", self.rated_current_A,
                              "must be a positive current, A (thesis generator: 7)")
         object.__setattr__(self, "rated_current_A", rated)
+        power_factor = checked_number(self.power_factor, "power_factor", "a lagging power factor in (0, 1]")
+        if not 0.0 < power_factor <= 1.0:
+            raise InputError("power_factor", self.power_factor, "must lie in (0, 1] (lagging load power factor)")
+        object.__setattr__(self, "power_factor", power_factor)
         low, high = TEMPERATURE_RANGE_C
         for field in ("T_inlet_C", "T_ambient_C"):
             temperature = checked_number(getattr(self, field), field, "a temperature in degC")
@@ -237,7 +218,7 @@ class Mission:
         -------
         pandas.DataFrame
             Float columns ``time_s`` (s), ``I_u, I_v, I_w`` (A RMS), ``I_exc`` (A, from
-            :func:`excitation_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
+            :func:`genthermal.exciter.exciter_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
         """
         step = checked_number(dt_s, "dt_s", "a positive number of seconds")
         if step <= 0:
@@ -250,7 +231,7 @@ class Mission:
             "I_u": currents[:, 0],
             "I_v": currents[:, 1],
             "I_w": currents[:, 2],
-            "I_exc": excitation_current(currents.mean(axis=1)),
+            "I_exc": exciter_current(currents.mean(axis=1), self.power_factor, self.rated_current_A),
             "T_inlet": np.full(times.shape, self.T_inlet_C),
             "T_ambient": np.full(times.shape, self.T_ambient_C),
         }
@@ -263,6 +244,7 @@ class Mission:
             "name": self.name,
             "description": self.description,
             "rated_current_A": self.rated_current_A,
+            "power_factor": self.power_factor,
             "T_inlet_C": self.T_inlet_C,
             "T_ambient_C": self.T_ambient_C,
             "actions": [action.to_dict() for action in self.actions],
@@ -353,7 +335,8 @@ def _mission_from_document(document: Any, source: str) -> Mission:
         raise InputError("actions", entries,
                          "must be a non-empty list such as [{condition: 1, duration_min: 15}]")
     actions = tuple(Action.from_dict(entry, f"actions[{index}]") for index, entry in enumerate(entries))
-    settings = {key: document[key] for key in ("description", "rated_current_A", "T_inlet_C", "T_ambient_C")
+    settings = {key: document[key] for key in ("description", "rated_current_A", "power_factor", "T_inlet_C",
+                                               "T_ambient_C")
                 if key in document}
     extras = {key: copy.deepcopy(document[key]) for key in EXTRA_KEYS if key in document}
     return Mission(name=document["name"], actions=actions, extras=extras, **settings)

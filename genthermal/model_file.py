@@ -13,7 +13,9 @@
         source: "diagnosis on flight_12.csv"
         onset_s: 3960             # optional: the effect starts 3960 s after a record's first sample
 
-:func:`load_model` also takes a built-in name: ``genco_rf201a`` or ``genco_rf201a:linear``.
+:func:`load_model` also takes a built-in name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
+parameter set, ``genco_rf201a:chapter7`` (the calibration fitted to the thesis's chapter-7 outcomes,
+:mod:`genthermal.machines.chapter7`; a model file inside the package).
 
 An effect with ``onset_s`` is loaded with its fitted values and the onset recorded on the model
 (``spec.onsets``): :func:`genthermal.simulate.simulate` and ``compare`` hold it at its neutral
@@ -38,6 +40,8 @@ from .outputs import write_text
 from .parameters import PROVENANCES
 
 VARIANTS = ("nonlinear", "linear")
+#: Shipped parameter sets: ``machine:name`` → model file inside the package.
+PARAMETER_SETS = ("chapter7",)
 _TOP_KEYS = ("machine", "variant", "parameters", "effects")
 #: Parameters the linear design model adds; saved through the variant, not as values.
 _DESIGN_PARAMETERS = ("I2_slope", "I2_intercept", "theta_ref")
@@ -46,7 +50,7 @@ _EFFECT_KEYS = ("name", "parameters", "provenance", "source", "onset_s")
 
 
 def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
-    """Build a model from a built-in name (``genco_rf201a[:linear]``) or a YAML model file.
+    """Build a model from a built-in name (``genco_rf201a[:linear|:chapter7]``) or a YAML model file.
 
     Raises
     ------
@@ -56,11 +60,15 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     """
     text = str(spec_or_path)
     name, _, variant = text.partition(":")
+    if name in MACHINES and variant in PARAMETER_SETS and not Path(text).is_file():
+        from .machines.chapter7 import parameter_file
+
+        return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
     if name in MACHINES and not Path(text).is_file():
         return _build(name, variant or "nonlinear", from_file=False)
     path = Path(text)
     if not path.is_file():
-        known = ", ".join(f"{m}, {m}:linear" for m in MACHINES)
+        known = ", ".join(f"{m}, {m}:linear, " + ", ".join(f"{m}:{v}" for v in PARAMETER_SETS) for m in MACHINES)
         raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
     try:
         document = yaml.safe_load(path.read_text(encoding="utf-8"))
@@ -175,7 +183,7 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
     """
     onsets = dict(model.spec.onsets) if onsets is None else onsets
     defaults = build_model(model.spec.name).parameters
-    effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].parameters}
+    effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].all_parameters}
     parameters = {}
     for name in model.parameter_names:
         if name in effect_parameters or name in _DESIGN_PARAMETERS:
@@ -187,7 +195,7 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
                                 "source": parameter.source}
     effects = []
     for effect in model.spec.effects:
-        names = [p.name for p in CATALOGUE[effect].parameters]
+        names = [p.name for p in CATALOGUE[effect].all_parameters]
         first = model.parameters[names[0]] if names else None
         entry = {"name": effect, "parameters": {n: model.parameters.value(n) for n in names}}
         if first is not None:

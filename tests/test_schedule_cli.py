@@ -15,7 +15,7 @@ FLY_KEYS = {"mission_time_s", "added_rest_s", "max_T_winding", "max_T_iron", "br
 SHORT = """name: short_blockage
 generators: {count: 2}
 faults:
-  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, inlet_rise_C: 31}
+  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
 actions:
   - {condition: taxi, duration_min: 15}
   - {condition: cruise_combat, duration_min: 30}

@@ -17,7 +17,7 @@ def healthy(design_model):
 
 @pytest.fixture(scope="module")
 def faulty(design_model):
-    return AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2))
+    return AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2, n_flow=0.0))
 
 
 def problem(generators, inlets, current_A, limit_C, minutes=(30,), current_limit_A=7.0):

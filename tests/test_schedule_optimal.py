@@ -7,6 +7,7 @@ import pytest
 
 from genthermal.mission import load_mission
 from genthermal.schedule.closed_loop import ManagerSettings, plan_mission, plan_with
+from genthermal.schedule.optimal import lowest_reachable_peak
 from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
 from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator, PowerSystem
@@ -42,7 +43,7 @@ def test_milp_plan_is_certified_and_feasible(open_loop_plans):
 
 @pytest.fixture(scope="module")
 def tiny(design_model):
-    faulty = AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2))
+    faulty = AffineGenerator(design_model.with_effect("coolant_flow_reduction", k_flow=0.2, n_flow=0.0))
     healthy = AffineGenerator(design_model)
     inlets = np.array([51.0, 20.0])
     x0 = np.array([g.steady_state(g.input(4.5, t, 20.0)) for g, t in zip((faulty, healthy), inlets)])
@@ -79,3 +80,14 @@ def test_infeasible_case_names_the_lowest_peak_and_the_action(tiny):
     assert message.startswith("infeasible: no schedule keeps θ ≤ 60 °C")
     assert "lowest reachable peak is" in message and "during action" in message
     assert result.details["lowest_peak_C"] > 60.0
+
+
+@pytest.mark.parametrize("scheduler", ["engineer", "optimal"])
+def test_a_plan_that_keeps_thetamax_but_not_its_back_off_is_not_feasible(tiny, scheduler):
+    lowest = lowest_reachable_peak(tiny).peak_C
+    squeezed = PlanningProblem(tiny.segments, tiny.generators, tiny.x0, tiny.inlet_C, 20.0, 1.911, 7.0,
+                               limit_C=lowest - 1.0, max_rest_s=900.0)
+    result = plan_with(scheduler, squeezed, ManagerSettings(), ("gen1", "gen2"), limit_C=lowest + 1.0)
+    assert not result.feasible
+    assert result.warnings[-1].startswith("margin not kept") and "rest" in result.details["response"]
+    assert result.details["planned_peak_C"] <= lowest + 1.0

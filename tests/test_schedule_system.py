@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from genthermal.coolant import outlet_flow_fraction
 from genthermal.errors import InputError
 from genthermal.mission import Mission, load_mission
 from genthermal.schedule.plan import Schedule, build_timeline, mission_segments, remaining_after
@@ -15,11 +16,16 @@ def system_from(**extras):
     return PowerSystem.from_mission(Mission.from_dict({"name": "t", "actions": ACTIONS, **extras}))
 
 
-def test_large_blockage_scenario_maps_the_outlet_to_a_flow_factor():
+def test_outlet_diameter_maps_to_the_orifice_flow_fraction():
+    system = system_from(faults=[{"generator": 1, "kind": "coolant_blockage", "onset_min": 6, "outlet_diameter_mm": 10}])
+    assert system.faults[0].values == {"k_flow": pytest.approx(outlet_flow_fraction(10.0))}
+
+
+def test_large_blockage_scenario_states_its_flow_and_exponent():
     system = PowerSystem.from_mission(load_mission("blockage_large"))
     (fault,) = system.faults
     assert system.generator_names == ("gen1", "gen2")
-    assert fault.effect == "coolant_flow_reduction" and fault.values["k_flow"] == pytest.approx(0.2)
+    assert fault.effect == "coolant_flow_reduction" and fault.values == {"k_flow": 0.2, "n_flow": 0.0}
     assert system.inlet_C(0, [0.0, 66 * 60.0]).tolist() == [20.0, 51.0]
     assert system.inlet_C(1, 66 * 60.0) == 20.0
     assert system.rest_current_A == pytest.approx(0.273 * 7.0)

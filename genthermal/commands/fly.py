@@ -1,12 +1,16 @@
-"""``genthermal fly SCENARIO --scheduler heuristic|optimal|milp --json FILE [--plot FILE]``.
+"""``genthermal fly SCENARIO --scheduler heuristic|engineer|optimal|milp --json FILE [--plot FILE]``.
 
-Closed-loop load management (thesis 7.2) on the true plant: every cycle a Kalman filter update from
-noisy measurements, a prediction to the end of the mission and a re-plan when a violation is
-predicted. The true plant differs from the design model (scenario ``generators.plant_mismatch``).
+Closed-loop load management (thesis 7.2) on the true plant: every cycle a filter update from
+noisy measurements, fault detection on the innovations and identification in flight, a prediction
+to the end of the mission and a re-plan when a violation is predicted. The true plant differs from
+the planning model (scenario ``generators.plant_mismatch`` or ``--plant``); the manager is not told
+the faults unless ``--tell-fault``.
 """
 
 from __future__ import annotations
 
+from ..schedule.closed_loop import ManagerSettings
+from ..schedule.monitor import ESTIMATORS
 from ..schedule.report import flight_summary
 from .plan import add_schedule_arguments, settings_from_args, write_outputs
 
@@ -17,6 +21,10 @@ def register(subparsers) -> None:
                                    description=__doc__.split("\n\n")[1])
     add_schedule_arguments(parser)
     parser.add_argument("--seed", default=0, type=int, help="seed of the measurement noise (default 0)")
+    parser.add_argument("--tell-fault", action="store_true", help="hand the manager each fault's effect and "
+                        "parameters from the first cycle after its onset (the old behaviour, for comparison)")
+    parser.add_argument("--estimator", default=ManagerSettings.estimator,
+                        help=f"filter in the loop: {' | '.join(ESTIMATORS)} (default {ManagerSettings.estimator})")
     parser.set_defaults(func=run)
 
 

@@ -11,8 +11,10 @@ import dataclasses
 
 from ..errors import InputError
 from ..mission import load_mission
+from ..model_file import load_model
 from ..outputs import report_json
 from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
+from ..schedule.monitor import ESTIMATORS
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
 
@@ -30,6 +32,10 @@ def add_schedule_arguments(parser) -> None:
                         help="plans tolerate a design model that underestimates a temperature rise within one "
                         f"cycle by this fraction (default {ManagerSettings.rise_backoff:g}; 0 = margin only)")
     parser.add_argument("--cycle-min", default="5", help="management cycle, min (default 5, thesis 7.2)")
+    parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
+                        "(genthermal.model_file); default the scenario's machine")
+    parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
+                        "a model file; default the planning model with the scenario's plant_mismatch")
 
 
 def _number_in(option: str, text: str, low: float, high: float, what: str) -> float:
@@ -56,7 +62,21 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         if int(args.seed) < 0:
             raise InputError("--seed", args.seed, "must be a whole number >= 0")
         settings = dataclasses.replace(settings, seed=int(args.seed))
+    if getattr(args, "estimator", None) is not None:
+        if args.estimator not in ESTIMATORS:
+            raise InputError("--estimator", args.estimator, f"must be one of {', '.join(ESTIMATORS)}")
+        settings = dataclasses.replace(settings, estimator=args.estimator, tell_fault=bool(args.tell_fault))
     system = PowerSystem.from_mission(load_mission(args.scenario))
+    models = {}
+    for option in ("model", "plant"):
+        if getattr(args, option, None):
+            model = load_model(getattr(args, option))
+            if model.spec.variant == "linear":
+                raise InputError(f"--{option}", getattr(args, option), "give a nonlinear simulation model; the "
+                                 "manager derives its design model itself")
+            models[option] = model
+    if models:
+        system = dataclasses.replace(system, **models)
     return system, settings
 
 

@@ -37,7 +37,9 @@ def register(subparsers) -> None:
         "sysid", help="identify ARX models of the winding and iron temperatures (thesis 5.3)",
         description="Fit ARX models of T_winding and T_iron to rig data (genthermal.measurements CSV "
         "schema), list the best candidate structures, validate the best on a second record and write "
-        "JSON. The validation simulation starts from the first measured temperature of that record.")
+        "JSON. Every model has a constant (offset) term, so a training record that starts warm (after "
+        "a discard) gives a consistent model; the validation simulation starts from the first measured "
+        "temperature of that record (initialisation from the data).")
     parser.add_argument("train", help="training data CSV")
     parser.add_argument("validation", help="validation data CSV (the selected models are scored on it)")
     parser.add_argument("--json", metavar="OUT.json", help="write the candidates, models and scores as JSON")
@@ -73,7 +75,7 @@ def run(args) -> int:
     ts_s = positive_float("--dt", args.dt)
     search_options = {"na_range": parse_range("--na", args.na, 1), "nb_range": parse_range("--nb", args.nb, 1),
                       "nk_range": parse_range("--nk", args.nk, 0), "integrate_input": args.integrate,
-                      "ts_s": ts_s}
+                      "ts_s": ts_s, "constant_term": True}
     discard_before_s = 60.0 * non_negative_float("--discard-before-min", args.discard_before_min)
     if args.input != "auto" and args.input not in INPUT_SIGNALS:
         raise InputError("--input", args.input, f"choose one of {', '.join(INPUT_SIGNALS)} or auto")
@@ -114,20 +116,21 @@ def identify_output(train, validation, output: str, input_choice: str, discard_b
     for row in candidates.head(TABLE_ROWS).itertuples():
         print(f"{row.na:>4d} {row.nb:>4d} {row.nk:>4d} {row.R2:>9.4f} {row.AIC:>9.4f}")
     best = candidates.iloc[0]
-    model = arx_fit(y, u, int(best.na), int(best.nb), int(best.nk),
-                    integrate_input=search_options["integrate_input"], ts_s=search_options["ts_s"])
+    model = arx_fit(y, u, int(best.na), int(best.nb), int(best.nk), integrate_input=search_options["integrate_input"],
+                    ts_s=search_options["ts_s"], constant_term=search_options["constant_term"])
     measured = output_signal(validation, output)
     start = measured[np.isfinite(measured)]
     if start.size == 0:
         raise InputError(f"{validation.source}: T_{output}", "all NaN", "the validation record has no measurement")
-    scores = simulation_scores(model, measured, input_signal(validation, input_name), y0=float(start[0]))
+    scores = simulation_scores(model, measured, input_signal(validation, input_name), initial_output=float(start[0]))
     print(f"selected na={int(best.na)} nb={int(best.nb)} nk={int(best.nk)}: validation R² {scores['R2']:.4f}, "
           f"RMSE {scores['rmse_K']:.2f} K, max |error| {scores['max_abs_error_K']:.2f} K")
     section = {
         "input": input_name,
         "candidates": [_candidate(row) for row in candidates.itertuples()],
         "selected": {**_candidate(best), "a": model.a.tolist(), "b": model.b.tolist(),
-                     "y_offset_C": model.y_offset, "loss_function_K2": model.loss_function},
+                     "y_offset_C": model.y_offset, "constant_K": model.constant,
+                     "loss_function_K2": model.loss_function},
         "validation": scores,
     }
     return section, model

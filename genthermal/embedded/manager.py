@@ -24,7 +24,7 @@ from ..design import linear_design_model
 from ..errors import InputError
 from ..estimation.kalman import THESIS_R_K2, KalmanFilter, output_matrices
 from ..losses import INPUT_NAMES
-from ..mission import EXCITATION_GAIN_A_PER_A, EXCITATION_NO_LOAD_A
+from ..exciter import exciter_line
 from ..schedule.closed_loop import DEFAULT_MARGIN_K
 from ..schedule.power_system import PowerSystem
 from . import toolchain
@@ -56,7 +56,9 @@ class ManagerSettings:
     dt_s : float
         Sample time, s.
     field_no_load_A, field_gain : float
-        Exciter law ``I_exc = field_no_load_A + field_gain * I``.
+        Exciter law ``I_exc = field_no_load_A + field_gain * I`` on the target: the least-squares
+        line of the AVR law (:func:`genthermal.exciter.exciter_line`, power factor 0.8 lagging,
+        7 A rated) over 0 … rated current, so that the C code needs no square root per sample.
     """
 
     profile_A: np.ndarray
@@ -69,8 +71,8 @@ class ManagerSettings:
     rest_quantum_steps: int = 6
     max_rest_steps: int = 360
     dt_s: float = 10.0
-    field_no_load_A: float = EXCITATION_NO_LOAD_A
-    field_gain: float = EXCITATION_GAIN_A_PER_A
+    field_no_load_A: float = exciter_line()[0]
+    field_gain: float = exciter_line()[1]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -25,6 +25,19 @@ Integrated input (thesis eq 5.9): with ``integrate_input`` the fit uses
 fitted one multiplied back by the integrator (thesis eqs 5.14-5.17):
 :math:`A = (1 - q^{-1}) A_w`, :math:`B = B_w`, so the model is driven by the raw input ``u``.
 
+Constant term (offset term): with ``constant_term`` the regression also fits a constant
+:math:`c` (K per sample), :math:`A_f(q)\\,\\tilde y(k) = B(q)\\,v(k - n_k) + c` with :math:`A_f, v` the
+fitted polynomial and input (:math:`v = w` for an integrated input). It makes a record that does not
+start at rest consistent: after the thesis's 30-min discard the machine is warm and still heating,
+and without :math:`c` the model would read that first (warm) value as the output at rest for the
+input then applied, a bias of tens of kelvin on any other record. With an integrated input,
+:math:`c` is the input history before the record (:math:`c = B(1)\\,w_{before}`) and the model is
+simulated in the fitted form (:math:`w` from zero), where :math:`c` does not vanish.
+
+Initial state: :meth:`ArxModel.simulate` starts from rest at the model's offset, or, with
+``initial_output``, from a measured first output (initialisation from the data: the past outputs
+set to it, the past inputs zero).
+
 Scores
 
 * :math:`R^2 = 1 - \\sum_k e(k)^2 / \\sum_k (y(k) - \\bar y)^2` with :math:`e` the error of the
@@ -32,7 +45,7 @@ Scores
   without the ``1 -``; its text ("tending towards 1 as the fit improves") and tables use this form.
 * AIC as MATLAB ``selstruc`` / normalised ``aic``: :math:`\\mathrm{AIC} = \\ln V + 2 d / N`, with
   :math:`V = \\frac{1}{N} \\sum_k \\varepsilon(k)^2` the mean squared one-step prediction error of the
-  fit (K²), :math:`d = n_a + n_b` the number of fitted parameters and :math:`N` the number of
+  fit (K²), :math:`d = n_a + n_b` (+1 with a constant term) the number of fitted parameters and :math:`N` the number of
   residuals (regression rows) it was computed from.
 """
 
@@ -42,7 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import block_diag
-from scipy.signal import lfilter
+from scipy.signal import lfilter, lfiltic
 
 from ..errors import InputError
 
@@ -70,6 +83,8 @@ class ArxModel:
         V, mean squared one-step prediction error of the fit, K².
     aic : float
         :math:`\\ln V + 2 (n_a + n_b) / N` of the fit.
+    constant : float
+        Constant term :math:`c` of the fitted equation, K per sample (0 when not fitted).
     """
 
     a: np.ndarray
@@ -80,6 +95,7 @@ class ArxModel:
     integrated_input: bool = False
     loss_function: float = float("nan")
     aic: float = float("nan")
+    constant: float = 0.0
 
     @property
     def structure(self) -> tuple[int, int, int]:
@@ -96,21 +112,42 @@ class ArxModel:
         order = max(num.size, self.a.size)
         return np.pad(num, (0, order - num.size)), np.pad(self.a, (0, order - self.a.size))
 
-    def simulate(self, u, y0: float | None = None) -> np.ndarray:
-        """Simulated output, °C: ``y0`` plus the response to ``u`` from rest (zero initial state).
+    def simulate(self, u, y0: float | None = None, initial_output: float | None = None) -> np.ndarray:
+        """Simulated output, °C: the model's response to ``u`` (and its constant term) plus a level.
 
         Parameters
         ----------
         u : array_like
             Input samples at the model's sample time (A, or A² for ``I_sq``).
         y0 : float, optional
-            Output level the simulation starts from, °C; default :attr:`y_offset`.
+            Output level added to the response, °C; default :attr:`y_offset`.
+        initial_output : float, optional
+            Measured output at the start of ``u``, °C: the model's past outputs are set to it
+            (initialisation from the data). Default: from rest (past outputs at the level).
         """
         u = _finite_signal(u, "u")
-        num, den = self.transfer_function()
+        level = self.y_offset if y0 is None else float(y0)
+        a_fit = self.fitted_denominator
+        v = np.cumsum(u) if self.integrated_input else u
+        num = np.concatenate([np.zeros(self.nk), self.b])
+        order = max(num.size, a_fit.size) - 1
+        state = None
+        if initial_output is not None and order > 0:
+            past = np.full(order, float(initial_output) - level)
+            state = lfiltic(num, a_fit, past, np.zeros(order))
         with np.errstate(over="ignore", invalid="ignore"):
-            response = lfilter(num, den, u)
-        return (self.y_offset if y0 is None else float(y0)) + response
+            response = lfilter(num, a_fit, v) if state is None else lfilter(num, a_fit, v, zi=state)[0]
+            if self.constant:
+                response = response + lfilter([self.constant], a_fit, np.ones_like(v))
+        return level + response
+
+    @property
+    def fitted_denominator(self) -> np.ndarray:
+        """A of the fitted equation: :attr:`a` without the integrator of an integrated-input model."""
+        if not self.integrated_input:
+            return self.a
+        quotient, _ = np.polydiv(self.a, [1.0, -1.0])
+        return quotient
 
     def predict_one_step(self, y, u) -> np.ndarray:
         """One-step-ahead prediction :math:`\\hat y(k) = y_{\\mathrm{offset}} + (1 - A(q)) \\tilde y(k)
@@ -121,7 +158,11 @@ class ArxModel:
         y, u = _signal(y, "y"), _finite_signal(u, "u")
         _check_same_length(y, u)
         regressors = regression_matrix(y - self.y_offset, u, len(self.a) - 1, len(self.b), self.nk)
-        return self.y_offset + regressors @ np.concatenate([self.a[1:], self.b])
+        return self.y_offset + regressors @ np.concatenate([self.a[1:], self.b]) + self._constant_per_sample()
+
+    def _constant_per_sample(self) -> float:
+        """The constant term as it acts on :attr:`a` (the integrator differences it away)."""
+        return 0.0 if self.integrated_input else self.constant
 
     def to_state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Controllable canonical form :math:`x(k+1) = A x(k) + B u(k)`,
@@ -129,7 +170,8 @@ class ArxModel:
 
         With ``num, den`` from :meth:`transfer_function` (n = order):
         first row of A ``-den[1:]``, ones on the sub-diagonal, ``B = e_1``,
-        ``C = num[1:] - num[0] den[1:]``, ``D = num[0]``.
+        ``C = num[1:] - num[0] den[1:]``, ``D = num[0]``. A fitted :attr:`constant` is not part of
+        it (it acts as a constant input; see :meth:`simulate`).
         """
         num, den = self.transfer_function()
         order = den.size - 1
@@ -152,7 +194,7 @@ def regression_matrix(y, u, na: int, nb: int, nk: int) -> np.ndarray:
 
 
 def arx_fit(y, u, na: int, nb: int, nk: int, integrate_input: bool = False, remove_offset: bool = True,
-            ts_s: float = 10.0) -> ArxModel:
+            ts_s: float = 10.0, constant_term: bool = False) -> ArxModel:
     """Fit an ARX model by linear least squares (:func:`numpy.linalg.lstsq`).
 
     Parameters
@@ -170,6 +212,9 @@ def arx_fit(y, u, na: int, nb: int, nk: int, integrate_input: bool = False, remo
         Subtract the first measured output before fitting (thesis 5.3.2).
     ts_s : float
         Sample time, s (stored in the model).
+    constant_term : bool
+        Also fit a constant :math:`c` (see the module docstring): needed when the record does not
+        start at rest, e.g. after a discard.
 
     Returns
     -------
@@ -185,10 +230,12 @@ def arx_fit(y, u, na: int, nb: int, nk: int, integrate_input: bool = False, remo
     y_offset = float(y[measured[0]]) if remove_offset else 0.0
     fit_input = np.cumsum(u) if integrate_input else u
     regressors = regression_matrix(y - y_offset, fit_input, na, nb, nk)
+    if constant_term:
+        regressors = np.column_stack([regressors, np.ones(y.size)])
     target = y - y_offset
     rows = np.arange(y.size) >= max(na, nk + nb - 1)
     rows &= np.isfinite(target) & np.all(np.isfinite(regressors), axis=1)
-    n_rows, n_parameters = int(rows.sum()), na + nb
+    n_rows, n_parameters = int(rows.sum()), na + nb + int(constant_term)
     if n_rows <= n_parameters:
         raise InputError("y", f"{n_rows} usable samples",
                          f"too few measured samples for {n_parameters} parameters (na={na}, nb={nb}, nk={nk})")
@@ -197,9 +244,10 @@ def arx_fit(y, u, na: int, nb: int, nk: int, integrate_input: bool = False, remo
     a = np.concatenate([[1.0], theta[:na]])
     if integrate_input:
         a = np.convolve(a, [1.0, -1.0])
-    return ArxModel(a=a, b=theta[na:], nk=int(nk), ts_s=float(ts_s), y_offset=y_offset,
+    return ArxModel(a=a, b=theta[na:na + nb], nk=int(nk), ts_s=float(ts_s), y_offset=y_offset,
                     integrated_input=bool(integrate_input), loss_function=loss,
-                    aic=normalized_aic(loss, n_parameters, n_rows))
+                    aic=normalized_aic(loss, n_parameters, n_rows),
+                    constant=float(theta[-1]) if constant_term else 0.0)
 
 
 def normalized_aic(loss_function: float, n_parameters: int, n_samples: int) -> float:
@@ -222,8 +270,9 @@ def r_squared(measured, modelled) -> float:
     return float(1.0 - np.sum(error**2) / spread) if spread > 0 else float("nan")
 
 
-def simulation_scores(model: ArxModel, y, u, y0: float | None = None) -> dict[str, float]:
-    """Compare ``model.simulate(u, y0)`` with measured ``y`` (NaN samples skipped).
+def simulation_scores(model: ArxModel, y, u, y0: float | None = None,
+                      initial_output: float | None = None) -> dict[str, float]:
+    """Compare ``model.simulate(u, y0, initial_output)`` with measured ``y`` (NaN samples skipped).
 
     Returns
     -------
@@ -231,7 +280,7 @@ def simulation_scores(model: ArxModel, y, u, y0: float | None = None) -> dict[st
         ``R2`` (see :func:`r_squared`), ``rmse_K`` and ``max_abs_error_K`` of the simulated output.
     """
     y = _signal(y, "y")
-    simulated = model.simulate(u, y0)
+    simulated = model.simulate(u, y0, initial_output)
     _check_same_length(y, simulated)
     error = (simulated - y)[np.isfinite(y)]
     return {"R2": r_squared(y, simulated), "rmse_K": float(np.sqrt(np.mean(error**2))),

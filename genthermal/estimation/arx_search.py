@@ -80,7 +80,8 @@ def training_record(data: MeasurementData, output: str, input_name: str,
 
 
 def arx_search(y, u, na_range=range(1, 4), nb_range=range(1, 4), nk_range=range(0, 5),
-               integrate_input: bool = False, remove_offset: bool = True, ts_s: float = 10.0) -> pd.DataFrame:
+               integrate_input: bool = False, remove_offset: bool = True, ts_s: float = 10.0,
+               constant_term: bool = False) -> pd.DataFrame:
     """Fit every structure of the ranges and score it (thesis Tables 5.1/5.2).
 
     Parameters
@@ -89,7 +90,7 @@ def arx_search(y, u, na_range=range(1, 4), nb_range=range(1, 4), nk_range=range(
         Output (°C, NaN where not measured) and input on one uniform grid.
     na_range, nb_range, nk_range : iterable of int
         Numbers of A and B parameters and delays to try.
-    integrate_input, remove_offset, ts_s
+    integrate_input, remove_offset, ts_s, constant_term
         As :func:`~genthermal.estimation.arx.arx_fit`.
 
     Returns
@@ -105,7 +106,7 @@ def arx_search(y, u, na_range=range(1, 4), nb_range=range(1, 4), nk_range=range(
                          "every range must hold at least one value")
     for na, nb, nk in structures:
         model = arx_fit(y, u, na, nb, nk, integrate_input=integrate_input, remove_offset=remove_offset,
-                        ts_s=ts_s)
+                        ts_s=ts_s, constant_term=constant_term)
         rows.append((na, nb, nk, r_squared(y, model.simulate(u)), model.aic))
     table = pd.DataFrame(rows, columns=CANDIDATE_COLUMNS)
     return table.sort_values(["R2", "AIC"], ascending=[False, True], kind="stable").reset_index(drop=True)
@@ -126,7 +127,8 @@ def select_input(data: MeasurementData, output: str, inputs=INPUT_SIGNALS, disca
     discard_before_s : float
         Leave out the start of the record, s (see :func:`training_record`).
     **search_options
-        Passed to :func:`arx_search` (ranges, ``integrate_input``, ``remove_offset``, ``ts_s``).
+        Passed to :func:`arx_search` (ranges, ``integrate_input``, ``remove_offset``, ``ts_s``,
+        ``constant_term``).
     """
     tables, best_rows = {}, []
     for name in inputs:

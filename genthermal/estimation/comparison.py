@@ -9,8 +9,9 @@ its inputs alone (open loop, no measurement updates):
   structure chosen on the *training* record by :func:`~genthermal.estimation.arx_search.select_input`.
 
 The physics models start from the first measured temperatures
-(:func:`~genthermal.estimation.kalman.initial_state_from_measurements`), each ARX model from the
-first measured value of its output. Scores per model and sensor, over the measured samples:
+(:func:`~genthermal.estimation.kalman.initial_state_from_measurements`), each ARX model (fitted
+with a constant term, see :mod:`genthermal.estimation.arx`) from the first measured value of its
+output. Scores per model and sensor, over the measured samples:
 :math:`R^2 = 1 - \sum e^2 / \sum (y - \bar y)^2`, RMSE and max :math:`|e|` (K).
 """
 
@@ -86,19 +87,19 @@ def compare_design_models(train: MeasurementData, validation: MeasurementData, p
         for sensor in SENSORS:
             rows.append({"model": label, "sensor": sensor, "order": model.n_states,
                          **error_scores(measured[sensor], result[sensor]), "detail": model.name})
-    options = {"ts_s": dt_s, **arx_search_options}
+    options = {"ts_s": dt_s, "constant_term": True, **arx_search_options}
     discard_before_s = options.pop("discard_before_s", 0.0)
     for sensor, output in SENSORS.items():
         selection = select_input(train, output, discard_before_s=discard_before_s, **options)
         best = selection.candidates.iloc[0]
         y, u = training_record(train, output, selection.input_name, discard_before_s)
-        arx = arx_fit(y, u, int(best.na), int(best.nb), int(best.nk),
-                      integrate_input=options.get("integrate_input", False), ts_s=dt_s)
+        arx = arx_fit(y, u, int(best.na), int(best.nb), int(best.nk), integrate_input=options.get("integrate_input", False),
+                      ts_s=dt_s, constant_term=options["constant_term"])
         y_val = output_signal(validation, output)
         first = y_val[np.isfinite(y_val)]
         if first.size == 0:
             raise InputError(f"validation {sensor}", "all NaN", "the validation record has no measurement")
-        simulated = arx.simulate(input_signal(validation, selection.input_name), y0=float(first[0]))
+        simulated = arx.simulate(input_signal(validation, selection.input_name), initial_output=float(first[0]))
         na, nb, nk = arx.structure
         rows.append({"model": MODEL_LABELS[2], "sensor": sensor, "order": arx.to_state_space()[0].shape[0],
                      **error_scores(y_val, simulated),

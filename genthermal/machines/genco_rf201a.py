@@ -38,6 +38,8 @@ ROLES = {
     "winding_insulation": (("stator_winding_radial", "yoke_teeth_interface"),
                            ("stator_winding_radial", "stator_teeth_radial")),
     "frame_to_ambient": (("frame", "ambient"),),
+    # convection coefficients of surfaces swept by the fan's air (they fall with the coolant flow)
+    "internal_convection": ("h_top_air", "h_end_air", "h_air_gap"),
 }
 #: Air node whose temperature leaves through the outlet duct (``T_outlet``).
 OUTLET_NODE = "end_air_out"

@@ -26,16 +26,18 @@ import dataclasses
 
 import numpy as np
 
-from ..estimation.kalman import THESIS_R_K2, KalmanFilter
+from ..estimation.kalman import THESIS_R_K2
 from ..simulate import simulate
+from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
+from .monitor import DetectionSettings, FaultMonitor, StateEstimator
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, generator_inputs, mission_segments,
                    predict, remaining_after)
 from .power_system import PowerSystem
 
-SCHEDULERS = ("heuristic", "optimal", "milp")
+SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Default back-off margin below θmax, K.
 DEFAULT_MARGIN_K = 2.5
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
@@ -65,7 +67,15 @@ class ManagerSettings:
         A prediction above the planning limit by more than this triggers a re-plan, K.
     seed : int
         Seed of the measurement noise.
-    heuristic, optimal, milp
+    tell_fault : bool
+        Hand the manager every fault's effect and parameters from the first cycle after its onset
+        (the comparison case); default False: the manager detects and identifies faults itself
+        (:mod:`genthermal.schedule.monitor`).
+    estimator : str
+        Filter in the loop, a key of :data:`genthermal.schedule.monitor.ESTIMATORS`.
+    detection : DetectionSettings
+        Fault detection and identification in flight.
+    heuristic, engineer, optimal, milp
         Settings of each scheduler.
     """
 
@@ -76,7 +86,11 @@ class ManagerSettings:
     max_rest_s: float = 3600.0
     replan_tolerance_K: float = 0.05
     seed: int = 0
+    tell_fault: bool = False
+    estimator: str = "kalman"
+    detection: DetectionSettings = DetectionSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
+    engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
 
@@ -104,10 +118,14 @@ class FlightResult:
     action_index : numpy.ndarray
         (n,) index of the mission action being flown or rested before.
     plans : list of dict
-        One record per (re-)plan: ``time_s``, ``method``, ``solve_s``, ``feasible``, ``peak_C``.
+        One record per (re-)plan: ``time_s``, ``method``, ``solve_s``, ``feasible``, ``peak_C``,
+        ``believed`` (the effects the plan was made with, per generator).
     warnings : list of str
     schedule_table : pandas.DataFrame or None
         The open-loop plan per action.
+    monitor : FaultMonitor or None
+        Alarms, identifications and recalibrations of the flight (closed loop).
+    settings : ManagerSettings or None
     """
 
     system: PowerSystem
@@ -122,6 +140,8 @@ class FlightResult:
     plans: list
     warnings: list
     schedule_table: object = None
+    monitor: object = None
+    settings: object = None
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
@@ -130,20 +150,30 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
 
     Parameters
     ----------
-    scheduler : {"heuristic", "optimal", "milp"}
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
     problem : PlanningProblem
         Its ``limit_C`` is the planning limit (θmax minus the margin).
     settings : ManagerSettings
     names : sequence of str
         Generator names, for the messages.
     limit_C : float
-        θmax, °C: ``feasible`` of the result says whether the plan keeps it.
+        θmax, °C.
     previous : Schedule, optional
         Warm start of the optimal scheduler.
+
+    Returns
+    -------
+    PlanResult
+        ``feasible`` is True only when the plan's own prediction, with its back-off (the margin and
+        the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
+        reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
+        (``planned_peak_C``) and what the manager does about it (``response``).
     """
     def run(p):
         if scheduler == "heuristic":
             return heuristic_plan(p, settings.heuristic)
+        if scheduler == "engineer":
+            return engineer_plan(p, settings.engineer)
         if scheduler == "optimal":
             return optimal_plan(p, settings.optimal, previous)
         return milp_plan(p, settings.milp)
@@ -154,22 +184,24 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     segment = problem.segments[lowest.peak_segment]
     where = (f"the lowest reachable peak is {lowest.peak_C:.1f} °C, on {names[lowest.peak_generator]} during "
              f"action {segment.action_index + 1} ({segment.label})")
-    if lowest.peak_C > limit_C:
-        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; flying the lowest-peak schedule"
+    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
+    response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
+                f"{relaxed.schedule.displaced_Ah(problem.segments):.2f} A·h to the other generators")
+    if relaxed.peak_C > limit_C:
+        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}"
     else:
         message = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C; "
-                   f"{where}, within θmax {limit_C:g} °C")
-    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
-    relaxed.feasible = lowest.peak_C <= limit_C
+                   f"{where}, within θmax {limit_C:g} °C; {response}")
+    relaxed.feasible = False
     relaxed.solve_s += result.solve_s + lowest.solve_s
     relaxed.warnings.append(message)
     relaxed.details.update(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
-                           lowest_peak_action=segment.action_index + 1)
+                           lowest_peak_action=segment.action_index + 1, planned_peak_C=relaxed.peak_C,
+                           response=response)
     return relaxed
 
 
-def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, faults) -> PlanningProblem:
-    generators = [system.design_generator(g, faults) for g in range(system.n_generators)]
+def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators) -> PlanningProblem:
     inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
@@ -186,10 +218,14 @@ class _Recorder:
         self.currents, self.nominal, self.resting, self.action = [], [], [], []
         self.plans, self.warnings = [], []
 
-    def plan(self, t_s: float, result: PlanResult) -> None:
-        """Record a (re-)plan made at ``t_s``."""
-        self.plans.append({"time_s": t_s, "method": result.method, "solve_s": result.solve_s,
-                           "feasible": result.feasible, "peak_C": result.peak_C, **result.details})
+    def plan(self, t_s: float, result: PlanResult, believed=None) -> None:
+        """Record a (re-)plan made at ``t_s`` with the ``believed`` effects per generator."""
+        record = {"time_s": t_s, "method": result.method, "solve_s": result.solve_s,
+                  "feasible": result.feasible, "peak_C": result.peak_C, **result.details}
+        if believed is not None:
+            record["believed"] = {name: [{"effect": e, "parameters": dict(v)} for e, v in effects]
+                                  for name, effects in zip(self.system.generator_names, believed)}
+        self.plans.append(record)
         self.warnings += result.warnings
 
     def add(self, segments, timeline, n: int, outputs, t0: float) -> None:
@@ -204,12 +240,13 @@ class _Recorder:
                    float(segments[timeline.segment[i]].current_at(timeline.offset_s[i])) for i in range(n)]
         self.nominal.append(np.array(nominal))
 
-    def result(self, scheduler, closed_loop, table=None) -> FlightResult:
+    def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None) -> FlightResult:
         """The :class:`FlightResult`."""
         return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
                             np.moveaxis(np.array(self.temperatures), 0, 2), np.hstack(self.currents),
                             np.concatenate(self.nominal), np.concatenate(self.resting),
-                            np.concatenate(self.action), self.plans, self.warnings, table)
+                            np.concatenate(self.action), self.plans, self.warnings, table,
+                            monitor, settings)
 
 
 def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_at):
@@ -250,7 +287,8 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     table = None
     if segments:
         all_faults = tuple(range(len(system.faults)))
-        problem = _problem(system, settings, segments, x, t_plan, all_faults)
+        generators = [system.design_generator(g, all_faults) for g in range(system.n_generators)]
+        problem = _problem(system, settings, segments, x, t_plan, generators)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
             schedule = result.schedule.rounded(dt)
@@ -262,45 +300,6 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     return recorder.result(scheduler, False, table)
 
 
-class StateEstimator:
-    """The Kalman filter (:class:`~genthermal.estimation.kalman.KalmanFilter`, time-varying gain)
-    of one generator, on the design model of the faults known so far.
-
-    Parameters
-    ----------
-    generator : AffineGenerator
-        Design model to start with.
-    x0 : array_like
-        Initial estimate, °C.
-    dt_s : float
-        Filter step, s.
-    filters : dict
-        Kalman filters by design model, shared between the generators of one flight.
-    """
-
-    def __init__(self, generator, x0, dt_s: float, filters: dict):
-        self.x, self.P, self.dt_s, self._filters = np.array(x0, dtype=float), None, dt_s, filters
-        self.use(generator)
-
-    def use(self, generator) -> None:
-        """Continue on ``generator``'s design model (state and covariance kept): a fault is known."""
-        if id(generator) not in self._filters:
-            self._filters[id(generator)] = KalmanFilter(generator.model, self.dt_s)
-        self.generator, self.kalman = generator, self._filters[id(generator)]
-        if self.P is None:
-            self.P = self.kalman.P0
-
-    def update(self, y) -> None:
-        """Measurement update with the measured winding and iron temperatures ``y`` (°C)."""
-        step = self.kalman.update(self.x, self.P, y)
-        self.x, self.P = step.x, step.P
-
-    def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
-        """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
-        for current, inlet in zip(currents_A, inlets_C):
-            self.x, self.P = self.kalman.predict(self.x, self.P, self.generator.input(current, inlet, ambient_C))
-
-
 def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     """Run generator ``g``'s true plant over ``timeline`` from ``t0`` (faults switch in at their
     onsets). Returns (outputs (2, n) after each step, state at the end)."""
@@ -308,10 +307,18 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     model = system.plant_model(g, system.faults_known_at(t0))
     _, switches = system.plant_switches(g)
     later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
-    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C)
+    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C,
+                             system.mission.power_factor, system.rated_current_A)
     run = simulate(model, frame, x0=x0, switches=later)
     states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
     return run[["T_winding", "T_iron"]].to_numpy()[1:].T, states[-1]
+
+
+def _told_beliefs(system: PowerSystem, t_s: float) -> list:
+    """Per generator, the effects of the faults started by ``t_s`` (``--tell-fault``)."""
+    known = system.faults_known_at(t_s)
+    return [tuple((system.faults[i].effect, tuple(system.faults[i].values.items())) for i in known
+                  if system.faults[i].generator == g and system.faults[i].effect) for g in range(system.n_generators)]
 
 
 def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings()) -> FlightResult:
@@ -320,13 +327,14 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     Parameters
     ----------
     system : PowerSystem
-    scheduler : {"heuristic", "optimal", "milp"}
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
     settings : ManagerSettings
 
     Returns
     -------
     FlightResult
-        True-plant temperatures, applied currents and one record per re-plan.
+        True-plant temperatures, applied currents, one record per re-plan and the alarms with
+        what was identified.
     """
     dt = settings.dt_s
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
@@ -335,33 +343,41 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     segments = mission_segments(system.mission)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
-    kalman_filters: dict = {}
-    filters = [StateEstimator(system.design_generator(g), x_true[g], dt, kalman_filters)
-               for g in range(system.n_generators)]
+    filter_cache: dict = {}
+    estimators = [StateEstimator(system.design_generator_for(()), x_true[g], dt, filter_cache, settings.estimator)
+                  for g in range(system.n_generators)]
+    monitor = FaultMonitor(system, settings.detection, dt)
     recorder = _Recorder(system)
-    measured, t = recorder.temperatures[0], 0.0
+    measured, t = None, 0.0
     while segments:
-        known = system.faults_known_at(t)
-        for g, estimator in enumerate(filters):
-            estimator.use(system.design_generator(g, known))
-            if t > 0:
-                estimator.update(measured[g] + noise_sd * rng.standard_normal(noise_sd.size))
-        problem = _problem(system, settings, segments, [f.x for f in filters], t, known)
+        if measured is not None:
+            for g, estimator in enumerate(estimators):
+                estimator.update(measured[g])
+            if not settings.tell_fault:
+                monitor.cycle(t, estimators)
+        beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
+        for g, estimator in enumerate(estimators):
+            estimator.use(system.design_generator_for(beliefs[g]) if settings.tell_fault else
+                          monitor.design_generator(g))
+        problem = _problem(system, settings, segments, [e.x for e in estimators], t,
+                           [e.generator for e in estimators])
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule)
             schedule = result.schedule.rounded(dt)
-            recorder.plan(t, result)
+            recorder.plan(t, result, beliefs)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
         n = min(cycle_steps, timeline.n_steps)
         applied = timeline.head(n)
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
-        for g, estimator in enumerate(filters):
+        for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
-        measured = outputs[:, :, -1]
+        sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
+        monitor.record(t, applied.currents_A, sensed)
+        measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    return recorder.result(scheduler, True)
+    return recorder.result(scheduler, True, monitor=monitor, settings=settings)

@@ -19,7 +19,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from ..mission import Mission, excitation_current
+from ..exciter import DEFAULT_POWER_FACTOR, exciter_current
+from ..mission import Mission
 
 #: Tolerance on the limit when checking a prediction, K.
 LIMIT_TOLERANCE_K = 1e-6
@@ -259,15 +260,17 @@ def remaining_after(segments, schedule: Schedule, timeline: Timeline, n_steps: i
     return (first,) + tuple(segments[k + 1:]), Schedule(schedule.displaced_A[:, k:].copy(), rest)
 
 
-def generator_inputs(timeline: Timeline, generator: int, t0_s: float, inlet_C, ambient_C: float) -> pd.DataFrame:
+def generator_inputs(timeline: Timeline, generator: int, t0_s: float, inlet_C, ambient_C: float,
+                     power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0) -> pd.DataFrame:
     """Input frame of one generator (columns of :meth:`Mission.to_inputs`) for ``timeline``
-    starting at ``t0_s``; ``inlet_C(t)`` gives the inlet temperature (°C). A last row repeats the
-    final input so the frame also yields the state at the end."""
+    starting at ``t0_s``; ``inlet_C(t)`` gives the inlet temperature (°C); the exciter current
+    follows the load at ``power_factor``. A last row repeats the final input so the frame also
+    yields the state at the end."""
     n = timeline.n_steps
     time_s = t0_s + np.arange(n + 1) * timeline.dt_s
     current = np.append(timeline.currents_A[generator], timeline.currents_A[generator, -1])
     return pd.DataFrame({"time_s": time_s, "I_u": current, "I_v": current, "I_w": current,
-                         "I_exc": excitation_current(np.clip(current, 0.0, None)),
+                         "I_exc": exciter_current(np.clip(current, 0.0, None), power_factor, rated_current_A),
                          "T_inlet": inlet_C(time_s), "T_ambient": np.full(n + 1, ambient_C)})
 
 

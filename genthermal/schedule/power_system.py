@@ -14,17 +14,16 @@ validated here)::
       limit_C: 110                 # temperature limit theta_max, degC (thesis 7.3.1)
       current_limit_percent: 100   # highest phase current a generator may carry, % of rated
       plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
-      machine: genco_rf201a
+      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration)
     faults:                        # optional list
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
-      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10}
+      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
       - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
       - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
 
-Blockage mapping (assumed): the thesis calls the 10 mm outlet "20 % of the non-fault state" (50 mm),
-read here as the coolant flow fraction :math:`k_{flow} = d/d_0` (0.2 at 10 mm). A pure orifice at
-fixed pressure would give the area ratio :math:`(d/d_0)^2 = 0.04`; the fan raises its pressure when
-throttled, so the flow falls much less, and 0.2-0.3 is the plausible range.
+Blockage mapping: an outlet plate of diameter ``outlet_diameter_mm`` gives the coolant flow fraction
+of the orifice relation :func:`genthermal.coolant.outlet_flow_fraction` (0.11 for the thesis's
+10 mm plate on the 50 mm outlet); the blockage effect lowers the internal convection with it.
 """
 
 from __future__ import annotations
@@ -36,13 +35,16 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
+from ..coolant import OUTLET_DIAMETER_MM, outlet_flow_fraction
 from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
 from ..effects import get_effect
 from ..errors import InputError
 from ..losses import INPUT_NAMES
-from ..machines import MACHINES, build_model
-from ..mission import EXCITATION_GAIN_A_PER_A, EXCITATION_NO_LOAD_A, Mission
+from ..machines import MACHINES
+from ..model_file import PARAMETER_SETS, load_model
+from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
+from ..mission import Mission
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -50,12 +52,10 @@ DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
 DEFAULT_LIMIT_C = 110.0
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
-#: Unblocked coolant outlet diameter of the thesis rig, mm (thesis 7.3.1).
-OUTLET_DIAMETER_MM = 50.0
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
                    "plant_mismatch", "machine")
-_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "inlet_rise_C"),
+_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C"),
                "inlet_rise": ("inlet_rise_C",), "effect": ("effect", "values", "inlet_rise_C")}
 
 
@@ -145,8 +145,11 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
         if "k_flow" in entry:
             k_flow = _number(entry, "k_flow", path, 0.05, 1.0, "(flow fraction)")
         else:
-            k_flow = _number(entry, "outlet_diameter_mm", path, 2.5, OUTLET_DIAMETER_MM, "mm") / OUTLET_DIAMETER_MM
-        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", {"k_flow": k_flow})
+            k_flow = outlet_flow_fraction(_number(entry, "outlet_diameter_mm", path, 7.0, OUTLET_DIAMETER_MM, "mm"))
+        values = {"k_flow": k_flow}
+        if "n_flow" in entry:  # exponent of the internal convection, h ∝ flow^n (effect default 0.8)
+            values["n_flow"] = _number(entry, "n_flow", path, 0.0, 1.5, "(convection exponent)")
+        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values)
     try:
         effect = get_effect(entry.get("effect"))
     except InputError as error:
@@ -168,7 +171,9 @@ class AffineGenerator:
     r"""A linear design model as matrices: :math:`\dot x = Lx + Bu + c`, :math:`y = C_yx + D_yu + e_y`.
 
     The phase current :math:`I` enters affinely, :math:`u = u_0 + I\,e_I` with
-    :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases, assumed exciter). ``L`` has real
+    :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases; :math:`I_{exc} \approx I_{exc,0} + g_{exc} I`,
+    the least-squares line of the AVR exciter law at the load's power factor,
+    :func:`genthermal.exciter.exciter_line`). ``L`` has real
     eigenvalues :math:`L = V\Lambda V^{-1}`, so a rest of free length :math:`h` at constant input
     is exactly :math:`x(h) = x_{ss} + V e^{\Lambda h}V^{-1}(x(0) - x_{ss})`.
 
@@ -176,9 +181,13 @@ class AffineGenerator:
     ----------
     model : ThermalModel
         An affine (linear design) model.
+    power_factor : float
+        Lagging load power factor, (0, 1].
+    rated_current_A : float
+        Rated phase current, A.
     """
 
-    def __init__(self, model):
+    def __init__(self, model, power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0):
         if not model.is_affine:
             raise InputError("model", model.name, "the scheduler plans on the linear design model")
         nx, nu = model.n_states, len(INPUT_NAMES)
@@ -191,7 +200,7 @@ class AffineGenerator:
         self.model, self.L, self.B, self.c, self.Cy, self.Dy, self.ey = model, L, B, c.ravel(), Cy, Dy, ey.ravel()
         self.e_I = np.zeros(nu)
         self.e_I[[INPUT_NAMES.index(p) for p in ("I_u", "I_v", "I_w")]] = 1.0
-        self.e_I[INPUT_NAMES.index("I_exc")] = EXCITATION_GAIN_A_PER_A
+        self.exciter_no_load_A, self.e_I[INPUT_NAMES.index("I_exc")] = exciter_line(power_factor, rated_current_A)
         eigenvalues, self.V = np.linalg.eig(L)
         if np.max(np.abs(eigenvalues.imag)) > 0 or np.max(eigenvalues.real) >= 0:
             raise InputError("model", model.name, "the design model needs real, negative eigenvalues")
@@ -202,7 +211,7 @@ class AffineGenerator:
     def input(self, current_A, inlet_C: float, ambient_C: float) -> np.ndarray:
         """Input vectors for phase currents ``current_A`` (A RMS), shape ``(..., n_inputs)``."""
         u0 = np.zeros(len(INPUT_NAMES))
-        u0[INPUT_NAMES.index("I_exc")] = EXCITATION_NO_LOAD_A
+        u0[INPUT_NAMES.index("I_exc")] = self.exciter_no_load_A
         u0[INPUT_NAMES.index("T_inlet")] = inlet_C
         u0[INPUT_NAMES.index("T_ambient")] = ambient_C
         return u0 + np.multiply.outer(np.asarray(current_A, dtype=float), self.e_I)
@@ -233,7 +242,7 @@ class AffineGenerator:
 def _nominal_models(machine: str):
     """The nominal simulation model and its linear design model (built once per machine; models
     are not changed after they are built)."""
-    model = build_model(machine)
+    model = load_model(machine)
     return model, linear_design_model(model)
 
 
@@ -258,6 +267,12 @@ class PowerSystem:
         Parameter name → factor applied to the nominal value in the true plant.
     machine : str
         Built-in machine of every generator.
+    model : ThermalModel, optional
+        The model the manager plans on and filters with (``--model``: a calibrated or identified
+        model file); default the machine's nominal simulation model.
+    plant : ThermalModel, optional
+        The true plant of every generator before its faults (``--plant``); default the planning
+        model with ``plant_mismatch`` applied.
     """
 
     mission: Mission
@@ -268,6 +283,8 @@ class PowerSystem:
     current_limit_percent: float = 100.0
     plant_mismatch: Mapping[str, float] = dataclasses.field(default_factory=lambda: dict(DEFAULT_PLANT_MISMATCH))
     machine: str = "genco_rf201a"
+    model: Any = None
+    plant: Any = None
 
     def __post_init__(self):
         if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
@@ -301,8 +318,11 @@ class PowerSystem:
                 raise InputError("generators.count", count, "must be a whole number 2..8")
             names = tuple(f"gen{i + 1}" for i in range(count))
         machine = config.get("machine", "genco_rf201a")
-        if machine not in MACHINES:
-            raise InputError("generators.machine", machine, f"unknown machine; built in: {', '.join(MACHINES)}")
+        if not isinstance(machine, str) or machine.partition(":")[0] not in MACHINES or \
+                machine.partition(":")[2] not in ("", "nonlinear", *PARAMETER_SETS):
+            raise InputError("generators.machine", machine,
+                             f"unknown machine; built in: {', '.join(MACHINES)}, optionally with a parameter set "
+                             f"({', '.join(f'{m}:{v}' for m in MACHINES for v in PARAMETER_SETS)})")
         mismatch = config.get("plant_mismatch", DEFAULT_PLANT_MISMATCH)
         if not isinstance(mismatch, Mapping):
             raise InputError("generators.plant_mismatch", mismatch, "must map parameter names to factors")
@@ -374,10 +394,18 @@ class PowerSystem:
         """Nonlinear simulation model of the machine with its nominal parameters."""
         return _nominal_models(self.machine)[0]
 
+    @property
+    def planning_model(self):
+        """The model the manager plans on (``model``, default the nominal simulation model)."""
+        return self.nominal_model if self.model is None else self.model
+
     def plant_model(self, generator: int, fault_indices=()):
-        """True plant: the nominal model with ``plant_mismatch`` and the given faults applied."""
+        """True plant: ``plant`` (default the planning model with ``plant_mismatch``) with the
+        given faults applied."""
         def build():
-            base = self.nominal_model
+            if self.plant is not None:
+                return self._with_faults(self.plant, generator, fault_indices)
+            base = self.planning_model
             try:
                 values = {name: base.parameters.value(name) * factor for name, factor in self.plant_mismatch.items()}
                 plant = base.with_parameters("assumed", "plant mismatch of the closed-loop test", **values)
@@ -393,14 +421,39 @@ class PowerSystem:
         return self.plant_model(generator), [(t, self.plant_model(generator, self.faults_known_at(t))) for t in onsets]
 
     def design_generator(self, generator: int, fault_indices=()) -> AffineGenerator:
-        """Linear design model (thesis 5.2) of the nominal machine with the given faults, as matrices."""
-        relevant = tuple(i for i in fault_indices if self.faults[i].generator == generator and self.faults[i].effect)
-        effects = tuple((self.faults[i].effect, tuple(self.faults[i].values.items())) for i in relevant)
+        """Design model (thesis 5.2) of the planning model with the given faults, as matrices."""
+        relevant = [self.faults[i] for i in fault_indices
+                    if self.faults[i].generator == generator and self.faults[i].effect]
+        return self.design_generator_for(tuple((f.effect, tuple(f.values.items())) for f in relevant))
 
-        def build():
-            design = _nominal_models(self.machine)[1]
-            return AffineGenerator(self._with_faults(design, generator, relevant))
-        return self._cached(("affine", effects), build)
+    def design_generator_for(self, effects=(), base=None) -> AffineGenerator:
+        """Design model of ``base`` (default the planning model) with ``effects`` (``(name,
+        ((parameter, value), ...))`` pairs, applied in order), linearised by
+        :func:`~genthermal.schedule.linearise.planning_design_model`. ``base`` may differ from the
+        planning model in parameter values only (a recalibration): its values are set on the
+        planning model's design model, which shares its compiled functions."""
+        from .linearise import planning_design_model
+
+        def build_planning():
+            if not effects and self.model is None:
+                return AffineGenerator(_nominal_models(self.machine)[1], *self._exciter_operating_point())
+            model = self.planning_model
+            for name, values in effects:
+                model = model.with_effect(name, **dict(values))
+            return AffineGenerator(planning_design_model(model), *self._exciter_operating_point())
+        planning = self._cached(("affine", tuple(effects)), build_planning)
+        if base is None or base is self.planning_model:
+            return planning
+        changed = {name: value for name, value in base.parameters.values().items()
+                   if value != self.planning_model.parameters.value(name)}
+        self._models.setdefault(("base", id(base)), base)  # keeps ``base`` alive while its key is used
+        return self._cached(("affine", tuple(effects), id(base)), lambda: AffineGenerator(
+            planning.model.with_parameters("fitted", "recalibrated in flight", **changed),
+            *self._exciter_operating_point()))
+
+    def _exciter_operating_point(self) -> tuple[float, float]:
+        """Power factor and rated current (A) the AVR exciter law of every design generator uses."""
+        return self.mission.power_factor, self.rated_current_A
 
     def describe(self) -> str:
         """Several lines: generators, rest mode, limit, faults."""

@@ -12,6 +12,16 @@ Keys of :func:`flight_summary`:
 ``displaced_Ah``        phase current moved off generators times time, A·h
 ``feasible``            every plan kept the prediction within the planning limit
 ``warnings``            scheduler fallbacks and infeasibility messages
+
+Closed loop only (:mod:`genthermal.schedule.monitor`; judged against the scenario's faults, which
+the manager is not told unless ``tell_fault``):
+
+``tell_fault``          whether the manager was handed the faults
+``detected_at_s``       first fault alarm on a generator whose fault had started, s (None: none)
+``detect_delay_s``      that alarm minus the fault's onset, s
+``identified``          one entry per identification: generator, effect, parameters, onset, confidence
+``false_alarms``        fault alarms on a generator with no fault started at that time
+``recalibrations``      in-flight recalibrations of the planning model: time, generator, parameters
 """
 
 from __future__ import annotations
@@ -49,7 +59,29 @@ def flight_summary(result: FlightResult) -> dict:
         "feasible": all(plan["feasible"] for plan in result.plans),
         "warnings": list(dict.fromkeys(result.warnings)),
     }
+    if result.closed_loop and result.monitor is not None:
+        summary.update(detection_summary(result))
     return summary
+
+
+def detection_summary(result: FlightResult) -> dict:
+    """The detection keys (module docstring) of a closed-loop flight."""
+    system, monitor = result.system, result.monitor
+    names = system.generator_names
+
+    def onset(g, t_s):
+        started = [f.onset_s for f in system.faults if f.generator == g and f.onset_s <= t_s + 1e-9]
+        return min(started) if started else None
+    true_alarms = [(a["time_s"], onset(a["generator"], a["time_s"])) for a in monitor.alarms
+                   if onset(a["generator"], a["time_s"]) is not None]
+    first = min(true_alarms, default=None)
+    return {"tell_fault": bool(result.settings.tell_fault),
+            "detected_at_s": None if first is None else float(first[0]),
+            "detect_delay_s": None if first is None else float(first[0] - first[1]),
+            "identified": [i.to_dict(names) for i in monitor.identifications],
+            "false_alarms": len(monitor.alarms) - len(true_alarms),
+            "recalibrations": [{"time_s": c["time_s"], "generator": names[c["generator"]],
+                                "parameters": c["parameters"]} for c in monitor.calibrations]}
 
 
 def summary_text(summary: dict, limit_C: float) -> str:
@@ -61,6 +93,11 @@ def summary_text(summary: dict, limit_C: float) -> str:
              f"peak winding/iron °C: {peaks}",
              f"time above {limit_C:g} °C: {summary['breach_s']:.0f} s; plans: {summary['replans']}, median solve "
              f"{summary['median_solve_s']:.2f} s; displaced {summary['displaced_Ah']:.2f} A·h"]
+    if "identified" in summary and not summary["tell_fault"]:
+        found = "; ".join(f"{i['generator']}: {i['effect'] or 'nothing significant'} at {i['detected_at_s'] / 60:.0f} min"
+                          + (f" (onset {i['onset_s'] / 60:.0f} min, {', '.join(f'{k}={v:.3g}' for k, v in i['parameters'].items())})"
+                             if i["effect"] else "") for i in summary["identified"]) or "no fault alarm"
+        lines.append(f"in-flight detection: {found}; false alarms {summary['false_alarms']}")
     lines += [w if w.startswith("infeasible") else f"warning: {w}" for w in summary["warnings"]]
     return "\n".join(lines)
 
@@ -81,6 +118,14 @@ def plot_flight(result: FlightResult, title: str = "", path=None):
         for start, end in zip(edges[::2], edges[1::2]):
             ax.axvspan(steps[start], hours[end], color="tab:green", alpha=0.15, lw=0)
         ax.grid(alpha=0.3)
+    monitor = result.monitor
+    for found in (monitor.identifications if monitor is not None else []):
+        label = (f"{system.generator_names[found.generator]}: {found.effect} identified" if found.effect else
+                 f"{system.generator_names[found.generator]}: alarm, nothing significant")
+        for ax in axes:
+            ax.axvline(found.detected_at_s / 3600.0, color="k" if found.effect else "grey", ls="-.", lw=1)
+        axes[1].annotate(label, (found.detected_at_s / 3600.0, axes[1].get_ylim()[0]), rotation=90, fontsize=7,
+                         va="bottom", ha="right")
     for panel, output in zip(axes[1:], OUTPUT_LABELS):
         panel.axhline(system.limit_C, color="red", ls="--", lw=1, label=f"limit {system.limit_C:g} °C")
         panel.set_ylabel(f"{output} [°C]")

@@ -1,0 +1,60 @@
+"""Fit the chapter-7 calibration and write the shipped parameter set (JSON summary on stdout).
+
+    python3 benchmarks/fit_chapter7.py [--json FILE] [--write]
+
+Fits the assumed cooling and loss values of the Genco RF201A, and the large blockage's flow
+fraction and convection exponent, to continuous proxies of the thesis's chapter-7 outcomes
+(:mod:`genthermal.machines.chapter7`), with IPOPT and exact derivatives. ``--write`` replaces
+``genthermal/machines/genco_rf201a_chapter7.yaml``; the blockage values go to the chapter-7 scenarios
+by hand (they are printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import yaml
+
+from genthermal.coolant import OUTLET_DIAMETER_MM
+from genthermal.machines import build_model
+from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE, SOURCE, fit_chapter7
+
+MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--json", help="also write the JSON here")
+    parser.add_argument("--write", action="store_true", help="write the shipped parameter set")
+    args = parser.parse_args()
+    started = time.perf_counter()
+    base = build_model()
+    result = fit_chapter7(base)
+    result["fit_s"] = time.perf_counter() - started
+    k_flow = result["values"]["k_flow"]
+    ratio = (OUTLET_DIAMETER_MM / 10.0) ** 4
+    result["outlet_loss_share_implied"] = (1 - k_flow**2) / (k_flow**2 * ratio - 1)
+    result["at_bound"] = [n for n, v in result["plant_values"].items()
+                          if min(abs(v - FIT_BOUNDS[n][0]), abs(v - FIT_BOUNDS[n][1])) < 1e-6 * max(1.0, abs(v))]
+    result["defaults"] = {n: base.parameters.value(n) for n in MACHINE_PARAMETERS}
+    text = json.dumps(result, indent=2)
+    print(text)
+    if args.json:
+        Path(args.json).write_text(text)
+    if args.write:
+        document = {"machine": base.spec.name, "variant": "nonlinear", "parameters": {
+            n: {"value": round(result["values"][n], 4), "provenance": "fitted",
+                "source": f"{SOURCE}: {FIT_BOUNDS[n][3]}, bounds {FIT_BOUNDS[n][0]:g}-{FIT_BOUNDS[n][1]:g} "
+                          f"{FIT_BOUNDS[n][2]}"}
+            for n in MACHINE_PARAMETERS}}
+        path = Path(__file__).resolve().parents[1] / "genthermal" / "machines" / PARAMETER_FILE
+        header = ("# Chapter-7 calibration of the Genco RF201A (genthermal.machines.chapter7), written by\n"
+                  "# benchmarks/fit_chapter7.py --write. load_model('genco_rf201a:chapter7') reads it.\n")
+        path.write_text(header + yaml.safe_dump(document, sort_keys=False))
+
+
+if __name__ == "__main__":
+    main()

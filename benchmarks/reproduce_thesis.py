@@ -1,0 +1,263 @@
+"""Reproduce the thesis, table by table: one JSON entry per published outcome of chapters 3-7.
+
+    python3 benchmarks/reproduce_thesis.py [--json FILE] [--quick]
+
+Each entry: ``section`` (thesis section / figure), ``outcome``, ``thesis`` (the published value),
+``genthermal`` (what this project computes, with the calibration used), ``verdict`` (reproduced /
+qualitative / contradicted / not checkable) and ``reason`` (for contradictions and qualitative
+matches). Rig measurements are not available, so every "measured" input is synthetic rig data from a
+plant whose parameters differ from the model's. ``--quick`` leaves out the closed-loop flights
+(chapter 7.3.3), about a minute each.
+
+Two calibrations are used: the default (chapters 3-5: normal operation near 70 °C) and
+``genco_rf201a:chapter7`` (fitted to the chapter-7 outcomes, :mod:`genthermal.machines.chapter7`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from genthermal.design import current_squared_fit, linear_design_model
+from genthermal.estimation.arx import arx_fit, simulation_scores
+from genthermal.estimation.arx_search import input_signal, output_signal, training_record
+from genthermal.estimation.comparison import compare_design_models
+from genthermal.estimation.prediction import prediction_study
+from genthermal.exciter import exciter_current
+from genthermal.machines import build_model
+from genthermal.measurements import dataframe_to_measurements
+from genthermal.mission import load_mission
+from genthermal.model_file import load_model
+from genthermal.schedule.closed_loop import ManagerSettings, fly
+from genthermal.schedule.power_system import PowerSystem
+from genthermal.simulate import simulate
+from genthermal.synth import synthesize
+
+#: The synthetic rig: parameters off the model's (as the demo's rig).
+RIG_MISMATCH = {"h_end_air": 0.85, "h_top_air": 1.1, "R0": 1.05, "P_iron": 1.2}
+ONSET_S = 66 * 60.0
+
+
+def entry(section, outcome, thesis, genthermal, verdict, reason=""):
+    return {"section": section, "outcome": outcome, "thesis": thesis, "genthermal": genthermal,
+            "verdict": verdict, "reason": reason}
+
+
+def rig_of(model):
+    return model.with_parameters("assumed", "synthetic rig", **{k: model.parameters.value(k) * f
+                                                                for k, f in RIG_MISMATCH.items()})
+
+
+def chapter_3_4(default):
+    stages = default.network.reduction_stages()
+    rated = exciter_current(7.0, 0.8)
+    return [
+        entry("4.2.4", "network size: nodes → after intermediate nodes → states", "19 → 12 → 8",
+              f"{stages['all_nodes']} → {stages['without_intermediate']} → {stages['states']}", "reproduced"),
+        entry("Table 3.4", "exciter winding current at full load", "1.02 A (rig reading)",
+              f"{rated:.2f} A (AVR law at 7 A, power factor 0.8)", "qualitative",
+              "the exciter constants are assumed (genthermal.exciter), not fitted to this reading"),
+        entry("4.3.1-4.3.3", "model vs rig: ±1 °C steady state, ±2-5 °C transient", "rig data",
+              "no rig data", "not checkable", "the rig measurements are not published"),
+    ]
+
+
+def chapter_5(default, records, rig_records):
+    design = linear_design_model(default)
+    fit = current_squared_fit(design)
+    low, high = fit.exact_at
+    rows = [entry("5.2, eq 5.3", "I² ≈ a I + b over the operating range", "7.3 I − 12, R² 0.9764, exact at 2.4 and 4.9 A",
+                  f"{fit.slope:.1f} I − {-fit.intercept:.1f}, R² {fit.r_squared:.4f}, exact at {low:.1f} and {high:.1f} A "
+                  f"(range {fit.current_range[0]:g}-{fit.current_range[1]:g} A)",
+                  "reproduced" if abs(fit.slope - 7.3) < 0.5 and abs(fit.r_squared - 0.9764) < 0.01 else "qualitative")]
+    train, validation = records
+    offsets = {"iron": float(output_signal(train, "iron")[0]),
+               "winding": float(output_signal(train, "winding")[np.searchsorted(train.time_s, 1800.0)])}
+    rows.append(entry("5.3.2", "ARX output offsets: first training values (iron at 0, winding at 30 min)",
+                      "26.5 °C iron, 62.7 °C winding",
+                      f"{offsets['iron']:.1f} °C iron, {offsets['winding']:.1f} °C winding (default calibration, "
+                      "Fig 3.2 flight from 20 °C)", "qualitative",
+                      "the rig started warmer than 20 °C (iron 26.5 °C); the winding's 30-min value matches within "
+                      f"{abs(offsets['winding'] - 62.7):.0f} K"))
+    scores = {}
+    for output, discard_s in (("winding", 1800.0), ("iron", 0.0)):
+        y, u = training_record(train, output, "I_exc", discard_s)
+        model = arx_fit(y, u, 1, 2, 0, integrate_input=True, constant_term=True)
+        biased = arx_fit(y, u, 1, 2, 0, integrate_input=True)
+        measured, u_val = output_signal(validation, output), input_signal(validation, "I_exc")
+        scores[output] = {
+            "train": simulation_scores(model, y, u)["R2"],
+            "validation": simulation_scores(model, measured, u_val, initial_output=measured[0])["R2"],
+            "validation_without_offset_term": simulation_scores(biased, measured, u_val, y0=measured[0])["R2"]}
+    rows.append(entry("5.3.2, Tables 5.1-5.2", "ARX (I_exc, na=1 nb=2 nk=0, integrator) training R²",
+                      "0.9843 iron, 0.8658 winding (30 min discarded)",
+                      f"{scores['iron']['train']:.4f} iron, {scores['winding']['train']:.4f} winding (synthetic rig)",
+                      "qualitative", "synthetic data: the fit is closer than on the rig"))
+    rows.append(entry("5.3.3", "ARX validation R² (thesis procedure)", "0.9760 iron, 0.8197 winding",
+                      f"{scores['iron']['validation']:.4f} iron, {scores['winding']['validation']:.4f} winding "
+                      f"with the constant term and initialisation from data; without them "
+                      f"{scores['iron']['validation_without_offset_term']:.2f} / "
+                      f"{scores['winding']['validation_without_offset_term']:.2f}",
+                      "reproduced" if scores["winding"]["validation"] >= 0.8 and scores["iron"]["validation"] >= 0.95
+                      else "contradicted", ""))
+    table = compare_design_models(*rig_records, plant=default)
+    physics = table[table["model"] == "linear physics"].set_index("sensor")["R2"]
+    rows.append(entry("5.4", "linear physics model R² on validation data", "0.9786 winding, 0.9903 iron",
+                      f"{physics['T_winding']:.4f} winding, {physics['T_iron']:.4f} iron (rig off by {RIG_MISMATCH})",
+                      "qualitative" if min(physics) > 0.9 else "contradicted",
+                      "synthetic rig with parameter mismatch instead of the rig"))
+    return rows, scores
+
+
+def chapter_6(default):
+    design = linear_design_model(default)
+    data = synthesize(rig_of(default), load_mission("thesis_fig_7_7"), 10.0, seed=1)
+    report = prediction_study(design, data).to_json()
+    worst_filter = max(report["filter_rmse"].values())
+    improved = [m for minutes in report["improved_minutes"].values() for m in minutes.values()]
+    return [
+        entry("6.3.1", "Kalman filter error against measurement", "< 1 °C",
+              f"RMSE ≤ {worst_filter:.2f} K (rig off by {RIG_MISMATCH})", "reproduced" if worst_filter < 1 else "contradicted"),
+        entry("6.3.2", "prediction beats the open-loop model for at least", "20 min (22 winding, 40 iron)",
+              f"{min(improved):.0f}-{max(improved):.0f} min over the start times", "reproduced" if min(improved) >= 20
+              else "contradicted"),
+        entry("7.2", "management cycle", "5 min", f"{ManagerSettings().cycle_s / 60:g} min", "reproduced"),
+    ]
+
+
+def healthy_peaks(model):
+    result = simulate(model, load_mission("thesis_fig_7_7").to_inputs(30.0))
+    t = result["time_s"].to_numpy()
+    winding = result["T_winding"].to_numpy()
+    return {"peak": float(winding.max()), "cruise_combat": float(winding[(t >= 7200) & (t <= 10800)].max()),
+            "landing": float(winding[t >= 13200].max())}
+
+
+def no_action_blockage(model, k_flow, n_flow):
+    inputs = load_mission("thesis_fig_7_7").to_inputs(30.0)
+    faulty = inputs.copy()
+    faulty.loc[faulty["time_s"] >= ONSET_S, "T_inlet"] += 31.0
+    blocked = model.with_effect("coolant_flow_reduction", k_flow=k_flow, n_flow=n_flow)
+    result = simulate(model, faulty, switches=[(ONSET_S, blocked)])
+    over = result[result["T_winding"] >= 109.0]
+    return (float(over["time_s"].iloc[0]) - ONSET_S) / 60.0 if len(over) else None
+
+
+def flight_outcome(scenario):
+    """Per mission action: largest current shed by gen1 (A) and rest before it (min)."""
+    system = PowerSystem.from_mission(load_mission(scenario))
+    result = fly(system, "heuristic", ManagerSettings())
+    dt = np.diff(result.time_s)
+    actions = []
+    for k, action in enumerate(system.mission.actions):
+        here = result.action_index == k
+        flying = here & ~result.resting
+        shed = result.nominal_A[flying] - result.currents_A[0, flying]
+        actions.append({"action": action.condition.name, "shed_A": float(np.max(shed, initial=0.0)),
+                        "rest_min": float(np.sum(dt[here & result.resting]) / 60.0)})
+    return {"actions": actions, "peak_C": float(result.temperatures_C[:, 0].max()),
+            "breach_s": float(np.sum(dt[np.max(result.temperatures_C[:, 0, 1:], axis=0) > system.limit_C]))}
+
+
+def _shed(outcome, indices):
+    return [outcome["actions"][i]["shed_A"] > 0.01 for i in indices]
+
+
+def chapter_7(default, chapter7, quick):
+    from genthermal.coolant import outlet_flow_fraction
+
+    rows = []
+    peaks = {"default": healthy_peaks(default), "chapter7": healthy_peaks(chapter7)}
+    rows.append(entry("7.3.2, Fig 7.8", "healthy Fig 7.7 mission stays below 110 °C", "yes",
+                      f"peak {peaks['default']['peak']:.1f} °C (default), {peaks['chapter7']['peak']:.1f} °C (chapter7)",
+                      "reproduced" if max(p["peak"] for p in peaks.values()) < 110 else "contradicted"))
+    implied = {"landing": 110 - 4, "cruise_combat": 110 - 16}
+    rows.append(entry("5.5 vs 7.3.3", "healthy winding level implied by each chapter",
+                      "ch. 5: optimisation point ~70 °C (offset 62.7 °C); ch. 7: +4 K breaks 110 °C at landing, "
+                      f"+16 K in cruise/combat → healthy ≈ {implied['landing']} °C landing, {implied['cruise_combat']} °C "
+                      "cruise/combat",
+                      f"default: {peaks['default']['landing']:.1f} °C landing, {peaks['default']['cruise_combat']:.1f} °C "
+                      f"cruise/combat; chapter7: {peaks['chapter7']['landing']:.1f} / {peaks['chapter7']['cruise_combat']:.1f} °C",
+                      "contradicted",
+                      "the thesis contradicts itself: one machine cannot run near 70 °C in normal operation (ch. 5) "
+                      f"and within 4 K of 110 °C at landing (ch. 7); the default follows ch. 5 "
+                      f"({110 - peaks['default']['landing']:.0f} K of margin at landing), genco_rf201a:chapter7 follows ch. 7"))
+    default_minutes = no_action_blockage(default, outlet_flow_fraction(10.0), 0.8)
+    chapter7_minutes = no_action_blockage(chapter7, 0.3, 0.5)
+    rows.append(entry("7.3.1, Fig 7.5", "large blockage, no action: 109 °C reached after the fault", "44 min (111 min in)",
+                      f"default (k_flow {outlet_flow_fraction(10.0):.2f}, n 0.8): {default_minutes:.0f} min; "
+                      f"chapter7 (k_flow 0.30, n 0.5, fitted at the edge of their range): {chapter7_minutes:.0f} min",
+                      "reproduced" if abs(chapter7_minutes - 44) <= 10 else "contradicted",
+                      "" if abs(chapter7_minutes - 44) <= 10 else
+                      "with a 10 mm orifice on the 50 mm outlet the flow cannot stay above ~30 % (orifice relation), "
+                      "and the +31 K inlet step alone adds ~20 K in 44 min: a machine hot enough for the 4 K / 16 K "
+                      "thresholds reaches 109 °C sooner; the thesis's inlet may have risen gradually (Fig 7.4)"))
+    if quick:
+        return rows, {}
+    flights = {s: flight_outcome(s) for s in ("chapter7_inlet_3C", "chapter7_inlet_4C", "chapter7_inlet_16C",
+                                               "chapter7_blockage_large")}
+    f3, f4, f16, fb = (flights[s] for s in flights)
+    nothing = not any(_shed(f3, range(8))) and sum(a["rest_min"] for a in f3["actions"]) == 0
+    rows.append(entry("7.3.3", "inlet +3 K (< 4 K): no action", "no action",
+                      "no action" if nothing else f"{f3['actions']}", "reproduced" if nothing else "contradicted"))
+    landing4 = f4["actions"][7]
+    before = not any(_shed(f4, range(7)))
+    rows.append(entry("7.3.3, Figs 7.9-7.10", "inlet +4 K: short rest and load adjust before landing",
+                      "rest + displacement before landing",
+                      f"landing: {landing4['shed_A']:.2f} A displaced, rest {landing4['rest_min']:.0f} min; nothing earlier: {before}",
+                      "reproduced" if landing4["rest_min"] > 0 and before else ("qualitative" if before else "contradicted"),
+                      "action only at landing, as in the thesis, but the healthy generator still has the spare capacity "
+                      "to take the load, so no rest is needed" if landing4["rest_min"] == 0 else ""))
+    combat = f16["actions"][5]["shed_A"] > 0.01
+    rows.append(entry("7.3.3, Figs 7.11-7.12", "inlet +16 K: displacement in cruise/combat (2 h), then rest before landing",
+                      "displacement from 2 h in cruise/combat; short rest + displacement for landing",
+                      "; ".join(f"{a['action']}: shed {a['shed_A']:.2f} A, rest {a['rest_min']:.0f} min"
+                                for a in f16["actions"][4:]),
+                      "reproduced" if combat and f16["actions"][7]["rest_min"] > 0 else
+                      ("qualitative" if f16["actions"][7]["rest_min"] > 0 else "contradicted"),
+                      "" if combat else "the manager acts in the following cruise instead: the cruise/combat peak "
+                      "stays just within the planning limit"))
+    three = _shed(fb, (4, 5, 6))
+    rest = fb["actions"][7]["rest_min"]
+    rows.append(entry("7.3.3, Figs 7.13-7.15", "large blockage, managed: displacement over 3 K-conditions, then rest "
+                      "before landing", "displacement in cruise, cruise/combat, cruise; 10 min rest (rig 20 min); "
+                      "breaches of 110.7 and 111 °C",
+                      "; ".join(f"{a['action']}: shed {a['shed_A']:.2f} A, rest {a['rest_min']:.0f} min"
+                                for a in fb["actions"][4:]) + f"; peak {fb['peak_C']:.1f} °C, {fb['breach_s']:.0f} s above 110 °C",
+                      "reproduced" if all(three) and 10 <= rest <= 20 else ("qualitative" if any(three) else "contradicted"),
+                      "" if all(three) and 10 <= rest <= 20 else "see the per-action figures"))
+    rows.append(entry("7.3.5", "rig test: 20-min rests", "rig data", "no rig", "not checkable",
+                      "the rig is not available"))
+    return rows, flights
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--json", help="also write the JSON here")
+    parser.add_argument("--quick", action="store_true", help="leave out the closed-loop flights")
+    args = parser.parse_args()
+    started = time.perf_counter()
+    default, chapter7 = build_model(), load_model("genco_rf201a:chapter7")
+    records = tuple(dataframe_to_measurements(synthesize(rig_of(default), load_mission(name), 10.0, seed=seed), name)
+                    for name, seed in (("thesis_fig_3_2", 6), ("thesis_fig_7_7", 5)))
+    rows = chapter_3_4(default)
+    chapter5, arx_scores = chapter_5(default, records, records)
+    rows += chapter5 + chapter_6(default)
+    chapter7_rows, flights = chapter_7(default, chapter7, args.quick)
+    rows += chapter7_rows
+    verdicts = {v: sum(r["verdict"] == v for r in rows) for v in ("reproduced", "qualitative", "contradicted",
+                                                                    "not checkable")}
+    report = {"entries": rows, "verdicts": verdicts, "arx": arx_scores, "flights": flights,
+              "wall_s": time.perf_counter() - started}
+    text = json.dumps(report, indent=2, ensure_ascii=False)
+    print(text)
+    if args.json:
+        Path(args.json).write_text(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,71 @@
+r"""Coolant flow through a partly blocked outlet: the outlet diameter → flow fraction relation.
+
+The internal fan drives the air around a circuit of resistances in series: the fan itself (a
+centrifugal fan's pressure falls with the square of its flow, :math:`\Delta p = p_0 - c_f Q^2`),
+the machine's passages and the outlet. Every resistance is quadratic, :math:`\Delta p = R Q^2`, so
+the operating point is :math:`Q = \sqrt{p_0 / (c_f + R_{circuit} + R_{out}(d))}`. The outlet is an
+orifice of diameter :math:`d`,
+
+.. math::
+    R_{out}(d) = \frac{\rho}{2\,C_d^2 A(d)^2}, \qquad A(d) = \frac{\pi d^2}{4},
+
+with the same discharge coefficient for the open outlet (diameter :math:`d_0`) and the plate, so
+:math:`R_{out}(d) = R_{out}(d_0)\,(d_0/d)^4`. With :math:`\beta = R_{out}(d_0) / (c_f + R_{circuit})`,
+the share of the healthy outlet's loss against the rest of the circuit, the flow fraction is
+
+.. math::
+    k_{flow}(d) = \frac{Q(d)}{Q(d_0)} = \sqrt{\frac{1 + \beta}{1 + \beta\,(d_0/d)^4}} .
+
+It is 1 at :math:`d = d_0`, rises with :math:`d`, and falls as :math:`d^2` for a small orifice
+(the orifice alone then limits the flow): :math:`k \to \sqrt{(1+\beta)/\beta}\,(d/d_0)^2`.
+
+The thesis (7.3.1) replaced the 50 mm outlet by a 10 mm plate and says only that "the only
+parameter of the design model that needed to change was the output vent diameter". Neither the
+fan curve nor the duct losses are given, so :math:`\beta` is assumed (:data:`OUTLET_LOSS_SHARE`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import InputError
+
+#: Diameter of the unblocked coolant outlet of the thesis rig, mm (thesis 7.3.1).
+OUTLET_DIAMETER_MM = 50.0
+#: Assumed share β of the healthy outlet's exit loss in the rest of the circuit's resistance (fan
+#: slope and passages): ~8.5 m/s in the 50 mm duct loses one velocity head, ~45 Pa, against a
+#: small internal fan's ~200-400 Pa, so β ≈ 0.1-0.25; 0.15 is taken.
+OUTLET_LOSS_SHARE = 0.15
+
+
+def outlet_flow_fraction(diameter_mm: float, healthy_diameter_mm: float = OUTLET_DIAMETER_MM,
+                         loss_share: float = OUTLET_LOSS_SHARE) -> float:
+    r"""Coolant flow with an outlet orifice of ``diameter_mm``, as a fraction of the healthy flow.
+
+    :math:`k = \sqrt{(1+\beta)/(1+\beta (d_0/d)^4)}`; see the module docstring.
+
+    Parameters
+    ----------
+    diameter_mm : float
+        Orifice diameter, mm; ``0 < d <= healthy_diameter_mm``.
+    healthy_diameter_mm : float
+        Diameter of the open outlet duct, mm (thesis rig: 50).
+    loss_share : float
+        :math:`\beta > 0`: exit loss of the open outlet over the rest of the circuit's resistance.
+
+    Returns
+    -------
+    float
+        :math:`k_{flow}` in (0, 1].
+    """
+    checks = (("healthy_diameter_mm", healthy_diameter_mm, healthy_diameter_mm > 0, "a diameter > 0 mm"),
+              ("loss_share", loss_share, loss_share > 0, "a resistance ratio > 0"))
+    for field, value, ok, what in checks:
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and ok):
+            raise InputError(field, value, f"must be {what}")
+    if not (isinstance(diameter_mm, (int, float)) and math.isfinite(diameter_mm)
+            and 0 < diameter_mm <= healthy_diameter_mm):
+        raise InputError("outlet_diameter_mm", diameter_mm,
+                         f"must be a diameter in (0, {healthy_diameter_mm:g}] mm (the open outlet)")
+    ratio = (healthy_diameter_mm / diameter_mm) ** 4
+    return math.sqrt((1.0 + loss_share) / (1.0 + loss_share * ratio))

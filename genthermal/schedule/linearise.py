@@ -1,0 +1,70 @@
+r"""The design model the schedulers plan on, for any model, fault effects included.
+
+:func:`genthermal.design.linear_design_model` replaces the copper loss :math:`I^2` by its
+least-squares line over the design current range (thesis eq. 5.3). A fault effect may add other
+losses that depend nonlinearly on the currents (a shorted turn :math:`R_{short}I_u^2`, an
+end-winding stray loss :math:`R_{stray}\sum_p I_p^2`, an excitation iron loss
+:math:`k_{exc}I_{exc}^2`). :func:`planning_design_model` treats them the same way: along the
+schedulers' load path (balanced phases :math:`I_u = I_v = I_w = I`, field current from the
+exciter law :func:`genthermal.exciter.exciter_current` at its default power factor) each such loss is replaced by its
+least-squares line :math:`q \approx \alpha I + \beta` over the same current range, written as
+:math:`\alpha (I_u + I_v + I_w)/3 + \beta`. The result is affine, so the schedulers and the
+Kalman filter use it unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import sympy
+
+from ..design import DEFAULT_CURRENT_RANGE_A, linear_design_model
+from ..losses import PHASE_CURRENTS, input_symbol
+from ..exciter import exciter_current
+from ..model import ThermalModel
+
+#: Currents sampled for the line fit, evenly over the design current range.
+FIT_POINTS = 41
+
+
+def _load_path_line(power: sympy.Expr, parameter_values: dict, current_range_A) -> tuple[float, float]:
+    """``(alpha W/A, beta W)`` of the least-squares line of ``power`` along the load path."""
+    currents = np.linspace(*current_range_A, FIT_POINTS)
+    inputs = [input_symbol(p) for p in PHASE_CURRENTS] + [input_symbol("I_exc")]
+    evaluate = sympy.lambdify(inputs, power.subs(parameter_values), "numpy")
+    values = np.broadcast_to(evaluate(currents, currents, currents, exciter_current(currents)), currents.shape)
+    alpha, beta = np.polyfit(currents, values, 1)
+    return float(alpha), float(beta)
+
+
+def planning_design_model(model: ThermalModel, current_range_A=DEFAULT_CURRENT_RANGE_A) -> ThermalModel:
+    """The affine design model of ``model`` (nonlinear or already linear) for the schedulers.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        A simulation model, possibly with fault effects, or a linear design model.
+    current_range_A : (float, float)
+        Range of the line fits, A RMS (the design model's, thesis eq. 5.3).
+
+    Returns
+    -------
+    ThermalModel
+        Affine in state and input. Losses that were already affine are unchanged.
+    """
+    design = model if model.spec.variant == "linear" else linear_design_model(model, current_range_A)
+    if design.is_affine:
+        return design
+    symbols = design.parameters.symbols()
+    values = {symbols[name]: value for name, value in design.parameters.values().items()}
+    currents = [input_symbol(p) for p in PHASE_CURRENTS] + [input_symbol("I_exc")]
+    mean_phase = sum(input_symbol(p) for p in PHASE_CURRENTS) / len(PHASE_CURRENTS)
+    sources = []
+    for source in design.network.heat_sources:
+        polynomial = sympy.Poly(sympy.expand(source.power), *currents) if source.power.has(*currents) else None
+        if polynomial is not None and polynomial.total_degree() > 1 and source.label != "copper":
+            alpha, beta = _load_path_line(source.power, values, current_range_A)
+            source = dataclasses.replace(source, power=alpha * mean_phase + beta)
+        sources.append(source)
+    return design.with_network(design.network.replace(heat_sources=tuple(sources)))

@@ -1,0 +1,347 @@
+r"""What the load manager knows about each generator: a state filter, a fault detector on its
+innovations, and identification of the fault from the in-flight record.
+
+**Filter.** :class:`StateEstimator` runs a filter (``ESTIMATORS``, default the Kalman filter of
+:mod:`genthermal.estimation.kalman`) on the design model of what the manager believes: the
+planning model with the effects identified so far.
+
+**Detection.** At every management cycle the filter's innovation :math:`e = y - \hat y^-` of the
+winding sensor is normalised by its predicted standard deviation, :math:`z_g = e_g/\sqrt{S_{ww}}`,
+:math:`S = CP^-C^T + R`. A model error common to all units (the planning model's cooling or
+resistance off by up to 30 %) gives innovations of 10 K per cycle, larger than a blockage's, so an
+absolute test cannot tell them apart. Two tests, each a CUSUM (Page 1954), separate them:
+
+* **fault** (one generator): for a generator that carries no more current than the others (the
+  model error grows with load, so a generator that took load on from the others would see it as
+  a fault), the differential innovation :math:`d_g = e_g -
+  \operatorname{median}_{h\ne g} e_h` (K) removes what the generators share; one-sided,
+  :math:`g_k = \max(0, g_{k-1} + d_k - \nu_f)`, alarm when :math:`g_k > h_f` — one-sided because
+  every fault the manager watches for (blockage, shorted turn, end-winding stray loss, excitation
+  iron loss) heats the machine;
+* **model error** (all generators): the mean :math:`\bar z` over the generators believed healthy,
+  two-sided with :math:`\nu_m, h_m`. An alarm recalibrates the planning model's uncertain
+  parameters (``calibrate_parameters``) on the record of the generator that looks healthiest
+  (:func:`genthermal.diagnose.calibrate`), at most every ``recalibrate_every_s``.
+
+The differential test assumes the units share the model error; unit-to-unit differences are not
+separated from faults. Its false-alarm rate is measured on healthy flights with parameters off by
+up to ±30 % (``benchmarks/bench_scheduler.py``).
+
+**Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
+generator's record, then the alarmed generator's record since the mission start (inputs and the
+noisy sensors, resampled to ``identify_dt_s``) is handed to :func:`genthermal.diagnose.diagnose`
+with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
+by ΔBIC, and accepted only when significant by diagnose's four tests. The manager then plans and
+filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`). An
+alarm that no effect explains is recorded and the detector restarts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+import pandas as pd
+
+from ..estimation.kalman import KalmanFilter
+from ..losses import INPUT_NAMES
+from ..measurements import WINDING_SENSORS
+from ..exciter import exciter_current
+
+#: Filters the closed loop can use: name → class built from an affine design model and a step (s)
+#: with ``update(x_pred, P, y) -> Update``, ``predict(x, P, u)`` and ``P0``.
+ESTIMATORS = {"kalman": KalmanFilter}
+#: Catalogue effects the manager watches for (heating faults).
+FAULT_EFFECTS = ("coolant_flow_reduction", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
+
+
+@dataclasses.dataclass(frozen=True)
+class DetectionSettings:
+    """Fault detection and identification in flight (module docstring).
+
+    Attributes
+    ----------
+    fault_drift, fault_threshold : float
+        :math:`\nu_f, h_f` of the differential (fault) CUSUM, K.
+    model_drift, model_threshold : float
+        :math:`\nu_m, h_m` of the common (model error) CUSUM.
+    calibrate_parameters : tuple of str
+        Parameters recalibrated on a model-error alarm.
+    recalibrate_every_s : float
+        Shortest time between recalibrations, s.
+    min_record_s : float
+        A model-error alarm recalibrates only on a record at least this long, s (shorter records
+        do not separate the parameters).
+    max_recalibrations : int
+        Recalibrations per flight on model-error alarms (a fault alarm always recalibrates).
+    fault_effects : tuple of str
+        Candidate effects of the identification.
+    identify_dt_s : float
+        Sample period of the records handed to calibration and identification, s.
+    max_identifications : int
+        Identifications per generator and flight (later alarms are recorded only).
+    """
+
+    fault_drift: float = 0.25
+    fault_threshold: float = 0.2
+    model_drift: float = 2.5
+    model_threshold: float = 5.0
+    calibrate_parameters: tuple = ("R0", "h_end_air")
+    recalibrate_every_s: float = 1800.0
+    min_record_s: float = 3600.0
+    max_recalibrations: int = 3
+    fault_effects: tuple = FAULT_EFFECTS
+    identify_dt_s: float = 60.0
+    max_identifications: int = 3
+
+
+class StateEstimator:
+    """The filter of one generator on the design model the manager believes in.
+
+    Parameters
+    ----------
+    generator : AffineGenerator
+        Design model to start with.
+    x0 : array_like
+        Initial estimate, °C.
+    dt_s : float
+        Filter step, s.
+    filters : dict
+        Filters by design model, shared between the generators of one flight.
+    estimator : str
+        Key of :data:`ESTIMATORS`.
+    """
+
+    def __init__(self, generator, x0, dt_s: float, filters: dict, estimator: str = "kalman"):
+        self.x, self.P, self.dt_s, self._filters = np.array(x0, dtype=float), None, dt_s, filters
+        self._make = ESTIMATORS[estimator]
+        self.innovation, self.innovation_std = np.full(2, np.nan), np.full(2, np.nan)
+        self.use(generator)
+
+    def use(self, generator) -> None:
+        """Continue on ``generator``'s design model (state and covariance kept)."""
+        if id(generator) not in self._filters:
+            self._filters[id(generator)] = self._make(generator.model, self.dt_s)
+        self.generator, self.filter = generator, self._filters[id(generator)]
+        if self.P is None:
+            self.P = self.filter.P0
+
+    def update(self, y) -> None:
+        """Measurement update with the measured winding and iron temperatures ``y`` (°C); keeps the
+        innovation and its predicted standard deviation (K)."""
+        C, R = self.filter.C, self.filter.R
+        self.innovation_std = np.sqrt(np.diag(C @ self.P @ C.T + R))
+        step = self.filter.update(self.x, self.P, y)
+        self.x, self.P, self.innovation = step.x, step.P, step.innovation
+
+    def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
+        """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
+        for current, inlet in zip(currents_A, inlets_C):
+            self.x, self.P = self.filter.predict(self.x, self.P, self.generator.input(current, inlet, ambient_C))
+
+
+class Cusum:
+    """CUSUM with drift :math:`\nu` and threshold :math:`h`; one- or two-sided."""
+
+    def __init__(self, drift: float, threshold: float, two_sided: bool = False):
+        self.drift, self.threshold, self.two_sided = drift, threshold, two_sided
+        self.high = self.low = 0.0
+
+    def update(self, z: float) -> bool:
+        """Add one cycle; True when a statistic crosses the threshold (both then restart)."""
+        if not np.isfinite(z):
+            return False
+        self.high = max(0.0, self.high + z - self.drift)
+        self.low = max(0.0, self.low - z - self.drift) if self.two_sided else 0.0
+        if max(self.high, self.low) > self.threshold:
+            self.high = self.low = 0.0
+            return True
+        return False
+
+
+@dataclasses.dataclass
+class Identification:
+    """An effect identified in flight.
+
+    Attributes
+    ----------
+    generator : int
+    detected_at_s : float
+        Time of the alarm, s.
+    effect : str or None
+        Identified effect, None when nothing significant explains the record.
+    values : dict
+        Fitted parameters of the effect.
+    onset_s : float or None
+        Fitted onset, s since the mission start.
+    delta_bic : float or None
+        ΔBIC of the effect (confidence: below -10 is very strong evidence).
+    rmse_before_K, rmse_after_K : float or None
+        Fit of the record without and with the effect, K.
+    runner_up : str or None
+        Second-ranked effect and its ΔBIC gap, for ambiguity.
+    solve_s : float
+        Wall-clock time of the identification, s.
+    """
+
+    generator: int
+    detected_at_s: float
+    effect: str | None
+    values: dict
+    onset_s: float | None
+    delta_bic: float | None
+    rmse_before_K: float | None
+    rmse_after_K: float | None
+    runner_up: str | None
+    solve_s: float
+
+    @property
+    def effects(self) -> tuple:
+        """The belief as ``((effect, ((name, value), ...)),)`` (empty when none was identified)."""
+        return ((self.effect, tuple(self.values.items())),) if self.effect else ()
+
+    def to_dict(self, names) -> dict:
+        """JSON entry: generator name, effect, parameters, onset and confidence."""
+        return {"generator": names[self.generator], "detected_at_s": self.detected_at_s, "effect": self.effect,
+                "parameters": self.values, "onset_s": self.onset_s,
+                "confidence": {"delta_bic": self.delta_bic, "rmse_before_K": self.rmse_before_K,
+                               "rmse_after_K": self.rmse_after_K, "runner_up": self.runner_up},
+                "solve_s": self.solve_s}
+
+
+def record_frame(time_s, currents_A, excitation_A, inlet_C, ambient_C: float, measured_C) -> pd.DataFrame:
+    """A generator's in-flight record in the measurement CSV schema (balanced phases).
+
+    Parameters
+    ----------
+    time_s : array_like
+        (n,) s.
+    currents_A, excitation_A, inlet_C : array_like
+        (n,) phase current, field current (A) and inlet temperature (°C) in force at each sample.
+    ambient_C : float
+    measured_C : array_like
+        (2, n) measured winding and iron temperatures, °C.
+    """
+    frame = {"time_s": np.asarray(time_s, dtype=float)}
+    for name in ("I_u", "I_v", "I_w"):
+        frame[name] = currents_A
+    frame.update(I_exc=excitation_A, T_inlet=inlet_C, T_ambient=np.full(len(frame["time_s"]), ambient_C))
+    for sensor in WINDING_SENSORS:
+        frame[sensor] = measured_C[0]
+    frame["T_iron"] = measured_C[1]
+    return pd.DataFrame(frame)[["time_s", *INPUT_NAMES, *WINDING_SENSORS, "T_iron"]]
+
+
+class FaultMonitor:
+    """Detection, recalibration and identification for every generator of one flight.
+
+    Parameters
+    ----------
+    system : PowerSystem
+    settings : DetectionSettings
+    dt_s : float
+        Step of the record, s.
+
+    Attributes
+    ----------
+    model : ThermalModel
+        The planning model, recalibrated in flight.
+    beliefs : list of tuple
+        Per generator, the identified effects (``(name, ((parameter, value), ...))``).
+    alarms : list of dict
+        ``time_s`` and ``generator`` of every fault alarm.
+    identifications : list of Identification
+    calibrations : list of dict
+        ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
+    """
+
+    def __init__(self, system, settings: DetectionSettings, dt_s: float):
+        self.system, self.settings, self.dt_s = system, settings, dt_s
+        n = system.n_generators
+        self.fault_tests = [Cusum(settings.fault_drift, settings.fault_threshold) for _ in range(n)]
+        self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
+        self.model, self.beliefs = system.planning_model, [()] * n
+        self.alarms, self.identifications, self.calibrations = [], [], []
+        self._time, self._currents, self._measured = [], [], []
+
+    def record(self, t0: float, currents_A, measured_C) -> None:
+        """Add the steps flown from ``t0``: currents (n_gen, n) and sensors (n_gen, 2, n) at the end
+        of each step."""
+        self._time.append(t0 + self.dt_s * np.arange(currents_A.shape[1]))
+        self._currents.append(currents_A)
+        self._measured.append(measured_C)
+
+    def frame(self, g: int) -> pd.DataFrame:
+        """Generator ``g``'s record so far in the measurement schema."""
+        time_s = np.concatenate(self._time) + self.dt_s
+        current = np.concatenate(self._currents, axis=1)[g]
+        measured = np.concatenate(self._measured, axis=2)[g]
+        excitation = exciter_current(current, self.system.mission.power_factor, self.system.rated_current_A)
+        return record_frame(time_s, current, excitation, self.system.inlet_C(g, time_s - self.dt_s),
+                            self.system.mission.T_ambient_C, measured)
+
+    def design_generator(self, g: int):
+        """Design model of generator ``g`` as the manager believes it."""
+        return self.system.design_generator_for(self.beliefs[g], base=self.model)
+
+    def cycle(self, t_s: float, estimators) -> None:
+        """Run both tests on the cycle's innovations (every estimator just updated)."""
+        if len(self._time) < 2:
+            return
+        z = np.array([e.innovation[0] / e.innovation_std[0] for e in estimators])
+        healthy = [g for g in range(len(z)) if not self.beliefs[g]]
+        e = np.array([est.innovation[0] for est in estimators])
+        load = self._currents[-1].mean(axis=1)
+        for g in range(len(z)):
+            if load[g] <= np.median(np.delete(load, g)) + 1e-9 and \
+                    self.fault_tests[g].update(e[g] - np.median(np.delete(e, g))):
+                self._fault_alarm(g, t_s, z)
+        last = max((c["time_s"] for c in self.calibrations), default=-np.inf)
+        if healthy and self.model_test.update(float(np.mean(z[healthy]))) and t_s >= self.settings.min_record_s and \
+                t_s - last >= self.settings.recalibrate_every_s and \
+                len(self.calibrations) < self.settings.max_recalibrations:
+            self._recalibrate(t_s, healthy, z)
+
+    def _recalibrate(self, t_s: float, candidates, z) -> None:
+        from ..diagnose import calibrate
+
+        g = min(candidates, key=lambda h: z[h])
+        result = calibrate(self.system.planning_model, self.frame(g), self.settings.calibrate_parameters,
+                           self.settings.identify_dt_s)
+        self.model = result.model
+        self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
+                                  "parameters": dict(zip(result.names, result.values))})
+
+    def _fault_alarm(self, g: int, t_s: float, z) -> None:
+        self.alarms.append({"time_s": t_s, "generator": g})
+        done = sum(1 for i in self.identifications if i.generator == g and i.effect)
+        if done >= self.settings.max_identifications:
+            return
+        others = [h for h in range(len(z)) if h != g and not self.beliefs[h]]
+        if others:
+            self._recalibrate(t_s, others, z)
+        found = identify_fault(self.model, self.frame(g), g, t_s, self.settings)
+        self.identifications.append(found)
+        if found.effect:
+            self.beliefs[g] = found.effects
+
+
+def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: float,
+                   settings: DetectionSettings) -> Identification:
+    """Identify the effect behind an alarm from the record (module docstring)."""
+    from ..diagnose import diagnose
+
+    started = time.perf_counter()
+    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects),
+                         pairs=False, design_experiment=False)  # one fault at a time, no rig test in flight
+    ranked = diagnosis.iterations[0].ranked
+    best = ranked[0] if ranked and ranked[0].significant else None
+    runner_up = (f"{ranked[1].effect} (ΔBIC +{ranked[1].delta_bic - ranked[0].delta_bic:.0f})"
+                 if len(ranked) > 1 else None)
+    elapsed = time.perf_counter() - started
+    if best is None:
+        return Identification(generator, detected_at_s, None, {}, None, ranked[0].delta_bic if ranked else None,
+                              diagnosis.iterations[0].rmse_before, None, runner_up, elapsed)
+    return Identification(generator, detected_at_s, best.effect, dict(best.values), float(best.onset_s),
+                          float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up, elapsed)

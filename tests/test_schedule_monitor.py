@@ -1,0 +1,72 @@
+"""In-flight fault detection and the planning design model of fault effects."""
+
+import json
+
+import numpy as np
+import pytest
+
+from genthermal.cli import main
+from genthermal.schedule.linearise import planning_design_model
+from genthermal.schedule.monitor import Cusum
+from genthermal.schedule.power_system import AffineGenerator
+
+SHORT = """name: short_blockage
+generators: {count: 2, plant_mismatch: {h_end_air: 0.8, R0: 1.2}}
+faults:
+  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, inlet_rise_C: 31}
+actions:
+  - {condition: taxi, duration_min: 15}
+  - {condition: cruise_combat, duration_min: 30}
+  - {condition: landing, duration_min: 15}
+"""
+
+
+def test_cusum_is_one_sided_accumulates_and_restarts():
+    test = Cusum(drift=0.5, threshold=1.0)
+    assert not any(test.update(z) for z in (-5.0, 0.4, 0.5, -3.0))  # below the drift: nothing builds up
+    assert not test.update(1.0) and test.update(1.1)  # 0.5 + 0.6 > 1
+    assert test.high == 0.0
+    two = Cusum(drift=0.5, threshold=1.0, two_sided=True)
+    assert not two.update(-1.2) and two.update(-1.4)
+
+
+@pytest.mark.parametrize("effect, values", [("phase_short_circuit", {"R_short": 0.5}),
+                                            ("end_winding_stray_loss", {"R_stray": 0.3}),
+                                            ("excitation_iron_loss", {"k_exc": 60.0})])
+def test_planning_design_model_keeps_a_current_squared_fault_and_stays_affine(plant_model, effect, values):
+    faulty = plant_model.with_effect(effect, **values)
+    design_faulty, design_healthy = planning_design_model(faulty), planning_design_model(plant_model)
+    assert design_faulty.is_affine
+    rises = []
+    for nonlinear, design in ((faulty, design_faulty), (plant_model, design_healthy)):
+        g = AffineGenerator(design)
+        u = g.input(5.0, 20.0, 20.0)
+        rises.append((g.outputs(g.steady_state(u), u), nonlinear.outputs(nonlinear.steady_state(u), u)))
+    design_rise = rises[0][0] - rises[1][0]
+    plant_rise = rises[0][1] - rises[1][1]
+    assert np.all(design_rise > 0.2)  # the fault's heat is kept, not linearised away at I = 0
+    np.testing.assert_allclose(design_rise, plant_rise, rtol=0.35)
+
+
+def test_fly_reports_detection_keys_and_tell_fault_keeps_the_old_behaviour(tmp_path):
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(SHORT)
+    untold, told = tmp_path / "untold.json", tmp_path / "told.json"
+    assert main(["fly", str(scenario), "--scheduler", "engineer", "--json", str(untold)]) == 0
+    assert main(["fly", str(scenario), "--scheduler", "engineer", "--tell-fault", "--json", str(told)]) == 0
+    a, b = json.loads(untold.read_text()), json.loads(told.read_text())
+    for key in ("detected_at_s", "detect_delay_s", "identified", "false_alarms", "recalibrations"):
+        assert key in a
+    assert not a["tell_fault"] and b["tell_fault"] and b["identified"] == []
+    assert b["plans"] and b["plans"][0]["believed"]["gen1"][0]["effect"] == "coolant_flow_reduction"
+    for entry in a["identified"]:
+        assert entry["generator"] in ("gen1", "gen2") and "delta_bic" in entry["confidence"]
+
+
+@pytest.mark.parametrize("args, field", [(["--estimator", "magic"], "--estimator"),
+                                         (["--model", "no_such_model"], "model"),
+                                         (["--plant", "genco_rf201a:linear"], "--plant")])
+def test_bad_fly_options_exit_2_naming_the_option(tmp_path, capsys, args, field):
+    assert main(["fly", "blockage_large", "--json", str(tmp_path / "x.json"), *args]) == 2
+    error = capsys.readouterr().err
+    assert field in error and "Traceback" not in error
