@@ -52,7 +52,7 @@ int main(void)
     long k;
     clock_gettime(CLOCK_MONOTONIC, &start);
     for (k = 0; k < %(n)d; ++k) {
-        gt_kalman_update(x, u, y, filtered, next, work);
+        gt_kalman_update(x, u, y, filtered, next, work, GT_WORK_SIZE);
         x[0] = next[0] - 1e-9 * (double)(k & 1);  /* keep the loop from being hoisted */
         checksum += next[3];
     }
@@ -76,7 +76,7 @@ int main(void)
     for (k = 0; k < 10; ++k) P[11 * k] = k < 8 ? 1.0 : 100.0;
     clock_gettime(CLOCK_MONOTONIC, &start);
     for (k = 0; k < %(n)d; ++k) {
-        gt_ekf_update(z, P, u, y, measured, zf, Pf, zn, Pn, work);
+        gt_ekf_update(z, P, u, y, measured, zf, Pf, zn, Pn, work, GT_WORK_SIZE);
         z[0] = zn[0] - 1e-9 * (double)(k & 1);  /* keep the loop from being hoisted */
         checksum += zn[3] + Pn[0];
     }

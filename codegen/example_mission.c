@@ -176,7 +176,7 @@ int main(int argc, char** argv)
         goto done;
     }
     /* the last row's input would act after the last printed time: n_rows - 1 steps */
-    if (gt_simulate(x0, mission.inputs, mission.n_rows - 1, states, work) != GT_OK) {
+    if (gt_simulate(x0, mission.inputs, mission.n_rows - 1, states, work, gt_work_size()) != GT_OK) {
         fprintf(stderr, "gt_simulate failed\n");
         goto done;
     }

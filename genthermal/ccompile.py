@@ -249,13 +249,13 @@ class CompiledModel:
         n, m, k = self.n_states, self.n_inputs, self.n_params
         self._results = {"step": np.empty(n), "rhs": np.empty(n), "jac_x": np.empty((n, n)),
                          "jac_u": np.empty((n, m)), "jac_p": np.empty((n, k)), "outputs": np.empty(self.n_outputs)}
-        self._entries = {name: self._entry(name, 5) for name in self._results}
-        self._entries["step"] = self._entry("step", 4)
-        self._entries["simulate"] = self._entry("simulate", 5, {2: ctypes.c_int})
+        self._entries = {name: self._entry(name, 6) for name in self._results}
+        self._entries["step"] = self._entry("step", 5)
+        self._entries["simulate"] = self._entry("simulate", 6, {2: ctypes.c_int})
         self._signatures = {s.name: s for s in generated.extra_functions}
         for signature in generated.extra_functions:
             self._entries[signature.name] = self._entry(signature.name,
-                                                        len(signature.inputs) + len(signature.outputs) + 1)
+                                                        len(signature.inputs) + len(signature.outputs) + 2)
 
     # --- loading helpers ----------------------------------------------------------------------
     def _constant(self, ctype, name):
@@ -265,13 +265,15 @@ class CompiledModel:
         return tuple(v.decode() for v in (ctypes.c_char_p * count).in_dll(self._lib, f"{self.prefix}_{name}"))
 
     def _entry(self, name: str, n_arguments: int, types: dict | None = None):
+        """Entry point ``<prefix>_<name>``: pointers, except ``types`` by index and the last
+        argument, the work size (``size_t``)."""
         function = self._lib[f"{self.prefix}_{name}"]
         function.restype = ctypes.c_int
-        function.argtypes = [(types or {}).get(i, ctypes.c_void_p) for i in range(n_arguments)]
+        function.argtypes = [(types or {}).get(i, ctypes.c_void_p) for i in range(n_arguments - 1)] + [ctypes.c_size_t]
         return function
 
     def _call(self, name: str, *arguments) -> None:
-        status = self._entries[name](*arguments, self._work_pointer)
+        status = self._entries[name](*arguments, self._work_pointer, self._work.size)
         if status != 0:
             raise LibraryCallError(f"{self.prefix}_{name} returned status {status} (see codegen/ABI.md)")
 

@@ -33,11 +33,10 @@ import casadi as ca
 from . import __version__
 from .errors import GenthermalError, InputError
 from .model import ThermalModel
+from .resources import TEMPLATE_DIR, shipped_file
 
 #: Version of the C interface written into ``<PREFIX>_ABI_VERSION``.
-ABI_VERSION = 1
-#: Directory of the ABI templates, the example program and its Makefile.
-TEMPLATE_DIR = Path(__file__).resolve().parents[1] / "codegen"
+ABI_VERSION = 2
 #: Continuous-model functions of (x, u, p) generated as they are (``jac_p`` is built from rows).
 MODEL_FUNCTIONS = ("rhs", "jac_x", "jac_u", "outputs")
 #: Names of the fixed entry points and metadata; extra functions may not take them (nor start
@@ -48,7 +47,7 @@ RESERVED_NAMES = ("step", "simulate", "rhs", "jac_x", "jac_u", "jac_p", "jac_p_r
                   "output_names")
 _C_KEYWORDS = set("auto break case char const continue default do double else enum extern float for goto if "
                   "inline int long register restrict return short signed sizeof static struct switch "
-                  "typedef union unsigned void volatile while work".split())  # work: the last argument
+                  "typedef union unsigned void volatile while work work_size size_t".split())  # the last arguments
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _MUTABLE_STATIC = re.compile(r"^\s*static\s+(?!const\b)(?!inline\b)[^(]*[=;\[]")
 _HEAP_CALL = re.compile(r"\b(malloc|calloc|realloc|free)\s*\(")
@@ -60,7 +59,7 @@ class CodegenError(GenthermalError):
 
 @dataclasses.dataclass(frozen=True)
 class Signature:
-    """C signature of an extra entry point ``<prefix>_<name>(inputs..., outputs..., work)``.
+    """C signature of an extra entry point ``<prefix>_<name>(inputs..., outputs..., work, work_size)``.
 
     Attributes
     ----------
@@ -149,7 +148,7 @@ def generate_c(model: ThermalModel, out_dir, dt_s: float = 10.0, prefix: str = "
     prefix : str
         C identifier that starts every public symbol and file name.
     extra_functions : dict of str to casadi.Function, optional
-        More entry points ``<prefix>_<name>(inputs..., outputs..., work)``; every input and output
+        More entry points ``<prefix>_<name>(inputs..., outputs..., work, work_size)``; every input and output
         becomes a dense row-major array named after the CasADi argument.
 
     Returns
@@ -361,7 +360,7 @@ def _extra_prototype(prefix: str, signature: Signature) -> str:
     shapes = ", ".join(f"{n}[{r}x{c}]" for n, (r, c) in signature.inputs)
     results = ", ".join(f"{n}[{r}x{c}]" for n, (r, c) in signature.outputs)
     arguments = [f"const double* {n}" for n, _ in signature.inputs]
-    arguments += [f"double* {n}" for n, _ in signature.outputs] + ["double* work"]
+    arguments += [f"double* {n}" for n, _ in signature.outputs] + ["double* work", "size_t work_size"]
     return (f"\n/* ({shapes}) -> ({results}), dense row-major */\n"
             f"int {prefix}_{signature.name}({', '.join(arguments)})")
 
@@ -372,7 +371,8 @@ def _extra_definition(prefix: str, signature: Signature) -> str:
     n_in, n_out = len(signature.inputs), len(signature.outputs)
     lines = [_extra_prototype(prefix, signature), "{", f"    const double* inputs[{n_in}];",
              f"    double* outputs[{n_out}];",
-             f"    if ({' || '.join(f'!{n}' for n in names + ['work'])}) return {upper}_ERR_NULL_POINTER;"]
+             f"    if ({' || '.join(f'!{n}' for n in names + ['work'])}) return {upper}_ERR_NULL_POINTER;",
+             f"    if (work_size < {upper}_WORK_SIZE) return {upper}_ERR_WORK_TOO_SMALL;"]
     lines += [f"    inputs[{i}] = {n};" for i, (n, _) in enumerate(signature.inputs)]
     lines += [f"    outputs[{i}] = {n};" for i, (n, _) in enumerate(signature.outputs)]
     lines += [f"    return evaluate({prefix}_cg_{signature.name}, inputs, {n_in}, outputs, {n_out}, work);", "}"]
@@ -381,10 +381,7 @@ def _extra_definition(prefix: str, signature: Signature) -> str:
 
 def _fill_template(template_name: str, fields: dict, target: Path) -> Path:
     """Replace every ``@NAME@`` of a template in ``codegen/`` and write ``target``."""
-    template = TEMPLATE_DIR / template_name
-    if not template.is_file():
-        raise CodegenError(f"ABI template {template} not found: genthermal must be installed from its "
-                           "source tree (pip install -e .) to generate C")
+    template = shipped_file(TEMPLATE_DIR / template_name)
 
     def field(match):
         if match.group(1) not in fields:

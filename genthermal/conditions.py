@@ -43,6 +43,9 @@ STARTUP_DURATION_S = 5 * 60.0
 MIN_ACTION_DURATION_S = 15 * 60.0
 #: Highest constant load accepted in an action, % of rated (overload step tests).
 MAX_LOAD_PERCENT = 120.0
+#: Largest multiplier of one phase's current (an unbalance, not a change of load): with the largest
+#: load it keeps every phase current within 2.4 x rated, below the measurements' 3 x limit.
+MAX_PHASE_SHARE = 2.0
 #: Multipliers of the three phase currents for a balanced load.
 BALANCED_SHARE = (1.0, 1.0, 1.0)
 #: Keys of one action in a scenario file.
@@ -254,9 +257,9 @@ class Action:
         values = tuple(checked_number(value, f"phase_share[{i}]", "a positive number")
                        for i, value in enumerate(share))
         for i, value in enumerate(values):
-            if value <= 0:
-                raise InputError(f"phase_share[{i}]", share[i],
-                                 "phase multipliers must be positive, e.g. [1, 1, 1]")
+            if not 0 < value <= MAX_PHASE_SHARE:
+                raise InputError(f"phase_share[{i}]", share[i], "phase multipliers must be positive and at "
+                                 f"most {MAX_PHASE_SHARE:g}, e.g. [1.1, 1.0, 0.9]")
         return values
 
     def load_steps(self) -> tuple[tuple[float, float], ...]:

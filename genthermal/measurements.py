@@ -25,12 +25,25 @@ cell means "no measurement at this sample", and a value outside the PT100 range 
 
 Row numbers in messages count data rows from 1, the header excluded; for files the line of the file
 (header = line 1) is given too, which is the row a spreadsheet shows.
+
+Files as spreadsheets write them are read: UTF-8 with or without a byte-order mark, UTF-16 with
+one, otherwise Latin-1 (flagged); comma, semicolon or tab separated (the header decides); decimal
+commas in a semicolon- or tab-separated file. A row with more or fewer cells than the header is an
+error naming its line. Units are checked against what the machine can do: temperatures that look
+like kelvin, or phase currents above :data:`MAX_CURRENT_FACTOR` times the machine's rated current
+(mA instead of A, say), are errors with the likely fix. A gap in the time stamps longer than
+:data:`GAP_FACTOR` sample periods is flagged: the inputs are held across it by a resampling and the
+sensors are missing there, which the user must know. Every flag is also issued as a
+:class:`DataWarning`, which the command line prints as one line.
 """
 
 from __future__ import annotations
 
 import difflib
+import io
 import os
+import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,6 +51,7 @@ import pandas as pd
 
 from .errors import InputError
 from .losses import INPUT_NAMES, PHASE_CURRENTS
+from .sizes import check_grid
 
 WINDING_SENSORS = ("T_winding_u", "T_winding_v", "T_winding_w")
 SENSOR_COLUMNS = (*WINDING_SENSORS, "T_iron")
@@ -46,6 +60,22 @@ REQUIRED_COLUMNS = ("time_s", *INPUT_NAMES, *SENSOR_COLUMNS)
 INPUT_TEMPERATURES = ("T_inlet", "T_ambient")
 #: Measuring range of the rig's PT100 channels, °C (thesis Table 3.4).
 PT100_RANGE_C = (-50.0, 300.0)
+#: A phase or field current above this multiple of the machine's rated phase current is refused (no
+#: generator of this kind carries it for longer than a fault clears; the model's losses are not
+#: valid there; its exciter needs about 1 A of field current at rated load).
+MAX_CURRENT_FACTOR = 3.0
+#: Median temperatures above these (°C) mean the column is in kelvin: inputs are cooling air,
+#: sensors a machine whose insulation fails near 200 °C.
+KELVIN_MEDIAN_C = {"input": 150.0, "sensor": 200.0}
+#: A time step longer than this multiple of the median step is a gap, flagged.
+GAP_FACTOR = 5.0
+#: A sensor with more than this share of its samples outside the PT100 range is an error, not a flag.
+MAX_OUT_OF_RANGE_SHARE = 0.5
+_DECIMAL_COMMA = re.compile(r"^\s*[-+]?\d+,\d+(?:[eE][-+]?\d+)?\s*$")
+
+
+class DataWarning(UserWarning):
+    """Something about the data the user must know (missing samples, gaps, values dropped)."""
 
 
 @dataclass
@@ -105,13 +135,16 @@ class MeasurementData:
         self.frame.to_csv(path, index=False)
 
 
-def load_measurements(path_or_buffer) -> MeasurementData:
-    """Read and validate a rig CSV file (schema in the module docstring).
+def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> MeasurementData:
+    """Read and validate a rig CSV file (schema and accepted formats in the module docstring).
 
     Parameters
     ----------
     path_or_buffer : str, os.PathLike or file-like
         The CSV file, header on the first line.
+    rated_current_A : float, optional
+        Rated RMS phase current of the machine the data come from (``model.spec.rated_current_A``);
+        default: that of the default built-in machine.
 
     Returns
     -------
@@ -120,26 +153,98 @@ def load_measurements(path_or_buffer) -> MeasurementData:
     Raises
     ------
     InputError
-        Empty file, missing column, non-numeric value, unknown input, negative current, input
+        Not a text file, ragged rows, empty file, missing column, non-numeric value, unknown
+        input, negative current, a current far above the rating, temperatures in kelvin, input
         temperature outside the PT100 range, or time not strictly increasing.
     """
     if isinstance(path_or_buffer, (str, os.PathLike)):
         source = str(path_or_buffer)
+        with open(path_or_buffer, "rb") as file:
+            content = file.read()
     else:
         source = str(getattr(path_or_buffer, "name", "<buffer>"))
+        content = path_or_buffer.read()
+    text, notes = _decode(content, source)
+    delimiter = _delimiter(text)
+    header = text.lstrip().split("\n", 1)[0]
+    if header.strip():
+        names = [cell.strip().strip('"') for cell in header.split(delimiter)]
+        _require_columns(names, source)
+        twice = sorted({name for name in names if names.count(name) > 1 and name})
+        if twice:
+            raise InputError("column", twice[0], f"appears more than once in the header of {source}")
+    _check_row_lengths(text, delimiter)
     try:
-        raw = pd.read_csv(path_or_buffer, dtype=str, skipinitialspace=True)
+        raw = pd.read_csv(io.StringIO(text), sep=delimiter, dtype=str, skipinitialspace=True)
     except pd.errors.EmptyDataError:
         raise InputError("file", source, "the file is empty: expected a header line and data rows") from None
-    return _validate(raw, source, from_file=True)
+    except pd.errors.ParserError as exc:
+        raise InputError("file", source, f"not a readable CSV table: {str(exc).strip()}") from None
+    if delimiter != "," and _has_decimal_commas(raw):
+        raw = raw.apply(lambda column: column.str.replace(",", ".", regex=False))
+        notes.append(f"read as {_DELIMITER_NAMES[delimiter]}-separated with decimal commas")
+    return _validate(raw, source, from_file=True, rated_current_A=rated_current_A, notes=notes)
 
 
-def dataframe_to_measurements(frame: pd.DataFrame, source: str = "<DataFrame>") -> MeasurementData:
+def dataframe_to_measurements(frame: pd.DataFrame, source: str = "<DataFrame>",
+                              rated_current_A: float | None = None) -> MeasurementData:
     """Validate an in-memory frame exactly as :func:`load_measurements` validates a file."""
-    return _validate(frame, source, from_file=False)
+    return _validate(frame, source, from_file=False, rated_current_A=rated_current_A)
 
 
-def _validate(raw: pd.DataFrame, source: str, from_file: bool) -> MeasurementData:
+_DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
+
+
+def _decode(content, source: str) -> tuple[str, list[str]]:
+    """The text of a CSV file and notes on how it was decoded; InputError for a binary file."""
+    if isinstance(content, str):
+        return content, []
+    if content.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return content.decode("utf-16"), []
+    if b"\x00" in content[:4096]:
+        raise InputError("file", source, "is not a text CSV file (it holds binary data)")
+    try:
+        return content.decode("utf-8-sig"), []
+    except UnicodeDecodeError:
+        return content.decode("latin-1"), ["not UTF-8: decoded as Latin-1"]
+
+
+def _delimiter(text: str) -> str:
+    """The cell separator the header line uses: comma, semicolon or tab (most frequent)."""
+    header = text.lstrip().split("\n", 1)[0]
+    counts = {delimiter: header.count(delimiter) for delimiter in _DELIMITER_NAMES}
+    best = max(counts, key=counts.get)
+    return best if counts[best] > 0 else ","
+
+
+def _check_row_lengths(text: str, delimiter: str) -> None:
+    """Every non-blank line must have as many cells as the header (unquoted files)."""
+    if '"' in text:
+        return  # quoted cells may hold separators; the CSV parser checks those files
+    lines = text.splitlines()
+    numbered = [(n, line) for n, line in enumerate(lines, start=1) if line.strip()]
+    if not numbered:
+        return
+    expected = numbered[0][1].count(delimiter)
+    for number, line in numbered[1:]:
+        cells = line.count(delimiter)
+        if cells == expected:
+            continue
+        hint = "every row needs one cell per header column (leave a cell empty for a missing sensor sample)"
+        if delimiter == "," and "." not in line and cells > expected:
+            hint = ("decimal commas in a comma-separated file? write decimals with '.' or separate the cells "
+                    "with ';'")
+        raise InputError(f"line {number} of the file", line if len(line) <= 80 else line[:77] + "...",
+                         f"has {cells + 1} cells but the header has {expected + 1}; {hint}")
+
+
+def _has_decimal_commas(raw: pd.DataFrame) -> bool:
+    first = raw.head(20).astype("string")
+    return bool(first.apply(lambda column: column.str.match(_DECIMAL_COMMA).fillna(False)).to_numpy().any())
+
+
+def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: float | None = None,
+              notes: list[str] | None = None) -> MeasurementData:
     raw = raw.reset_index(drop=True)
     raw.columns = [str(name).strip() for name in raw.columns]
     _require_columns(raw.columns, source)
@@ -151,13 +256,60 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool) -> MeasurementDat
     for name in ("time_s", *INPUT_NAMES):
         _check_input_column(frame[name].to_numpy(), name, from_file)
     _check_time_increasing(frame["time_s"].to_numpy(), from_file)
-    flags = []
+    _check_units(frame, present_sensors, from_file, _rated_current(rated_current_A))
+    flags = [f"{source}: {note}" for note in notes or []]
+    flags.extend(_gap_flags(frame["time_s"].to_numpy(), from_file))
     for name in present_sensors:
         flags.extend(_discard_out_of_range(frame, name, from_file))
     missing_counts = {name: int(frame[name].isna().sum()) for name in present_sensors}
     flags.extend(f"{name}: no valid sample at all" for name, n in missing_counts.items() if n == len(frame))
     ignored = [name for name in raw.columns if name not in columns]
+    for flag in flags:
+        warnings.warn(flag, DataWarning, stacklevel=3)
     return MeasurementData(frame, source, missing_counts, flags, ignored)
+
+
+def _rated_current(rated_current_A: float | None) -> float:
+    if rated_current_A is not None:
+        return float(rated_current_A)
+    from .machines import MACHINES
+
+    return float(next(iter(MACHINES.values())).RATED_CURRENT_A)  # the default machine's
+
+
+def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A: float) -> None:
+    """Temperatures in kelvin and currents far above the rating are errors with the likely fix."""
+    limit = MAX_CURRENT_FACTOR * rated_current_A
+    for name in (*PHASE_CURRENTS, "I_exc"):
+        values = frame[name].to_numpy()
+        above = np.flatnonzero(values > limit)
+        if above.size:
+            row = int(above[0])
+            hint = (" The currents look like mA: divide by 1000." if np.nanmedian(values) / 1000.0 <= limit
+                    and np.nanmedian(values) > limit else "")
+            raise InputError(f"column {name}, {_row_label(row, from_file)}", float(values[row]),
+                             f"more than {MAX_CURRENT_FACTOR:g} x the rated {rated_current_A:g} A RMS of the "
+                             f"machine ({above.size} sample(s)); the model is not valid there.{hint}")
+    for name, kind in [*((n, "input") for n in INPUT_TEMPERATURES), *((n, "sensor") for n in sensors)]:
+        values = frame[name].to_numpy()
+        if np.isfinite(values).any() and np.nanmedian(values) > KELVIN_MEDIAN_C[kind]:
+            raise InputError(f"column {name}", f"median {np.nanmedian(values):g}",
+                             "temperatures must be in °C; these look like kelvin: subtract 273.15")
+
+
+def _gap_flags(time_s: np.ndarray, from_file: bool) -> list[str]:
+    """Flag steps longer than GAP_FACTOR median steps (the sensors are missing across them)."""
+    steps = np.diff(time_s)
+    if steps.size < 2:
+        return []
+    median = float(np.median(steps))
+    gaps = np.flatnonzero(steps > GAP_FACTOR * median)
+    if not gaps.size:
+        return []
+    longest = int(gaps[np.argmax(steps[gaps])])
+    return [f"time_s: {gaps.size} gap(s) longer than {GAP_FACTOR:g} sample periods ({median:g} s); the longest "
+            f"is {steps[longest]:g} s after {_row_label(longest, from_file)} (t = {time_s[longest]:g} s): "
+            "inputs are held across a gap and the sensors count as missing there"]
 
 
 def _row_label(index: int, from_file: bool) -> str:
@@ -191,8 +343,9 @@ def _numeric_column(raw: pd.Series, name: str, from_file: bool) -> np.ndarray:
     bad = np.flatnonzero(given & ~np.isfinite(values))
     if bad.size:
         row = int(bad[0])
+        hint = "; write decimals with '.'" if _DECIMAL_COMMA.match(str(raw.iloc[row])) else ""
         raise InputError(f"column {name}, {_row_label(row, from_file)}", raw.iloc[row],
-                         "not a finite number")
+                         f"not a finite number{hint}")
     return values
 
 
@@ -231,6 +384,10 @@ def _discard_out_of_range(frame: pd.DataFrame, name: str, from_file: bool) -> li
     bad = np.flatnonzero((values < low) | (values > high))
     if not bad.size:
         return []
+    given = int(np.isfinite(values).sum())
+    if bad.size > MAX_OUT_OF_RANGE_SHARE * given:
+        raise InputError(f"column {name}", f"{bad.size} of {given} samples",
+                         f"outside the PT100 range {low:g} to {high:g} °C: wrong unit or wrong column?")
     examples = ", ".join(f"{_row_label(int(i), from_file)}: {values[i]:g} °C" for i in bad[:3])
     more = f" and {bad.size - 3} more" if bad.size > 3 else ""
     frame.loc[bad, name] = np.nan
@@ -268,6 +425,7 @@ def resample(data: MeasurementData, dt_s: float) -> MeasurementData:
         raise InputError("dt_s", dt_s, "the resampling step must be a positive number of seconds")
     if dt_s > duration_s:
         raise InputError("dt_s", dt_s, f"longer than the record ({duration_s:g} s from {data.source})")
+    check_grid(duration_s, dt_s, "dt_s", dt_s)
     tolerance_s = 1e-9 * dt_s
     grid = time_s[0] + dt_s * np.arange(int(np.floor(duration_s / dt_s + 1e-9)) + 1)
     held = np.searchsorted(time_s, grid + tolerance_s, side="right") - 1

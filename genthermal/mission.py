@@ -4,7 +4,8 @@ A :class:`Mission` is a list of :class:`Action` objects, each a load condition (
 see :mod:`genthermal.conditions`) or a constant load in % (for step tests) held for a duration.
 :meth:`Mission.to_inputs` turns it into the input time series of a thermal model.
 
-Missions are stored as YAML under ``scenarios/`` at the top of the repository::
+Missions are stored as YAML under ``scenarios/`` at the top of the repository (installed as
+``genthermal/data/scenarios``, see :mod:`genthermal.resources`)::
 
     name: thesis_fig_3_2                 # required, text
     description: Example flight ...      # optional, text
@@ -29,7 +30,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import difflib
-import math
 import os
 from pathlib import Path
 from typing import Any, Mapping
@@ -41,6 +41,8 @@ import yaml
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
 from .exciter import DEFAULT_POWER_FACTOR, exciter_current
+from .resources import SCENARIO_DIR
+from .sizes import check_grid
 
 __all__ = [
     "Action",
@@ -50,8 +52,6 @@ __all__ = [
     "load_mission",
 ]
 
-#: Directory of the shipped scenario files (the package is installed in editable mode).
-SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
 #: Columns of :meth:`Mission.to_inputs`: s, A RMS (three phases), A (field), degC, degC.
 INPUT_COLUMNS = ("time_s", "I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
 #: Accepted range of inlet and ambient temperatures, degC.
@@ -211,7 +211,8 @@ class Mission:
         Parameters
         ----------
         dt_s : float
-            Sample period, s (> 0).
+            Sample period, s (> 0); the grid may have at most
+            :data:`genthermal.sizes.MAX_GRID_SAMPLES` samples.
 
         Returns
         -------
@@ -222,7 +223,7 @@ class Mission:
         step = checked_number(dt_s, "dt_s", "a positive number of seconds")
         if step <= 0:
             raise InputError("dt_s", dt_s, "the sample period must be positive, s")
-        n_steps = int(math.floor(self.duration_s / step + 1e-9))
+        n_steps = check_grid(self.duration_s, step, f"mission {self.name} at dt_s", dt_s) - 1
         times = np.arange(n_steps + 1, dtype=float) * step
         currents = self.phase_currents(np.minimum(times, self.duration_s))
         columns = {

@@ -25,6 +25,7 @@ and generated code use the model with every effect active (the state after the l
 
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 
@@ -35,6 +36,7 @@ from .effects import CATALOGUE, apply_effect
 from .errors import InputError
 from .machines import MACHINES, build_model
 from .model import ThermalModel
+from .outputs import write_text
 from .parameters import PROVENANCES
 
 VARIANTS = ("nonlinear", "linear")
@@ -43,6 +45,8 @@ PARAMETER_SETS = ("chapter7",)
 _TOP_KEYS = ("machine", "variant", "parameters", "effects")
 #: Parameters the linear design model adds; saved through the variant, not as values.
 _DESIGN_PARAMETERS = ("I2_slope", "I2_intercept", "theta_ref")
+_PARAMETER_KEYS = ("value", "provenance", "source")
+_EFFECT_KEYS = ("name", "parameters", "provenance", "source", "onset_s")
 
 
 def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
@@ -67,9 +71,14 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
         known = ", ".join(f"{m}, {m}:linear, " + ", ".join(f"{m}:{v}" for v in PARAMETER_SETS) for m in MACHINES)
         raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
     try:
-        document = yaml.safe_load(path.read_text())
+        document = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError("model file", str(path), "not a text file (UTF-8 YAML expected)") from None
     except yaml.YAMLError as exc:
-        raise InputError("model file", str(path), f"not valid YAML: {exc}") from None
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        raise InputError("model file", str(path), f"not valid YAML{where}: "
+                         f"{getattr(exc, 'problem', None) or exc}; check indentation, colons and brackets") from None
     return model_from_document(document, str(path))
 
 
@@ -93,12 +102,14 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
         raise InputError(unknown[0], document[unknown[0]], f"unknown key; a model file has {', '.join(_TOP_KEYS)}")
     if "machine" not in document:
         raise InputError("machine", None, f"missing in {source}; e.g. machine: genco_rf201a")
-    model = _build(str(document["machine"]), str(document.get("variant", "nonlinear")), from_file=True)
+    model = _build(_text(document["machine"], "machine"), _text(document.get("variant", "nonlinear"), "variant"),
+                   from_file=True)
     parameters = document.get("parameters") or {}
     if not isinstance(parameters, dict):
         raise InputError("parameters", parameters, "must map parameter names to {value, provenance, source}")
     for name, entry in parameters.items():
         entry = entry if isinstance(entry, dict) else {"value": entry}
+        _reject_unknown(entry, f"parameters.{name}", _PARAMETER_KEYS)
         if name not in model.parameters:
             raise InputError(f"parameters.{name}", name, f"not a parameter of {model.name}")
         provenance = str(entry.get("provenance", "assumed"))
@@ -114,6 +125,7 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
     for i, entry in enumerate(effects):
         if not isinstance(entry, dict) or "name" not in entry:
             raise InputError(f"effects[{i}]", entry, "must be a mapping with a name and parameters")
+        _reject_unknown(entry, f"effects[{i}]", _EFFECT_KEYS)
         if entry["name"] not in CATALOGUE:
             raise InputError(f"effects[{i}].name", entry["name"], f"unknown effect; known: {', '.join(CATALOGUE)}")
         values = entry.get("parameters") or {}
@@ -127,7 +139,7 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
             model = apply_effect(model, entry["name"], provenance=provenance,
                                  source=str(entry.get("source", "")) or f"model file {source}", **values)
         except InputError as exc:
-            raise InputError(f"effects[{i}] ({entry['name']})", exc.value, exc.reason) from None
+            raise InputError(f"effects[{i}] ({entry['name']}) {exc.field}", exc.value, exc.reason) from None
         if entry.get("onset_s") is not None:
             onsets[entry["name"]] = entry["onset_s"]
             try:
@@ -138,11 +150,25 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
 
 
 def _number(value, field: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(field, value, "must be a number") from None
-    return number
+    """A finite YAML number; text (even ``"1.5"``), booleans and ``.inf``/``.nan`` are refused."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(field, value, "must be a number written as a number (e.g. 17.2, not '17.2' or true)")
+    if not math.isfinite(value):
+        raise InputError(field, value, "must be a finite number")
+    return float(value)
+
+
+def _text(value, field: str) -> str:
+    if not isinstance(value, str):
+        raise InputError(field, value, "must be a name written as text")
+    return value
+
+
+def _reject_unknown(entry: dict, field: str, allowed: tuple[str, ...]) -> None:
+    unknown = sorted(str(key) for key in set(entry) - set(allowed))
+    if unknown:
+        raise InputError(f"{field}.{unknown[0]}", entry[unknown[0]] if unknown[0] in entry else None,
+                         f"unknown key; allowed: {', '.join(allowed)}")
 
 
 def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
@@ -182,7 +208,4 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
 
 def save_model(model: ThermalModel, path: str | os.PathLike, onsets: dict | None = None) -> Path:
     """Write ``model`` as a YAML model file (see :func:`model_document`); return the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(yaml.safe_dump(model_document(model, onsets), sort_keys=False))
-    return path
+    return write_text(path, yaml.safe_dump(model_document(model, onsets), sort_keys=False))

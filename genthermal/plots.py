@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import matplotlib
 
 matplotlib.use("Agg")  # files, not windows: the CLI and the tests run headless
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
+
+from .outputs import replacing  # noqa: E402
 
 LIMIT_C = 110.0
 
@@ -16,11 +16,13 @@ LIMIT_C = 110.0
 def finish_figure(fig, path=None, close: bool = False):
     """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it.
 
+    The file is written whole or not at all (:func:`genthermal.outputs.replacing`).
+
     ``close`` releases the figure from pyplot after saving (for reports that draw many)."""
     fig.tight_layout()
     if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=110)
+        with replacing(path) as temporary:
+            fig.savefig(temporary, dpi=110)
     if close:
         plt.close(fig)
     return fig

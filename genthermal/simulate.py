@@ -96,8 +96,19 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=None) 
         if last > start:
             X[:, start + 1:last + 1] = np.asarray(
                 segment_model.discretise(dt).simulator(last - start)(X[:, start], U[:, start:last]))
+    _check_finite(X, time_s)
     frames = [results_frame(m, time_s[a:b], U[:, a:b], X[:, a:b]) for m, a, b in segments]
     return pd.concat(frames, ignore_index=True)
+
+
+def _check_finite(X: np.ndarray, time_s: np.ndarray) -> None:
+    """A state that is not a finite number means inputs or parameters beyond what the model can
+    take: refuse the run rather than report inf or NaN temperatures."""
+    bad = np.flatnonzero(~np.isfinite(X).all(axis=0))
+    if bad.size:
+        raise InputError("simulation", f"t = {time_s[bad[0]]:g} s",
+                         "the temperatures are no longer finite numbers from this time on: the inputs "
+                         "(currents, temperatures) or parameters are beyond anything the machine can carry")
 
 
 def _segments(model: ThermalModel, time_s: np.ndarray, switches) -> list[tuple[ThermalModel, int, int]]:

@@ -231,7 +231,7 @@ def rig_files(tmp_path):
 
 def test_sysid_command_end_to_end(rig_files, tmp_path, capsys):
     out = tmp_path / "sysid.json"
-    argv = ["sysid", rig_files[0], "--validate", rig_files[1], "--json", str(out), "--input", "I_exc",
+    argv = ["sysid", rig_files[0], rig_files[1], "--json", str(out), "--input", "I_exc",
             "--na", "1-2", "--nb", "1-2", "--nk", "0-2"]
     assert main(argv) == 0
     printed = capsys.readouterr().out
@@ -253,7 +253,7 @@ def test_sysid_command_end_to_end(rig_files, tmp_path, capsys):
 
 def test_sysid_auto_input_and_discard(rig_files, tmp_path):
     out = tmp_path / "auto.json"
-    argv = ["sysid", rig_files[0], "--validate", rig_files[1], "--json", str(out), "--na", "1", "--nb", "1-2",
+    argv = ["sysid", rig_files[0], rig_files[1], "--json", str(out), "--na", "1", "--nb", "1-2",
             "--nk", "1", "--discard-before-min", "10"]
     assert main(argv) == 0
     report = json.loads(out.read_text())
@@ -263,7 +263,7 @@ def test_sysid_auto_input_and_discard(rig_files, tmp_path):
 
 def test_sysid_integrated_input_multiplies_the_integrator_back(rig_files, tmp_path):
     out = tmp_path / "integrated.json"
-    argv = ["sysid", rig_files[0], "--validate", rig_files[1], "--json", str(out), "--input", "I_exc",
+    argv = ["sysid", rig_files[0], rig_files[1], "--json", str(out), "--input", "I_exc",
             "--na", "1", "--nb", "2", "--nk", "0", "--integrate"]
     assert main(argv) == 0
     report = json.loads(out.read_text())
@@ -274,15 +274,20 @@ def test_sysid_integrated_input_multiplies_the_integrator_back(rig_files, tmp_pa
 
 @pytest.mark.parametrize("extra, named", [
     (["--na", "0-2"], "--na"), (["--nb", "3-1"], "--nb"), (["--nk", "x"], "--nk"),
-    (["--input", "I_x"], "--input"), (["--ts", "0"], "--ts"), (["--discard-before-min", "-5"], "--discard"),
-    (["--validate", "none.csv"], "none.csv"),
+    (["--input", "I_x"], "--input"), (["--dt", "0"], "--dt"), (["--discard-before-min", "-5"], "--discard"),
 ])
 def test_sysid_bad_arguments_exit_2_naming_the_option(rig_files, tmp_path, capsys, monkeypatch, extra, named):
     monkeypatch.chdir(tmp_path)
-    argv = ["sysid", rig_files[0], "--validate", rig_files[1], "--json", "x.json", *extra]
+    argv = ["sysid", rig_files[0], rig_files[1], "--json", "x.json", *extra]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert named in err and "Traceback" not in err
+
+
+def test_sysid_missing_validation_file_exits_2_naming_it(rig_files, tmp_path, capsys):
+    assert main(["sysid", rig_files[0], str(tmp_path / "none.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "none.csv" in err and "Traceback" not in err
 
 
 # --- thesis check --------------------------------------------------------------------------------

@@ -18,7 +18,8 @@ import pytest
 from genthermal import ccompile
 from genthermal.ccompile import CompiledModel, compile_library, compile_objects, find_compiler
 from genthermal.cli import main
-from genthermal.codegen import TEMPLATE_DIR, forbidden_constructs, generate_c
+from genthermal.codegen import forbidden_constructs, generate_c
+from genthermal.resources import TEMPLATE_DIR
 from genthermal.errors import CompilerNotFoundError, InputError
 from genthermal.mission import load_mission
 from genthermal.simulate import simulate
@@ -172,11 +173,11 @@ static void* run(void* argument)
     double x0[8] = {20, 20, 20, 20, 20, 20, 20, 20};
     double again[N_STEPS * 8];
     int r, i;
-    job->status = job->linear ? gtl_simulate(x0, inputs, N_STEPS, job->X, work)
-                              : gt_simulate(x0, inputs, N_STEPS, job->X, work);
+    job->status = job->linear ? gtl_simulate(x0, inputs, N_STEPS, job->X, work, sizeof work / sizeof *work)
+                              : gt_simulate(x0, inputs, N_STEPS, job->X, work, sizeof work / sizeof *work);
     for (r = 0; r < REPEATS; ++r) {
-        job->status |= job->linear ? gtl_simulate(x0, inputs, N_STEPS, again, work)
-                                   : gt_simulate(x0, inputs, N_STEPS, again, work);
+        job->status |= job->linear ? gtl_simulate(x0, inputs, N_STEPS, again, work, sizeof work / sizeof *work)
+                                   : gt_simulate(x0, inputs, N_STEPS, again, work, sizeof work / sizeof *work);
         for (i = 0; i < N_STEPS * 8; ++i) if (again[i] != job->X[i]) job->status |= 16;
     }
     return NULL;

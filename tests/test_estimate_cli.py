@@ -81,7 +81,7 @@ BAD = [
     (["--predict-from", "50,abc"], "--predict-from"),
     (["--predict-from", "500"], "--predict-from"),
     (["--dt", "0"], "--dt"),
-    (["--margin", "-1"], "--margin"),
+    (["--min-improvement", "-1"], "--min-improvement"),
     (["--dt", "600"], "--dt"),  # the nonlinear model cannot be discretised accurately at 10 min
     (["--every", "0"], "--every"),
     (["--filter", "ukf"], "--filter"),

@@ -69,12 +69,12 @@ def model_from_args(args: argparse.Namespace, source: str = "set on the command 
 
 
 def positive_float(option: str, text: str) -> float:
-    """Parse a strictly positive number for ``option`` or raise InputError naming it."""
+    """Parse a finite, strictly positive number for ``option`` or raise InputError naming it."""
     try:
         value = float(text)
     except (TypeError, ValueError):
         raise InputError(option, text, "must be a positive number") from None
-    if not value > 0:
+    if not (math.isfinite(value) and value > 0):
         raise InputError(option, text, "must be a positive number")
     return value
 

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..model_file import save_model
+from ..outputs import report_json
+from ..progress import working
 from ._common import model_from_args
-from .compare import add_model_and_data_arguments, data_step
+from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
 def register(subparsers) -> None:
@@ -30,7 +29,9 @@ def run(args) -> int:
 
     model = model_from_args(args)
     names = check_parameter_names(model, args.params.split(","), "--params")
-    result = calibrate(model, args.data, names, data_step(args))
+    data = fitting_data(args.data, model, args)
+    with working("calibrate"):
+        result = calibrate(model, data, names, data_step(args))
     summary = result.to_dict()
     print(f"{model.name}: {len(names)} parameter(s) fitted to {args.data} "
           f"({'converged' if result.converged else 'NOT converged'})")
@@ -45,7 +46,5 @@ def run(args) -> int:
     if args.out:
         print(f"wrote {save_model(result.model, args.out)}")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(summary, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, summary)
     return 0

@@ -12,12 +12,16 @@ import shutil
 from pathlib import Path
 
 from ..ccompile import compile_library
-from ..codegen import TEMPLATE_DIR, generate_c
+from ..codegen import generate_c
 from ..design import linear_design_model
+from ..errors import InputError
 from ..estimation.ekf import embedded_functions as ekf_functions
 from ..estimation.kalman import embedded_functions
+from ..resources import TEMPLATE_DIR, shipped_file
 from ._common import add_model_arguments, model_from_args, positive_float
 
+#: Longest prediction horizon compiled into C, steps (the generated code grows with it; 24 h at 10 s).
+MAX_PREDICT_STEPS = 8640
 #: Files of ``codegen/`` copied next to the generated sources so that ``make -C DIR`` works.
 COMPANION_FILES = ("example_mission.c", "Makefile", "ABI.md")
 
@@ -50,11 +54,14 @@ def run(args) -> int:
     extra = None
     if args.kalman:
         steps = positive_float("--predict-steps", args.predict_steps)
+        if steps > MAX_PREDICT_STEPS:
+            raise InputError("--predict-steps", args.predict_steps, f"at most {MAX_PREDICT_STEPS} steps (the "
+                             "generated code grows with the horizon); predict further by calling it again")
         design = model if model.is_affine else linear_design_model(model)
         extra = {**embedded_functions(design, dt_s=dt, predict_steps=steps),
                  **ekf_functions(model, dt_s=dt, predict_steps=steps)}
     generated = generate_c(model, out, dt_s=dt, extra_functions=extra)
-    companions = [Path(shutil.copyfile(TEMPLATE_DIR / name, out / name)) for name in COMPANION_FILES]
+    companions = [Path(shutil.copyfile(shipped_file(TEMPLATE_DIR / name), out / name)) for name in COMPANION_FILES]
     step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"
     print(f"{model.name}: C code with dt = {dt:g} s ({step}) in {out}")
     for signature in generated.extra_functions:

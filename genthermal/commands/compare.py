@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
+from ..outputs import report_json
 from ._common import add_model_arguments, model_from_args, positive_float
 
 
@@ -19,6 +17,21 @@ def add_model_and_data_arguments(parser) -> None:
 def data_step(args) -> float | None:
     """The ``--dt`` option as seconds, or None."""
     return None if args.dt is None else positive_float("--dt", args.dt)
+
+
+def fitting_data(path: str, model, args):
+    """Measurements of ``path`` checked against ``model``'s rating, block-averaged when long and no
+    ``--dt`` was given (:mod:`genthermal.long_records`; the note is printed)."""
+    from ..long_records import decimate_for_fitting
+    from ..measurements import load_measurements
+
+    data = load_measurements(path, rated_current_A=model.spec.rated_current_A)
+    if args.dt is not None:
+        return data
+    data, note = decimate_for_fitting(data)
+    if note:
+        print(f"note: {note}")
+    return data
 
 
 def register(subparsers) -> None:
@@ -40,14 +53,18 @@ def run(args) -> int:
     model = model_from_args(args)
     comparison = compare(model, args.data, data_step(args))
     print(f"{model.name} on {comparison.source}: {comparison.metrics['samples']} samples")
+    total = comparison.metrics["samples"]
     for name, m in comparison.metrics["overall"].items():
+        if m["n"] == 0:
+            print(f"  {name}: no sample with both a measurement and a finite model value; no metrics")
+            continue
         r2 = "n/a" if m["r2"] is None else f"{m['r2']:.4f}"
+        counted = "" if m["n"] == total else f" (on the {m['n']} of {total} samples measured)"
         print(f"  {name}: RMSE {m['rmse']:.3f} K, MAE {m['mae']:.3f} K, max {m['max_abs']:.3f} K, "
-              f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h")
+              f"bias {m['bias']:+.3f} K, R² {r2}, trend {comparison.metrics['trend_K_per_h'][name]:+.3f} K/h"
+              f"{counted}")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(comparison.metrics, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, comparison.metrics)
     if args.report:
         from ..diagnose.report import write_compare_report
 

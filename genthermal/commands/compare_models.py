@@ -3,12 +3,10 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
 from ..errors import InputError
 from ..estimation.comparison import compare_design_models
 from ..measurements import load_measurements
+from ..outputs import report_json
 from ._common import add_model_arguments, model_from_args, positive_float
 
 
@@ -30,8 +28,6 @@ def run(args) -> int:
     """Compare the models, print the table and write the JSON."""
     dt = positive_float("--dt", args.dt)
     train, validation = load_measurements(args.train), load_measurements(args.validation)
-    for flag in (*train.flags, *validation.flags):
-        print(f"warning: {flag}")
     plant = model_from_args(args)
     if plant.is_affine:
         raise InputError("--model", args.model, "give a nonlinear model; its linear design model is compared with it")
@@ -39,9 +35,6 @@ def run(args) -> int:
     print(f"design models on {args.validation} (ARX fitted on {args.train}), open loop:")
     print(table.to_string(index=False, float_format=lambda v: f"{v:.4f}"))
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"train": str(args.train), "validation": str(args.validation), "dt_s": dt,
-                                    "models": table.to_dict(orient="records")}, indent=2))
-        print(f"wrote {path}")
+        report_json(args.json, {"train": str(args.train), "validation": str(args.validation), "dt_s": dt,
+                                "models": table.to_dict(orient="records")})
     return 0

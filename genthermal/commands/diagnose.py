@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import json
-import sys
-from pathlib import Path
-
 from ..model_file import save_model
+from ..outputs import report_json
+from ..progress import say, working
 from ._common import model_from_args
-from .compare import add_model_and_data_arguments, data_step
+from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
 def register(subparsers) -> None:
@@ -32,8 +30,11 @@ def run(args) -> int:
     from ..diagnose.discover import diagnose
 
     model = model_from_args(args)
-    result = diagnose(model, args.data, baseline=args.baseline, iterate=args.iterate, dt_s=data_step(args),
-                      progress=lambda line: print(f"  ... {line}", file=sys.stderr, flush=True))
+    data = fitting_data(args.data, model, args)
+    baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
+    with working("diagnose"):
+        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args),
+                          progress=lambda line: say(f"  ... {line}"))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:
@@ -50,9 +51,7 @@ def run(args) -> int:
     print(document["explanation"])
     print(document["residual"]["summary"])
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(document, indent=2))
-        print(f"wrote {args.json}")
+        report_json(args.json, document)
     if args.report:
         from ..diagnose.report import write_diagnosis_report
 

@@ -1,4 +1,4 @@
-"""``genthermal estimate DATA.csv --json out.json [--model NAME|FILE] [--filter ekf|kf]``: filter
+"""``genthermal estimate DATA.csv [--json out.json] [--model NAME|FILE] [--filter ekf|kf]``: filter
 and n-step prediction study (thesis 6.3) on rig data.
 
 The default filter is the extended Kalman filter on the model itself (a calibrated model file,
@@ -8,7 +8,6 @@ thesis's linear filter on the model's linear design model.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -29,6 +28,7 @@ from ..estimation.prediction import (
     prediction_study,
 )
 from ..measurements import load_measurements
+from ..outputs import report_json
 from ._common import add_model_arguments, model_from_args, positive_float
 
 FILTERS = ("ekf", "kf")
@@ -51,7 +51,7 @@ def register(subparsers) -> None:
     parser.add_argument("--every", default=str(DEFAULT_EVERY_MIN), metavar="MIN",
                         help=f"interval between the starts of the error-by-horizon table, min (default "
                         f"{DEFAULT_EVERY_MIN:g})")
-    parser.add_argument("--json", required=True, metavar="OUT.json", help="JSON file to write")
+    parser.add_argument("--json", metavar="OUT.json", help="write the errors and periods of increased accuracy as JSON")
     parser.add_argument("--predict-from", default=",".join(str(s) for s in THESIS_STARTS_MIN), metavar="MIN,...",
                         help="prediction start times, min after the first sample (default 50,75,100,125,150,175)")
     parser.add_argument("--dt", default="10",
@@ -63,7 +63,7 @@ def register(subparsers) -> None:
                         help="use the converged (steady-state) gain (--filter kf only)")
     parser.add_argument("--estimate-noise", action="store_true",
                         help="estimate R from the data (thesis 6.2.2) instead of using eq. 6.10")
-    parser.add_argument("--margin", default=str(DEFAULT_MARGIN_K), metavar="K",
+    parser.add_argument("--min-improvement", default=str(DEFAULT_MARGIN_K), metavar="K",
                         help=f"smallest improvement over the open loop that counts, K (default {DEFAULT_MARGIN_K:g})")
     parser.set_defaults(func=run)
 
@@ -88,11 +88,11 @@ def run(args) -> int:
     dt = positive_float("--dt", args.dt)
     starts = parse_starts(args.predict_from)
     try:
-        margin = float(args.margin)
+        margin = float(args.min_improvement)
     except ValueError:
-        raise InputError("--margin", args.margin, "must be a number of kelvin >= 0") from None
+        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0") from None
     if not (math.isfinite(margin) and margin >= 0):
-        raise InputError("--margin", args.margin, "must be a number of kelvin >= 0")
+        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0")
     every = positive_float("--every", args.every)
     if args.filter not in FILTERS:
         raise InputError("--filter", args.filter, f"must be one of {', '.join(FILTERS)}")
@@ -103,8 +103,6 @@ def run(args) -> int:
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
     horizon_starts(len(data.time_s), dt, DEFAULT_HORIZONS_MIN, every)
     check_sensors(model, data, field=f"{args.data}: sensors")
-    for flag in data.flags:
-        print(f"warning: {flag}")
     model = model if args.filter == "ekf" or model.is_affine else linear_design_model(model)
     make = (lambda **kw: ExtendedKalmanFilter(model, dt, **kw)) if args.filter == "ekf" else \
         (lambda **kw: KalmanFilter(model, dt, **kw))
@@ -123,10 +121,8 @@ def run(args) -> int:
               "missing_counts": result.missing_counts, "steady_state_gain": bool(args.steady_state),
               "R_K2": [kalman.R[i, i] for i in range(len(kalman.output_names))], **study.to_json()}
     print_summary(report, result)
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2))
-    print(f"wrote {path}")
+    if args.json:
+        report_json(args.json, report)
     if args.plot:
         plot = Path(args.plot)
         filter_plot = plot.with_name(f"{plot.stem}_filter{plot.suffix or '.png'}")

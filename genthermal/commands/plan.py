@@ -8,17 +8,15 @@ current per generator and rest before each action) is planned for the rest of th
 from __future__ import annotations
 
 import dataclasses
-import json
-from pathlib import Path
 
 from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
+from ..outputs import report_json
 from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
 from ..schedule.monitor import ESTIMATORS
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
-from ._common import positive_float
 
 
 def add_schedule_arguments(parser) -> None:
@@ -57,9 +55,12 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
     margin = _number_in("--margin", args.margin, 0.0, 50.0, "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
-    settings = ManagerSettings(cycle_s=60.0 * positive_float("--cycle-min", args.cycle_min), margin_K=margin,
+    cycle_min = _number_in("--cycle-min", args.cycle_min, 1.0, 60.0, "a number of minutes")  # 1 plan per cycle
+    settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin,
                                rise_backoff=backoff)
     if getattr(args, "seed", None) is not None:
+        if int(args.seed) < 0:
+            raise InputError("--seed", args.seed, "must be a whole number >= 0")
         settings = dataclasses.replace(settings, seed=int(args.seed))
     if getattr(args, "estimator", None) is not None:
         if args.estimator not in ESTIMATORS:
@@ -83,10 +84,7 @@ def write_outputs(args, summary: dict, result, limit_C: float) -> None:
     """Print the summary, write the JSON and the plot when asked."""
     print(summary_text(summary, limit_C))
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(summary, indent=2))
-        print(f"wrote {path}")
+        report_json(args.json, summary)
     if args.plot:
         plot_flight(result, path=args.plot)
         print(f"wrote {args.plot}")

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from ..mission import load_mission
+from ..outputs import write_csv
 from ..simulate import simulate
 from ._common import add_model_arguments, model_from_args, positive_float
 
@@ -28,9 +27,7 @@ def run(args) -> int:
     mission = load_mission(args.scenario)
     model = model_from_args(args)
     result = simulate(model, mission.to_inputs(dt))
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    result.to_csv(out, index=False, float_format="%.6f")
+    out = write_csv(result, args.out, float_format="%.6f")
     peak = result[model.output_names].max()
     print(f"{mission.name}: {mission.duration_s / 3600:.2f} h on {model.name}, dt = {dt:g} s")
     if mission.extras.get("faults"):

@@ -2,12 +2,23 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from ..errors import InputError
 from ..mission import load_mission
+from ..outputs import write_csv
 from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
 from ._common import add_model_arguments, model_from_args, non_negative_float, parse_assignments, positive_float
+
+
+#: Largest sensor noise variance accepted, K² (a 10 K standard deviation: no PT100 is that bad).
+MAX_NOISE_VARIANCE_K2 = 100.0
+#: Largest relative current noise accepted (50 %).
+MAX_CURRENT_NOISE = 0.5
+
+
+def _at_most(option: str, value: float, limit: float, unit: str) -> float:
+    if value > limit:
+        raise InputError(option, value, f"at most {limit:g} {unit}: larger noise hides the machine entirely")
+    return value
 
 
 def register(subparsers) -> None:
@@ -43,17 +54,17 @@ def run(args) -> int:
         raise InputError("--seed", args.seed, "must be a whole number") from None
     if seed < 0:
         raise InputError("--seed", args.seed, "must be a whole number >= 0")
-    noise = (non_negative_float("--noise-winding", args.noise_winding), non_negative_float("--noise-iron", args.noise_iron))
-    current_noise = non_negative_float("--current-noise", args.current_noise)
+    noise = tuple(_at_most(option, non_negative_float(option, text), MAX_NOISE_VARIANCE_K2, "K²")
+                  for option, text in (("--noise-winding", args.noise_winding), ("--noise-iron", args.noise_iron)))
+    current_noise = _at_most("--current-noise", non_negative_float("--current-noise", args.current_noise),
+                             MAX_CURRENT_NOISE, "(relative)")
     overrides = parse_assignments(args.param)
     mission = load_mission(args.scenario)
     plant = model_from_args(args, source="synthetic plant, set on the command line")
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
     frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
                        switches=switches)
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    frame.to_csv(out, index=False, float_format="%.5f")
+    out = write_csv(frame, args.out, float_format="%.5f")
     changed = "".join(f", {name}={value:g}" for name, value in overrides.items())
     print(f"{mission.name}: {len(frame)} samples every {dt:g} s from {plant.name} (--model {args.model}{changed}), "
           f"seed {seed}")

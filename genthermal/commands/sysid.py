@@ -1,4 +1,4 @@
-"""``genthermal sysid TRAIN.csv --validate VAL.csv --json out.json``: ARX models from rig data.
+"""``genthermal sysid TRAIN.csv VAL.csv [--json out.json]``: ARX models from rig data.
 
 The thesis 5.3 procedure: for each output (stator winding, stator iron) try every ARX structure
 (and, with ``--input auto``, every input signal) on the training record, list the ten best
@@ -8,10 +8,6 @@ validation record with a different load profile. The two models are stacked into
 """
 
 from __future__ import annotations
-
-import json
-import math
-from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +23,7 @@ from ..estimation.arx_search import (
     training_record,
 )
 from ..measurements import load_measurements, resample
+from ..outputs import report_json
 from ._common import non_negative_float, positive_float
 
 #: Largest order or delay accepted on the command line (the search grows as the product of ranges).
@@ -44,8 +41,8 @@ def register(subparsers) -> None:
         "a discard) gives a consistent model; the validation simulation starts from the first measured "
         "temperature of that record (initialisation from the data).")
     parser.add_argument("train", help="training data CSV")
-    parser.add_argument("--validate", required=True, metavar="VAL.csv", help="validation data CSV")
-    parser.add_argument("--json", required=True, metavar="OUT.json", help="JSON file to write")
+    parser.add_argument("validation", help="validation data CSV (the selected models are scored on it)")
+    parser.add_argument("--json", metavar="OUT.json", help="write the candidates, models and scores as JSON")
     parser.add_argument("--input", default="auto",
                         help=f"input signal: {', '.join(INPUT_SIGNALS)} or auto (try each; default)")
     parser.add_argument("--integrate", action="store_true",
@@ -56,7 +53,7 @@ def register(subparsers) -> None:
     parser.add_argument("--na", default="1-3", help="numbers of A parameters to try, e.g. 1-3 (default)")
     parser.add_argument("--nb", default="1-3", help="numbers of B parameters to try, e.g. 1-3 (default)")
     parser.add_argument("--nk", default="0-4", help="input delays in samples to try, e.g. 0-4 (default)")
-    parser.add_argument("--ts", default="10", help="sample time in s the data are resampled to (default 10)")
+    parser.add_argument("--dt", default="10", help="sample time in s the data are resampled to (default 10)")
     parser.set_defaults(func=run)
 
 
@@ -75,7 +72,7 @@ def parse_range(option: str, text: str, smallest: int) -> range:
 
 def run(args) -> int:
     """Search, select and validate a model per output; print the tables and write the JSON."""
-    ts_s = positive_float("--ts", args.ts)
+    ts_s = positive_float("--dt", args.dt)
     search_options = {"na_range": parse_range("--na", args.na, 1), "nb_range": parse_range("--nb", args.nb, 1),
                       "nk_range": parse_range("--nk", args.nk, 0), "integrate_input": args.integrate,
                       "ts_s": ts_s, "constant_term": True}
@@ -83,10 +80,8 @@ def run(args) -> int:
     if args.input != "auto" and args.input not in INPUT_SIGNALS:
         raise InputError("--input", args.input, f"choose one of {', '.join(INPUT_SIGNALS)} or auto")
     train = resample(load_measurements(args.train), ts_s)
-    validation = resample(load_measurements(args.validate), ts_s)
-    for flag in (*train.flags, *validation.flags):
-        print(f"warning: {flag}")
-    report = {"ts_s": ts_s, "train": str(args.train), "validate": str(args.validate),
+    validation = resample(load_measurements(args.validation), ts_s)
+    report = {"ts_s": ts_s, "train": str(args.train), "validation": str(args.validation),
               "integrate_input": bool(args.integrate), "discard_before_s": discard_before_s}
     models = {}
     for output in OUTPUTS:
@@ -96,10 +91,9 @@ def run(args) -> int:
     report["state_space"] = {"outputs": [f"T_{output} - y_offset" for output in OUTPUTS],
                              "inputs": [report[output]["input"] for output in OUTPUTS],
                              "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist()}
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_finite_or_null(report), indent=2))
-    print(f"\nwrote {path}")
+    if args.json:
+        print()
+        report_json(args.json, report)
     return 0
 
 
@@ -144,14 +138,3 @@ def identify_output(train, validation, output: str, input_choice: str, discard_b
 
 def _candidate(row) -> dict:
     return {"na": int(row.na), "nb": int(row.nb), "nk": int(row.nk), "R2": float(row.R2), "AIC": float(row.AIC)}
-
-
-def _finite_or_null(value):
-    """``value`` with every non-finite float replaced by None (JSON has no inf or NaN)."""
-    if isinstance(value, dict):
-        return {key: _finite_or_null(item) for key, item in value.items()}
-    if isinstance(value, list):
-        return [_finite_or_null(item) for item in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value

@@ -42,6 +42,7 @@ from ..effects import CATALOGUE, Effect
 from ..errors import InputError
 from ..mission import Mission
 from ..model import ThermalModel
+from ..outputs import write_text
 from ..simulate import simulate
 
 BLOCKS = 6
@@ -86,10 +87,7 @@ class SeparatingExperiment:
 
     def write(self, path) -> Path:
         """Write the test as a scenario YAML file (``genthermal simulate``/``synth`` read it)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(yaml.safe_dump(self.mission.to_dict(), sort_keys=False, allow_unicode=True))
-        return path
+        return write_text(path, yaml.safe_dump(self.mission.to_dict(), sort_keys=False, allow_unicode=True))
 
 
 def _candidate_model(model: ThermalModel, explanation: Mapping[str, Mapping[str, float]],

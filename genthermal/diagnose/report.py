@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
 
 import numpy as np
 
-from ..mission import SCENARIO_DIR
+from ..outputs import write_json
 from ..plots import finish_figure, plt  # the Agg backend is chosen there
+from ..resources import DEMO_DATA_DIR
 from .compare import REGRESSORS, Comparison, compare
 from .discover import Diagnosis
 
 #: The shipped demo dataset (which effect is hidden is said in its README, not in the CSV).
-DEMO_DATA = SCENARIO_DIR / "data" / "hidden_effect_demo.csv"
+DEMO_DATA = DEMO_DATA_DIR / "hidden_effect_demo.csv"
 
 
 def _save(fig, path: Path) -> str:
@@ -98,7 +97,7 @@ def write_compare_report(comparison: Comparison, out_dir) -> Path:
     residual = plot_residuals(frame["time_s"].to_numpy(), {"model − measured": predicted - measured}, names,
                               out / "residual_vs_time.png")
     regressors = plot_regressors(comparison, out / "residual_vs_regressors.png")
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+    write_json(out / "metrics.json", metrics)
     lines = [f"# {comparison.model_name} against {comparison.source}", "",
              f"{metrics['samples']} samples every {metrics['dt_s']:g} s; error = model − measurement "
              f"(positive: the model runs hot). RMSE over both sensors: {metrics['rmse_all_sensors']:.3f} K.", "",
@@ -125,7 +124,7 @@ def write_diagnosis_report(diagnosis: Diagnosis, out_dir) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     series, names = diagnosis.series, diagnosis.model.output_names
     document = diagnosis.to_dict()
-    (out / "diagnosis.json").write_text(json.dumps(document, indent=2))
+    write_json(out / "diagnosis.json", document)
     lines = [f"# Diagnosis of {document['model']} on {document['data']}", "",
              f"Verdict: **{document['verdict']}**. Estimated sensor noise {diagnosis.noise_std:.3f} K.", "",
              document["explanation"], "", "| round | RMSE before [K] | added | RMSE after [K] |", "|---|---|---|---|"]
@@ -203,14 +202,5 @@ def run_discovery_demo(out_dir, data=None, model=None) -> dict:
                "explanation": diagnosis.iterations[0].explanation,
                "reports": [str(out / "compare" / "report.md"), str(out / "diagnose" / "report.md")],
                "model_file": str(out / "improved_model.yaml")}
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default))
+    write_json(out / "summary.json", summary)
     return summary
-
-
-def _json_default(value):
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
-    if isinstance(value, float) and math.isnan(value):
-        return None
-    raise TypeError(type(value).__name__)
-

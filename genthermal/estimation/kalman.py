@@ -46,6 +46,7 @@ with a subset of the sensors uses :math:`P_\infty` restricted to that subset.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import casadi as ca
 import numpy as np
@@ -64,6 +65,9 @@ THESIS_R_K2 = (0.0082, 0.013)
 DEFAULT_HEAT_NOISE_W = 30.0
 #: Default initial standard deviation of every state, K.
 DEFAULT_INITIAL_STD_K = 3.0
+#: A measurement whose magnitude exceeds this (°C) counts as missing in the generated update; NaN
+#: and inf fail the comparison and count as missing too.
+_LARGEST_MEASUREMENT = 1e30  # fits single precision too (the Cortex-M build uses float)
 
 
 def output_matrices(model: ThermalModel) -> tuple[np.ndarray, np.ndarray]:
@@ -242,14 +246,31 @@ class KalmanFilter(RecursiveFilter):
 
     # --- CasADi functions for code generation ----------------------------------------------
     def update_function(self) -> ca.Function:
-        """``(x_pred, u, y) -> (x_filtered, x_next_pred)`` with the steady-state gain baked in.
+        """``(x_pred, u, y) -> (x_filtered, x_next_pred)`` with the steady-state gains baked in.
 
-        Every sensor must be given; for a missing one pass its predicted value ``C x_pred + e``
-        (zero innovation), which skips that correction.
+        A non-finite ``y[i]`` (NaN: the sensor did not measure) is skipped exactly as
+        :meth:`update` in steady-state mode skips it: the gain is that of the sensors that
+        measured (one precomputed gain per subset of sensors), and with no sensor the state is
+        only predicted. A NaN never reaches the state.
         """
+        n_outputs = len(self.output_names)
         x_pred = ca.SX.sym("x_pred", len(self.state_names))
-        u, y = ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("y", len(self.output_names))
-        x_filtered = x_pred + ca.DM(self.steady_state_gain()) @ (y - ca.DM(self.C) @ x_pred - ca.DM(self.e))
+        u, y = ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("y", n_outputs)
+        measured = [ca.fabs(y[i]) <= _LARGEST_MEASUREMENT for i in range(n_outputs)]  # false for NaN, inf
+        expected = ca.DM(self.C) @ x_pred + ca.DM(self.e)
+        innovation = ca.vertcat(*(ca.if_else(measured[i], y[i] - expected[i], 0.0) for i in range(n_outputs)))
+        correction = ca.SX.zeros(len(self.state_names))
+        for subset in itertools.product((False, True), repeat=n_outputs):
+            mask = np.array(subset)
+            if not mask.any():
+                continue
+            gain = np.zeros((len(self.state_names), n_outputs))
+            gain[:, mask] = self._gain(self.P_steady, mask)
+            indicator = 1.0
+            for i, used in enumerate(subset):
+                indicator = indicator * (measured[i] if used else 1.0 - measured[i])
+            correction += indicator * (ca.DM(gain) @ innovation)
+        x_filtered = x_pred + correction
         x_next = ca.DM(self.A) @ x_filtered + ca.DM(self.B) @ u + ca.DM(self.c)
         return ca.Function("kalman_update", [x_pred, u, y], [x_filtered, x_next],
                            ["x_pred", "u", "y"], ["x_filtered", "x_next_pred"])

@@ -108,8 +108,8 @@ static void log_message(instance_t* c, fmi2Status status, const char* category, 
 static int evaluate(instance_t* c)
 {
     double* v = c->values;
-    if (@PREFIX@_rhs(v + VR_X, v + VR_U, v + VR_P, v + VR_DX, c->work) != @PREFIX_UPPER@_OK) return -1;
-    return @PREFIX@_outputs(v + VR_X, v + VR_U, v + VR_P, v + VR_Y, c->work) == @PREFIX_UPPER@_OK ? 0 : -1;
+    if (@PREFIX@_rhs(v + VR_X, v + VR_U, v + VR_P, v + VR_DX, c->work, @PREFIX_UPPER@_WORK_SIZE) != @PREFIX_UPPER@_OK) return -1;
+    return @PREFIX@_outputs(v + VR_X, v + VR_U, v + VR_P, v + VR_Y, c->work, @PREFIX_UPPER@_WORK_SIZE) == @PREFIX_UPPER@_OK ? 0 : -1;
 }
 
 /* The full Jacobian of (dx/dt, y) with respect to (x, u). */
@@ -118,13 +118,13 @@ static int evaluate_jacobian(instance_t* c)
     double block[(NX > NY ? NX : NY) * (NX > NU ? NX : NU)];
     const double* v = c->values;
     int i, j, status = 0;
-    status |= @PREFIX@_jac_x(v + VR_X, v + VR_U, v + VR_P, block, c->work);
+    status |= @PREFIX@_jac_x(v + VR_X, v + VR_U, v + VR_P, block, c->work, @PREFIX_UPPER@_WORK_SIZE);
     for (i = 0; i < NX; ++i) for (j = 0; j < NX; ++j) c->jacobian[i * (NX + NU) + j] = block[i * NX + j];
-    status |= @PREFIX@_jac_u(v + VR_X, v + VR_U, v + VR_P, block, c->work);
+    status |= @PREFIX@_jac_u(v + VR_X, v + VR_U, v + VR_P, block, c->work, @PREFIX_UPPER@_WORK_SIZE);
     for (i = 0; i < NX; ++i) for (j = 0; j < NU; ++j) c->jacobian[i * (NX + NU) + NX + j] = block[i * NU + j];
-    status |= @PREFIX@_output_jac_x(v + VR_X, v + VR_U, v + VR_P, block, c->work);
+    status |= @PREFIX@_output_jac_x(v + VR_X, v + VR_U, v + VR_P, block, c->work, @PREFIX_UPPER@_WORK_SIZE);
     for (i = 0; i < NY; ++i) for (j = 0; j < NX; ++j) c->jacobian[(NX + i) * (NX + NU) + j] = block[i * NX + j];
-    status |= @PREFIX@_output_jac_u(v + VR_X, v + VR_U, v + VR_P, block, c->work);
+    status |= @PREFIX@_output_jac_u(v + VR_X, v + VR_U, v + VR_P, block, c->work, @PREFIX_UPPER@_WORK_SIZE);
     for (i = 0; i < NY; ++i) for (j = 0; j < NU; ++j) c->jacobian[(NX + i) * (NX + NU) + NX + j] = block[i * NU + j];
     return status ? -1 : 0;
 }
@@ -384,7 +384,7 @@ FMI2_EXPORT fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component component
 /* --- co-simulation: adaptive Dormand-Prince 5(4) over one communication step --------------- */
 static int rhs_at(instance_t* c, const double* x, double* xdot)
 {
-    return @PREFIX@_rhs(x, c->values + VR_U, c->values + VR_P, xdot, c->work) == @PREFIX_UPPER@_OK ? 0 : -1;
+    return @PREFIX@_rhs(x, c->values + VR_U, c->values + VR_P, xdot, c->work, @PREFIX_UPPER@_WORK_SIZE) == @PREFIX_UPPER@_OK ? 0 : -1;
 }
 
 static int integrate(instance_t* c, double h_total)

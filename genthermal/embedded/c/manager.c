@@ -38,13 +38,13 @@ static int predict_peak(const gtm_settings_t* s, const double* x0, int g, int re
     *peak = NO_PEAK;
     model_input(s, s->rest_current_A, inlet_C, u);
     for (k = 0; k < rest && *peak <= stop_above_C; ++k) {
-        if (gt_step(x, u, x, work) != GT_OK) return GT_ERR_EVALUATION;
+        if (gt_step(x, u, x, work, GT_WORK_SIZE) != GT_OK) return GT_ERR_EVALUATION;
         if (x[s->winding_state] > *peak) *peak = x[s->winding_state];
     }
     for (k = index; k < s->n_profile && *peak <= stop_above_C; ++k) {
         mission_currents(s, k, displaced, hot, currents);
         model_input(s, currents[g], inlet_C, u);
-        if (gt_step(x, u, x, work) != GT_OK) return GT_ERR_EVALUATION;
+        if (gt_step(x, u, x, work, GT_WORK_SIZE) != GT_OK) return GT_ERR_EVALUATION;
         if (x[s->winding_state] > *peak) *peak = x[s->winding_state];
     }
     return GT_OK;
@@ -110,7 +110,7 @@ int gtm_step(gtm_state_t* state, const gtm_settings_t* settings, const double* y
     if (state->mission_index >= settings->n_profile && state->rest_remaining == 0) return GTM_MISSION_DONE;
     for (g = 0; g < GTM_N_GENERATORS; ++g) { /* the update; its one-step prediction is redone below */
         model_input(settings, 0.0, inlet_C[g], u);
-        status |= gt_kalman_update(state->x_pred[g], u, y + g * GT_N_OUTPUTS, state->x_filtered[g], ignored, work);
+        status |= gt_kalman_update(state->x_pred[g], u, y + g * GT_N_OUTPUTS, state->x_filtered[g], ignored, work, GT_WORK_SIZE);
     }
     state->decided = state->samples % settings->cycle_steps == 0;
     if (state->decided) status |= decide(state, settings, inlet_C, work);
@@ -124,7 +124,7 @@ int gtm_step(gtm_state_t* state, const gtm_settings_t* settings, const double* y
     }
     for (g = 0; g < GTM_N_GENERATORS; ++g) {
         model_input(settings, currents_A[g], inlet_C[g], u);
-        status |= gt_step(state->x_filtered[g], u, state->x_pred[g], work);
+        status |= gt_step(state->x_filtered[g], u, state->x_pred[g], work, GT_WORK_SIZE);
     }
     ++state->samples;
     return status ? GT_ERR_EVALUATION : GT_OK;

@@ -1,0 +1,101 @@
+"""Long, finely sampled records made fit for fitting: block averages on a coarser grid.
+
+A rig logging at 1 s for a week gives 604 800 samples, while the temperatures a model is fitted
+to change over minutes: the slow modes of the thesis generator have time constants of 6.5 to 50
+minutes and the fastest (air and thin solid nodes) of 2 to 30 s, which only the sensors' noise
+shows at 1 s. Fitting (``calibrate``, ``diagnose``) simulates the model once per candidate and
+iteration, so its cost grows with the number of samples. :func:`decimate_for_fitting` therefore
+averages the record in blocks down to at most :data:`MAX_FITTING_SAMPLES` samples, on the first
+of :data:`FITTING_STEPS_S` that is long enough, and says so.
+
+Block averages keep what the model needs. Inputs are held over a step ``[t_k, t_k + step)`` by
+the simulation, so they are averaged over that block: currents as RMS values (the copper and
+excitation losses go with the current squared, so the mean loss of the block is kept), inlet and
+ambient temperatures as means. A sensor is compared with the state *at* ``t_k``, so it is averaged
+over the window centred on ``t_k`` (a linear trend cancels, the noise falls); a window without
+any valid sample is missing. A block inside a gap of the record holds the inputs of the block
+before it, as a resampling does (the gap is flagged when the record is loaded).
+Memory stays bounded: one pass of numpy reductions over the validated columns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .errors import InputError
+from .losses import INPUT_NAMES, PHASE_CURRENTS
+from .measurements import MeasurementData
+
+#: Most samples a record given to calibration or diagnosis keeps (one week at 60 s is 10 080).
+MAX_FITTING_SAMPLES = 12_000
+#: Block lengths tried in order, s: 10 s is the thesis logging and filter step; the longest is the
+#: 5-minute management cycle, well below the 6.5-minute fastest slow mode of the thesis generator.
+FITTING_STEPS_S = (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)
+#: Columns averaged as RMS values (losses go with their square).
+RMS_COLUMNS = (*PHASE_CURRENTS, "I_exc")
+
+
+def fitting_step(data: MeasurementData) -> float | None:
+    """The block length (s) :func:`decimate_for_fitting` uses for ``data``, or None to keep it.
+
+    Raises
+    ------
+    InputError
+        The record is so long that even the longest block leaves more than
+        :data:`MAX_FITTING_SAMPLES` samples: split it.
+    """
+    time_s = data.time_s
+    samples = time_s.size
+    if samples <= MAX_FITTING_SAMPLES:
+        return None
+    duration_s = float(time_s[-1] - time_s[0])
+    own_step = float(np.median(np.diff(time_s)))
+    for step in FITTING_STEPS_S:
+        if step >= own_step and duration_s / step + 1 <= MAX_FITTING_SAMPLES:
+            return step
+    raise InputError(data.source, f"{samples} samples over {duration_s / 86400:.3g} days",
+                     f"too long to fit in one piece (more than {MAX_FITTING_SAMPLES} samples even at "
+                     f"{FITTING_STEPS_S[-1]:g} s); split the record")
+
+
+def block_average(data: MeasurementData, step_s: float) -> MeasurementData:
+    """Average ``data`` on the grid ``t0, t0 + step_s, ...`` (see the module docstring): inputs over
+    the block that starts at each grid time, sensors over the window centred on it.
+    """
+    time_s = data.time_s
+    elapsed = time_s - time_s[0]
+    n_blocks = int(np.floor(elapsed[-1] / step_s + 1e-9)) + 1
+    columns = {"time_s": time_s[0] + step_s * np.arange(n_blocks)}
+    input_block = np.floor(elapsed / step_s + 1e-9).astype(np.int64)
+    sensor_block = np.minimum(np.floor(elapsed / step_s + 0.5).astype(np.int64), n_blocks - 1)
+    for name in data.frame.columns:
+        if name == "time_s":
+            continue
+        block = input_block if name in INPUT_NAMES else sensor_block
+        values = data.frame[name].to_numpy(dtype=float)
+        valid = np.isfinite(values)
+        squared = name in RMS_COLUMNS
+        sums = np.bincount(block, np.where(valid, values ** 2 if squared else values, 0.0), n_blocks)
+        counts = np.bincount(block, valid, n_blocks)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = sums / counts
+        mean = np.sqrt(mean) if squared else mean
+        if name in INPUT_NAMES:  # a block inside a gap (flagged on loading) holds the last input
+            mean = pd.Series(mean).ffill().to_numpy()
+        columns[name] = mean
+    frame = pd.DataFrame(columns)
+    missing = {name: int(frame[name].isna().sum()) for name in data.missing_counts}
+    return MeasurementData(frame, f"{data.source} averaged over {step_s:g} s blocks", missing,
+                           list(data.flags), list(data.ignored_columns))
+
+
+def decimate_for_fitting(data: MeasurementData) -> tuple[MeasurementData, str | None]:
+    """``data`` block-averaged to :func:`fitting_step` when it is long, and a note saying so."""
+    step = fitting_step(data)
+    if step is None:
+        return data, None
+    averaged = block_average(data, step)
+    note = (f"{data.source}: {len(data.frame)} samples averaged to {len(averaged.frame)} over {step:g} s blocks "
+            f"for fitting (currents as RMS); give --dt to choose the step yourself")
+    return averaged, note

@@ -1,0 +1,58 @@
+"""Long records: block averages for fitting keep the mean loss and the timing, and bound the size."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from genthermal.errors import InputError
+from genthermal.long_records import MAX_FITTING_SAMPLES, block_average, decimate_for_fitting, fitting_step
+from genthermal.measurements import REQUIRED_COLUMNS, dataframe_to_measurements
+
+
+def record(hours: float, step_s: float, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    time_s = np.arange(0.0, hours * 3600.0 + step_s / 2, step_s)
+    current = 4.0 + 3.0 * (np.sin(time_s / 300.0) > 0) + rng.normal(0, 0.3, time_s.size)  # 5-min steps, noisy
+    ramp = 40.0 + 10.0 * np.sin(2 * np.pi * time_s / 7200.0)  # sensors: a 2-hour cycle
+    columns = {"time_s": time_s, "I_u": np.abs(current), "I_v": np.abs(current), "I_w": np.abs(current),
+               "I_exc": np.full(time_s.size, 0.8), "T_inlet": np.full(time_s.size, 20.0),
+               "T_ambient": np.full(time_s.size, 20.0)}
+    columns.update({name: ramp for name in REQUIRED_COLUMNS if name.startswith("T_w") or name == "T_iron"})
+    return dataframe_to_measurements(pd.DataFrame(columns), "synthetic")
+
+
+def test_short_records_are_kept_as_they_are():
+    data = record(2.0, 10.0)
+    assert fitting_step(data) is None and decimate_for_fitting(data) == (data, None)
+
+
+def test_a_week_at_1s_is_bounded_and_keeps_mean_loss_and_timing():
+    data = record(7 * 24.0, 1.0)
+    averaged, note = decimate_for_fitting(data)
+    assert len(averaged.frame) <= MAX_FITTING_SAMPLES and "averaged" in note
+    step = float(np.diff(averaged.time_s)[0])
+    # the mean of I^2 (the copper loss) over the record is kept, which a plain mean of I would not
+    np.testing.assert_allclose(np.mean(averaged.frame["I_u"] ** 2), np.mean(data.frame["I_u"] ** 2), rtol=1e-3)
+    assert np.mean(averaged.frame["I_u"]) ** 2 < np.mean(averaged.frame["I_u"] ** 2)
+    # a sensor is the centred average: it is the value at the grid time, not half a block later
+    interior = averaged.frame.iloc[1:-1]
+    exact = 40.0 + 10.0 * np.sin(2 * np.pi * interior["time_s"] / 7200.0)
+    assert np.max(np.abs(interior["T_iron"] - exact)) < 0.01
+    assert step in (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)
+
+
+def test_a_gap_holds_the_inputs_and_leaves_the_sensors_missing():
+    data = record(1.0, 1.0)
+    frame = data.frame[(data.time_s < 1200) | (data.time_s >= 2400)].reset_index(drop=True)
+    with pytest.warns(UserWarning, match="gap"):
+        gappy = dataframe_to_measurements(frame, "gappy")
+    averaged = block_average(gappy, 60.0)
+    inside = (averaged.time_s > 1260) & (averaged.time_s < 2340)
+    assert np.isfinite(averaged.frame[["I_u", "T_inlet"]].to_numpy()).all()
+    assert averaged.frame.loc[inside, "T_iron"].isna().all()
+
+
+def test_a_record_too_long_for_any_block_is_refused():
+    data = record(24.0 * 45, 60.0)  # 45 days at 60 s: more than MAX_FITTING_SAMPLES even at 300 s
+    with pytest.raises(InputError, match="split the record"):
+        fitting_step(data)
