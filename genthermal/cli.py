@@ -97,6 +97,10 @@ def main(argv: list[str] | None = None) -> int:
         check_output_paths(args, args.command)
         with warnings.catch_warnings():
             warnings.simplefilter("always", DataWarning)
+            # A library's deprecation notice is for developers, not a line for the user (the floor
+            # versions of mpmath/sympy raise some while the pytest warning filters are active).
+            warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", PendingDeprecationWarning)
             warnings.showwarning = _warning_printer(command)
             code = int(args.func(args) or 0)
         sys.stdout.flush()
