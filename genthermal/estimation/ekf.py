@@ -54,7 +54,7 @@ from ..discretise import check_step_accuracy
 from ..errors import InputError
 from ..losses import INPUT_NAMES
 from ..model import ThermalModel
-from .filter_base import RecursiveFilter
+from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
     THESIS_R_K2,
@@ -252,7 +252,5 @@ def embedded_functions(model: ThermalModel, dt_s: float = 10.0, predict_steps: i
         ExtendedKalmanFilter.predict_function(predict_steps)}`` for
         :func:`genthermal.codegen.generate_c`'s ``extra_functions``.
     """
-    if int(predict_steps) != predict_steps or predict_steps < 1:
-        raise InputError("predict_steps", predict_steps, "must be a positive whole number of steps")
     ekf = ExtendedKalmanFilter(model, dt_s)
-    return {"ekf_update": ekf.update_function(), "ekf_predict": ekf.predict_function(int(predict_steps))}
+    return {"ekf_update": ekf.update_function(), "ekf_predict": ekf.predict_function(checked_predict_steps(predict_steps))}

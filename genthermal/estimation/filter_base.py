@@ -88,3 +88,10 @@ class RecursiveFilter:
         if missing:
             raise InputError("sensors", missing, f"missing columns; need {', '.join(self.output_names)} "
                              f"(the sensors of {self.model.name})")
+
+
+def checked_predict_steps(predict_steps) -> int:
+    """``predict_steps`` as an int, or an InputError naming it when it is not a whole number >= 1."""
+    if int(predict_steps) != predict_steps or predict_steps < 1:
+        raise InputError("predict_steps", predict_steps, "must be a positive whole number of steps")
+    return int(predict_steps)

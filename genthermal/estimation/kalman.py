@@ -57,7 +57,7 @@ import scipy.signal
 from ..errors import InputError
 from ..losses import INPUT_NAMES
 from ..model import ThermalModel
-from .filter_base import RecursiveFilter
+from .filter_base import RecursiveFilter, checked_predict_steps
 
 #: Measurement noise covariance of thesis eq. 6.10, K² (stator winding, stator iron).
 THESIS_R_K2 = (0.0082, 0.013)
@@ -332,8 +332,6 @@ def embedded_functions(design_model: ThermalModel, dt_s: float = 10.0, predict_s
         ``{"kalman_update": (x_pred, u, y) -> (x_filtered, x_next_pred),
         "predict": (x, U) -> Y}`` for :func:`genthermal.codegen.generate_c`'s ``extra_functions``.
     """
-    if int(predict_steps) != predict_steps or predict_steps < 1:
-        raise InputError("predict_steps", predict_steps, "must be a positive whole number of steps")
     kalman = KalmanFilter(design_model, dt_s=dt_s)
-    return {"kalman_update": kalman.update_function(), "predict": kalman.predict_function(int(predict_steps))}
+    return {"kalman_update": kalman.update_function(), "predict": kalman.predict_function(checked_predict_steps(predict_steps))}
 
