@@ -29,6 +29,10 @@ from .losses import INPUT_NAMES, LossFloor, input_symbol
 from .network import Network
 from .parameters import ParameterSet
 
+#: A steady state this far below the coldest boundary temperature (K) is the non-physical root of a
+#: thermal runaway: the model has no heat sinks, and no loss cools a machine 50 K below its air.
+COLDEST_STEADY_STATE_BELOW_K = 50.0
+
 _CASADI_FUNCTIONS = {"log": ca.log, "exp": ca.exp, "sqrt": ca.sqrt, "Abs": ca.fabs,
                      "Max": ca.fmax, "Min": ca.fmin, "Heaviside": lambda v: ca.if_else(v >= 0, 1, 0),
                      "LossFloor": lambda v: ca.fmax(v, 0)}
@@ -375,7 +379,9 @@ class ThermalModel:
         Raises
         ------
         InputError
-            If Newton's method does not converge in 50 iterations.
+            If Newton's method does not converge in 50 iterations, or converges to temperatures far
+            below the coolant and ambient (:data:`COLDEST_STEADY_STATE_BELOW_K`): the root of a
+            thermal runaway, where the copper resistance :math:`R_0(1+\\alpha_{cu}\\theta)` vanishes.
         """
         u = np.asarray(u, dtype=float)
         x = np.full(self.n_states, float(u[INPUT_NAMES.index("T_ambient")]))
@@ -383,8 +389,17 @@ class ThermalModel:
             step = np.linalg.solve(self.jacobian_x(x, u, p), self.rhs(x, u, p))
             x = x - step
             if np.max(np.abs(step)) < tol * max(1.0, np.max(np.abs(x))):
-                return x
+                return self._physical_steady_state(x, u)
         raise InputError("u", u.tolist(), "no steady state found (Newton did not converge)")
+
+    def _physical_steady_state(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        coldest = min(float(u[INPUT_NAMES.index(name)]) for name in ("T_inlet", "T_ambient"))
+        if x.min() < coldest - COLDEST_STEADY_STATE_BELOW_K:
+            raise InputError("steady state", f"{x.min():.4g} °C", f"is far below the coolant and ambient "
+                             f"({coldest:g} °C): at this load the losses grow with temperature faster than the "
+                             "cooling removes them (thermal runaway), so there is no physical steady state; "
+                             "check the loss and cooling parameters (R0, h_*)")
+        return x
 
     def discretise(self, dt_s: float):
         """The :class:`~genthermal.discretise.DiscreteModel` for step ``dt_s`` (s), cached."""

@@ -331,6 +331,10 @@ class PowerSystem:
         if not isinstance(fault_entries, list):
             raise InputError("faults", fault_entries, "must be a list of faults")
         faults = tuple(parse_fault(e, names, f"faults[{i}]") for i, e in enumerate(fault_entries))
+        for i, fault in enumerate(faults):
+            if fault.onset_s >= mission.duration_s:
+                raise InputError(f"faults[{i}].onset_min", fault.onset_s / 60.0, f"is not before the mission's end "
+                                 f"({mission.duration_s / 60.0:g} min): the fault would never happen")
         return cls(mission, names, faults,
                    rest_percent=_number(config, "rest_percent", "generators", 0.0, 100.0, "%", DEFAULT_REST_PERCENT),
                    limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC", DEFAULT_LIMIT_C),
