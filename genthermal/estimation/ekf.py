@@ -52,7 +52,7 @@ import scipy.linalg
 
 from ..discretise import check_step_accuracy
 from ..errors import InputError
-from ..losses import INPUT_NAMES
+from ..losses import INPUT_NAMES, PHASE_CURRENTS
 from ..model import ThermalModel
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
@@ -69,6 +69,9 @@ from .kalman import (
 DEFAULT_NODE_HEAT_NOISE_W = 5.0
 #: How far each disturbance heat flow may drift in one hour (1 sigma of the random walk), W.
 DEFAULT_DISTURBANCE_DRIFT_W = 15.0
+#: How far each load-scaled disturbance (W at rated current, scaled by the load squared) may drift
+#: in one hour, W; 0 leaves those states out.
+DEFAULT_LOAD_SCALED_DRIFT_W = 15.0
 #: Initial standard deviation of each disturbance heat flow, W.
 DEFAULT_INITIAL_DISTURBANCE_W = 30.0
 
@@ -107,10 +110,12 @@ class ExtendedKalmanFilter(RecursiveFilter):
     """
 
     def __init__(self, model: ThermalModel, dt_s: float = 10.0, disturbance_nodes=None,
+                 load_scaled_drift_W: float = DEFAULT_LOAD_SCALED_DRIFT_W,
                  node_heat_noise_W: float = DEFAULT_NODE_HEAT_NOISE_W,
                  disturbance_drift_W: float = DEFAULT_DISTURBANCE_DRIFT_W,
                  initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None):
         for name, value in (("node_heat_noise_W", node_heat_noise_W), ("disturbance_drift_W", disturbance_drift_W),
+                            ("load_scaled_drift_W", load_scaled_drift_W),
                             ("initial_disturbance_W", initial_disturbance_W)):
             if not (np.isfinite(value) and value >= 0):
                 raise InputError(name, value, "must be a heat flow in W >= 0")
@@ -123,12 +128,15 @@ class ExtendedKalmanFilter(RecursiveFilter):
             raise InputError("disturbance_nodes", unknown or nodes,
                              f"must be capacitive nodes of {model.name}: {', '.join(model.state_names)}")
         self.disturbance_nodes = nodes
-        self.disturbance_names = tuple(f"q_{node}" for node in nodes)
+        self.load_scaled = load_scaled_drift_W > 0
+        self.disturbance_names = tuple(f"q_{node}" for node in nodes) + \
+            (tuple(f"q_load_{node}" for node in nodes) if self.load_scaled else ())
         self.output_names = list(model.output_names)
         self.state_names = [*model.state_names, *self.disturbance_names]
-        nx, nd, ny = model.n_states, len(nodes), len(self.output_names)
+        nx, nd, ny = model.n_states, len(self.disturbance_names), len(self.output_names)
+        self.rated_current_A = float(model.spec.rated_current_A)
         capacity = node_heat_capacities(model)
-        self.M = np.zeros((nx, nd))
+        self.M = np.zeros((nx, len(nodes)))
         for j, node in enumerate(nodes):
             index = model.state_names.index(node)
             self.M[index, j] = 1.0 / capacity[index]
@@ -136,8 +144,9 @@ class ExtendedKalmanFilter(RecursiveFilter):
         self.C = C
         self.H = np.hstack([C, np.zeros((ny, nd))])
         self.transition, self.state_step = self._transition_functions(discrete)
+        drift = np.repeat([disturbance_drift_W, load_scaled_drift_W][:1 + self.load_scaled], len(nodes))
         self.Q = scipy.linalg.block_diag(heat_flow_process_noise(model, dt_s, node_heat_noise_W),
-                                         np.eye(nd) * disturbance_drift_W**2 * self.dt_s / 3600.0)
+                                         np.diag(drift**2 * self.dt_s / 3600.0))
         self.R = _covariance("R", THESIS_R_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
@@ -148,9 +157,14 @@ class ExtendedKalmanFilter(RecursiveFilter):
     def _transition_functions(self, discrete) -> tuple[ca.Function, ca.Function]:
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
-        nx, nd = self.model.n_states, self.M.shape[1]
+        nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
         z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(INPUT_NAMES))
-        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ z[nx:]), z[nx:])
+        heat = z[nx:nx + n_nodes]
+        if self.load_scaled:
+            phases = [u[INPUT_NAMES.index(name)] for name in PHASE_CURRENTS]
+            load_squared = sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2)
+            heat = heat + load_squared * z[nx + n_nodes:]
+        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
         return (ca.Function("ekf_transition", [z, u], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
                 ca.Function("ekf_state_step", [z, u], [z_next], ["z", "u"], ["z_next"]))
 
@@ -182,7 +196,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
     def initial_state(self, y0, u0) -> np.ndarray:
         """Nodes from :func:`initial_state_from_measurements`, disturbances zero."""
         return np.concatenate([initial_state_from_measurements(self.model, y0, u0),
-                               np.zeros(len(self.disturbance_nodes))])
+                               np.zeros(len(self.disturbance_names))])
 
     def forecast(self, x_start, U: np.ndarray) -> np.ndarray:
         """Outputs (°C, n × n_outputs) from the filter state ``x_start`` run open loop with inputs
