@@ -23,18 +23,19 @@ def test_transition_is_the_simulation_step_and_its_jacobian_is_exact(ekf, plant_
     rng = np.random.default_rng(0)
     step = plant_model.discretise(DT_S).step
     u = plant_model.input_vector(6.5, 6.5, 6.5, 0.97, 25.0, 22.0)
-    z = np.concatenate([40 + 50 * rng.random(plant_model.n_states), [0.0, 0.0]])
+    nx, nd = plant_model.n_states, len(ekf.disturbance_names)
+    z = np.concatenate([40 + 50 * rng.random(nx), np.zeros(nd)])
     z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
     # no disturbance: exactly the step simulate() takes
-    assert np.max(np.abs(z_next.ravel()[:8] - np.asarray(step(z[:8], u)).ravel())) < 1e-12
-    z[8:] = (25.0, -10.0)
+    assert np.max(np.abs(z_next.ravel()[:nx] - np.asarray(step(z[:nx], u)).ravel())) < 1e-12
+    z[nx:] = 30.0 * rng.standard_normal(nd)
     z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
     for j in range(len(z)):  # central differences of the same step
         dz = np.zeros(len(z))
         dz[j] = 1e-3
         column = (np.asarray(ekf.transition(z + dz, u)[0]) - np.asarray(ekf.transition(z - dz, u)[0])).ravel() / 2e-3
         assert np.allclose(F[:, j], column, rtol=1e-6, atol=1e-9)
-    assert np.any(np.abs(F[:8, 8:]) > 0)  # the disturbances heat their nodes
+    assert np.all(np.any(np.abs(F[:nx, nx:]) > 0, axis=0))  # every disturbance heats its node
 
 
 def test_predictions_are_offset_free_under_an_effect_the_model_lacks(plant_model, ekf):
@@ -92,7 +93,7 @@ def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
         library = model_library(plant_model, dt_s=DT_S, prefix="gte", extra_functions=functions)
     except CompilerNotFoundError as exc:
         pytest.skip(str(exc))
-    z = np.concatenate([np.linspace(40.0, 90.0, 8), [12.0, -4.0]])
+    z = np.concatenate([np.linspace(40.0, 90.0, plant_model.n_states), [12.0, -4.0, 6.0, 3.0]])
     P = ekf.P0 * 0.3 + 0.01
     u = plant_model.input_vector(6.0, 6.0, 6.0, 0.93, 22.0, 21.0)
     y = np.array([85.0, 60.0])
