@@ -133,7 +133,9 @@ def main(argv=None) -> int:
         c_ns = c_update_ns(design, Path(folder), embedded_functions(design, 10.0, 1))
     plant = build_model()
     ekf = ExtendedKalmanFilter(plant, dt_s=10.0)
-    z, P = np.concatenate([x, [5.0, -2.0]]), np.diag([1.0] * 8 + [100.0] * 2)
+    n_disturbances = len(ekf.disturbance_names)
+    z = np.concatenate([x, [5.0, -2.0, 3.0, 1.0][:n_disturbances]])
+    P = np.diag([1.0] * len(x) + [100.0] * n_disturbances)
 
     def ekf_python_update():
         update = ekf.update(z, P, y)
