@@ -106,3 +106,21 @@ def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
     U = np.tile(u[:, None], (1, 30))
     expected = ekf.forecast(z_next, np.hstack([U, U[:, :1]]))[1:].T  # outputs after each step
     assert np.max(np.abs(library.call("ekf_predict", z_next, U) - expected)) < 1e-9
+
+
+def test_load_scaled_losses_act_with_the_load_squared_and_not_at_rest(plant_model, ekf):
+    nx = plant_model.n_states
+    z = np.concatenate([np.full(nx, 60.0), np.zeros(len(ekf.disturbance_names))])
+    load = ekf.state_names.index("q_load_" + plant_model.spec.sensors["T_winding"])
+    constant = ekf.state_names.index("q_" + plant_model.spec.sensors["T_winding"])
+    rises = {}
+    for current in (0.0, 3.5, 7.0):
+        u = plant_model.input_vector(current, current, current, 0.8, 25.0, 22.0)
+        base = np.asarray(ekf.transition(z, u)[0]).ravel()[:nx]
+        with_load, with_constant = z.copy(), z.copy()
+        with_load[load], with_constant[constant] = 40.0, 40.0
+        rises[current] = [np.max(np.asarray(ekf.transition(state, u)[0]).ravel()[:nx] - base)
+                          for state in (with_load, with_constant)]
+    assert rises[0.0][0] == 0.0 and rises[7.0][0] > 0  # no load, no loss
+    np.testing.assert_allclose(rises[3.5][0] / rises[7.0][0], (3.5 / 7.0) ** 2, rtol=1e-2)  # not 0.5: squared
+    np.testing.assert_allclose(rises[7.0][0], rises[7.0][1], rtol=1e-2)  # at rated current: W for W

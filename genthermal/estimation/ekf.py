@@ -14,9 +14,9 @@ constant heat flow cannot carry from one load to another. They enter the nodes a
     (d, m)_{k+1} = (d, m)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
 
 :math:`\Phi` the *same* discrete step that simulation uses (:attr:`DiscreteModel.forced_step` of
-:mod:`genthermal.discretise`, with the forcing :math:`w = Md`, :math:`M_{ij} = 1/C_i` for node i
-of disturbance j), so filter and simulation cannot drift apart. The Jacobian
-:math:`F_k = \partial (\Phi, d)/\partial(x, d)` at :math:`(\hat x_k, \hat d_k, u_k)` is exact
+:mod:`genthermal.discretise`, with the forcing :math:`w = M(d + \ell(u) m)`, :math:`M_{ij} = 1/C_i`
+for node i of disturbance j), so filter and simulation cannot drift apart. The Jacobian
+:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact
 (CasADi automatic differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`.
 Update and prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place
 of :math:`A` (Joseph-form covariance update; missing sensors drop their rows).
