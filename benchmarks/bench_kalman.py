@@ -9,8 +9,9 @@ Run ``python benchmarks/bench_kalman.py --json bench_kalman.json``; prints JSON 
   (steady-state mode), median of repeats.
 * ``casadi_update_ns`` -- the same CasADi function evaluated in-process with numpy arguments.
 * ``ekf_c_update_ns`` -- ``gt_ekf_update`` (the extended Kalman filter on the nonlinear model with
-  two disturbance heat flows: 10 states, full covariance, update and prediction with the exact
-  Jacobian of the discrete step) in the same kind of C loop; ``ekf_python_update_ns`` --
+  two disturbance heat flows and two load-scaled losses: 12 states, full covariance, update and
+  prediction with the exact Jacobian of the discrete step) in the same kind of C loop;
+  ``ekf_python_update_ns`` --
   :meth:`ExtendedKalmanFilter.update` + :meth:`ExtendedKalmanFilter.predict`.
 
 Target (issue): one filter update in generated C <= 1 µs.
@@ -69,11 +70,12 @@ EKF_DRIVER = r"""
 static double work[GT_WORK_SIZE];
 int main(void)
 {
-    double z[10] = {40, 60, 58, 70, 69, 70, 35, 33, 5, -2}, u[6] = {5, 5, 5, 0.85, 20, 20}, y[2] = {70.2, 59.9};
-    double measured[2] = {1, 1}, P[100] = {0}, zf[10], Pf[100], zn[10], Pn[100], checksum = 0.0;
+    double z[12] = {40, 60, 58, 70, 69, 70, 35, 33, 5, -2, 3, 1}, u[6] = {5, 5, 5, 0.85, 20, 20};
+    double y[2] = {70.2, 59.9}, measured[2] = {1, 1}, P[144] = {0}, zf[12], Pf[144], zn[12], Pn[144];
+    double checksum = 0.0;
     struct timespec start, stop;
     long k;
-    for (k = 0; k < 10; ++k) P[11 * k] = k < 8 ? 1.0 : 100.0;
+    for (k = 0; k < 12; ++k) P[13 * k] = k < 8 ? 1.0 : 100.0;
     clock_gettime(CLOCK_MONOTONIC, &start);
     for (k = 0; k < %(n)d; ++k) {
         gt_ekf_update(z, P, u, y, measured, zf, Pf, zn, Pn, work, GT_WORK_SIZE);
@@ -131,7 +133,9 @@ def main(argv=None) -> int:
         c_ns = c_update_ns(design, Path(folder), embedded_functions(design, 10.0, 1))
     plant = build_model()
     ekf = ExtendedKalmanFilter(plant, dt_s=10.0)
-    z, P = np.concatenate([x, [5.0, -2.0]]), np.diag([1.0] * 8 + [100.0] * 2)
+    n_disturbances = len(ekf.disturbance_names)
+    z = np.concatenate([x, [5.0, -2.0, 3.0, 1.0][:n_disturbances]])
+    P = np.diag([1.0] * len(x) + [100.0] * n_disturbances)
 
     def ekf_python_update():
         update = ekf.update(z, P, y)

@@ -23,18 +23,19 @@ def test_transition_is_the_simulation_step_and_its_jacobian_is_exact(ekf, plant_
     rng = np.random.default_rng(0)
     step = plant_model.discretise(DT_S).step
     u = plant_model.input_vector(6.5, 6.5, 6.5, 0.97, 25.0, 22.0)
-    z = np.concatenate([40 + 50 * rng.random(plant_model.n_states), [0.0, 0.0]])
+    nx, nd = plant_model.n_states, len(ekf.disturbance_names)
+    z = np.concatenate([40 + 50 * rng.random(nx), np.zeros(nd)])
     z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
     # no disturbance: exactly the step simulate() takes
-    assert np.max(np.abs(z_next.ravel()[:8] - np.asarray(step(z[:8], u)).ravel())) < 1e-12
-    z[8:] = (25.0, -10.0)
+    assert np.max(np.abs(z_next.ravel()[:nx] - np.asarray(step(z[:nx], u)).ravel())) < 1e-12
+    z[nx:] = 30.0 * rng.standard_normal(nd)
     z_next, F = (np.asarray(v) for v in ekf.transition(z, u))
     for j in range(len(z)):  # central differences of the same step
         dz = np.zeros(len(z))
         dz[j] = 1e-3
         column = (np.asarray(ekf.transition(z + dz, u)[0]) - np.asarray(ekf.transition(z - dz, u)[0])).ravel() / 2e-3
         assert np.allclose(F[:, j], column, rtol=1e-6, atol=1e-9)
-    assert np.any(np.abs(F[:8, 8:]) > 0)  # the disturbances heat their nodes
+    assert np.all(np.any(np.abs(F[:nx, nx:]) > 0, axis=0))  # every disturbance heats its node
 
 
 def test_predictions_are_offset_free_under_an_effect_the_model_lacks(plant_model, ekf):
@@ -92,7 +93,7 @@ def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
         library = model_library(plant_model, dt_s=DT_S, prefix="gte", extra_functions=functions)
     except CompilerNotFoundError as exc:
         pytest.skip(str(exc))
-    z = np.concatenate([np.linspace(40.0, 90.0, 8), [12.0, -4.0]])
+    z = np.concatenate([np.linspace(40.0, 90.0, plant_model.n_states), [12.0, -4.0, 6.0, 3.0]])
     P = ekf.P0 * 0.3 + 0.01
     u = plant_model.input_vector(6.0, 6.0, 6.0, 0.93, 22.0, 21.0)
     y = np.array([85.0, 60.0])
@@ -105,3 +106,21 @@ def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
     U = np.tile(u[:, None], (1, 30))
     expected = ekf.forecast(z_next, np.hstack([U, U[:, :1]]))[1:].T  # outputs after each step
     assert np.max(np.abs(library.call("ekf_predict", z_next, U) - expected)) < 1e-9
+
+
+def test_load_scaled_losses_act_with_the_load_squared_and_not_at_rest(plant_model, ekf):
+    nx = plant_model.n_states
+    z = np.concatenate([np.full(nx, 60.0), np.zeros(len(ekf.disturbance_names))])
+    load = ekf.state_names.index("q_load_" + plant_model.spec.sensors["T_winding"])
+    constant = ekf.state_names.index("q_" + plant_model.spec.sensors["T_winding"])
+    rises = {}
+    for current in (0.0, 3.5, 7.0):
+        u = plant_model.input_vector(current, current, current, 0.8, 25.0, 22.0)
+        base = np.asarray(ekf.transition(z, u)[0]).ravel()[:nx]
+        with_load, with_constant = z.copy(), z.copy()
+        with_load[load], with_constant[constant] = 40.0, 40.0
+        rises[current] = [np.max(np.asarray(ekf.transition(state, u)[0]).ravel()[:nx] - base)
+                          for state in (with_load, with_constant)]
+    assert rises[0.0][0] == 0.0 and rises[7.0][0] > 0  # no load, no loss
+    np.testing.assert_allclose(rises[3.5][0] / rises[7.0][0], (3.5 / 7.0) ** 2, rtol=1e-2)  # not 0.5: squared
+    np.testing.assert_allclose(rises[7.0][0], rises[7.0][1], rtol=1e-2)  # at rated current: W for W

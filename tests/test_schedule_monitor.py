@@ -63,10 +63,52 @@ def test_fly_reports_detection_keys_and_tell_fault_keeps_the_old_behaviour(tmp_p
         assert entry["generator"] in ("gen1", "gen2") and "delta_bic" in entry["confidence"]
 
 
-@pytest.mark.parametrize("args, field", [(["--estimator", "magic"], "--estimator"),
+@pytest.mark.parametrize("args, field", [(["--filter", "magic"], "--filter"),
                                          (["--model", "no_such_model"], "model"),
                                          (["--plant", "genco_rf201a:linear"], "--plant")])
 def test_bad_fly_options_exit_2_naming_the_option(tmp_path, capsys, args, field):
     assert main(["fly", "blockage_large", "--json", str(tmp_path / "x.json"), *args]) == 2
     error = capsys.readouterr().err
     assert field in error and "Traceback" not in error
+
+
+def _filtered_winding_errors(plant_model, filter_names, hours=1.5, dt=10.0, seed=0):
+    """Fly one generator of a mismatched plant (R0 × 1.2, h_end_air × 0.8) at 90 % load for
+    ``hours`` with noisy measurements; return each filter's winding error (K) of the state it
+    hands the planner at the end."""
+    from genthermal.schedule.linearise import planning_design_model
+    from genthermal.schedule.monitor import StateEstimator
+
+    plant = plant_model.with_parameters("assumed", "test mismatch", R0=1.2 * plant_model.parameters.value("R0"),
+                                        h_end_air=0.8 * plant_model.parameters.value("h_end_air"))
+    generator = AffineGenerator(planning_design_model(plant_model))
+    step = plant.discretise(dt).step
+    u = generator.input(0.9 * plant_model.spec.rated_current_A, 20.0, 20.0)
+    x_true = np.full(plant.n_states, 20.0)
+    estimators = {name: StateEstimator(generator, lambda: plant_model, x_true, dt, {}, name) for name in filter_names}
+    rng = np.random.default_rng(seed)
+    winding = plant_model.state_names.index(plant_model.spec.sensors["T_winding"])
+    for _ in range(int(hours * 3600 / dt)):
+        x_true = np.asarray(step(x_true, u)).ravel()
+        y = plant.outputs(x_true, u) + rng.normal(0.0, 0.3, 2)
+        for estimator in estimators.values():
+            estimator.predict([0.9 * plant_model.spec.rated_current_A], [20.0], 20.0)
+            estimator.update(y)
+    return {name: abs(e.x[winding] - x_true[winding]) for name, e in estimators.items()}
+
+
+def test_flight_ekf_hands_the_planner_design_model_nodes_closer_to_a_mismatched_plant(plant_model):
+    errors = _filtered_winding_errors(plant_model, ("ekf", "kf"))
+    assert errors["ekf"] < 1.0 and errors["ekf"] < errors["kf"], errors
+
+
+def test_planner_state_maps_nodes_by_name_and_names_missing_nodes(plant_model, design_model):
+    from genthermal.errors import InputError
+    from genthermal.schedule.monitor import planner_state
+
+    names = [*reversed(plant_model.state_names), "q_extra"]
+    state = np.arange(len(names), dtype=float)
+    mapped = planner_state(state, names, design_model)
+    assert [names[int(v)] for v in mapped] == list(design_model.state_names)
+    with pytest.raises(InputError, match="design_model"):
+        planner_state(state[1:], names[1:], design_model)

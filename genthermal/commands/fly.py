@@ -10,7 +10,7 @@ the faults unless ``--tell-fault``.
 from __future__ import annotations
 
 from ..schedule.closed_loop import ManagerSettings
-from ..schedule.monitor import ESTIMATORS
+from ..schedule.monitor import FLIGHT_FILTERS
 from ..schedule.report import flight_summary
 from .plan import add_schedule_arguments, settings_from_args, write_outputs
 
@@ -23,8 +23,9 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", default=0, type=int, help="seed of the measurement noise (default 0)")
     parser.add_argument("--tell-fault", action="store_true", help="hand the manager each fault's effect and "
                         "parameters from the first cycle after its onset (the old behaviour, for comparison)")
-    parser.add_argument("--estimator", default=ManagerSettings.estimator,
-                        help=f"filter in the loop: {' | '.join(ESTIMATORS)} (default {ManagerSettings.estimator})")
+    parser.add_argument("--filter", default=ManagerSettings.filter, metavar="|".join(FLIGHT_FILTERS),
+                        help="filter in the loop — ekf: extended Kalman filter on the flown model (--model) with "
+                        "disturbance heat flows (default); kf: the thesis's linear filter on its design model")
     parser.set_defaults(func=run)
 
 

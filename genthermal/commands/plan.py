@@ -14,7 +14,7 @@ from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
 from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
-from ..schedule.monitor import ESTIMATORS
+from ..schedule.monitor import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
 
@@ -62,10 +62,10 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         if int(args.seed) < 0:
             raise InputError("--seed", args.seed, "must be a whole number >= 0")
         settings = dataclasses.replace(settings, seed=int(args.seed))
-    if getattr(args, "estimator", None) is not None:
-        if args.estimator not in ESTIMATORS:
-            raise InputError("--estimator", args.estimator, f"must be one of {', '.join(ESTIMATORS)}")
-        settings = dataclasses.replace(settings, estimator=args.estimator, tell_fault=bool(args.tell_fault))
+    if getattr(args, "filter", None) is not None:
+        if args.filter not in FLIGHT_FILTERS:
+            raise InputError("--filter", args.filter, f"must be one of {', '.join(FLIGHT_FILTERS)}")
+        settings = dataclasses.replace(settings, filter=args.filter, tell_fault=bool(args.tell_fault))
     system = PowerSystem.from_mission(load_mission(args.scenario))
     models = {}
     for option in ("model", "plant"):

@@ -1,19 +1,22 @@
 r"""Extended Kalman filter on the nonlinear model, with disturbance states (offset-free prediction).
 
-The filter state is :math:`z = (x, d)`: the node temperatures :math:`x` (°C) and one unknown heat
-flow :math:`d_j` (W) into each sensor node (for the thesis generator: into the stator winding and
-into the stator iron). The heat flows stand for what the model lacks (a blockage, a wrong
-convection coefficient, a wrong loss): they enter the nodes as :math:`\dot x_i \mathrel{+}= d_j/C_i`
-and drift as random walks,
+The filter state is :math:`z = (x, d, m)`: the node temperatures :math:`x` (°C), one unknown
+heat flow :math:`d_j` (W) into each sensor node (for the thesis generator: into the stator winding
+and into the stator iron) and, for the same nodes, one unknown loss :math:`m_j` (W at rated
+current) that scales with the load squared, :math:`\ell(u) = \overline{I^2}/I_{rated}^2` (mean
+over the phases). They stand for what the model lacks: :math:`d` for a blockage or a wrong
+convection coefficient, :math:`m` for a wrong copper or load-dependent iron loss, which a
+constant heat flow cannot carry from one load to another. They enter the nodes as
+:math:`\dot x_i \mathrel{+}= (d_j + \ell(u) m_j)/C_i` and drift as random walks,
 
 .. math::
-    x_{k+1} = \Phi(x_k, u_k, M d_k) + w_k, \qquad d_{k+1} = d_k + \eta_k, \qquad
-    y_k = C x_k + e + v_k,
+    x_{k+1} = \Phi(x_k, u_k, M (d_k + \ell(u_k) m_k)) + w_k, \qquad
+    (d, m)_{k+1} = (d, m)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
 
 :math:`\Phi` the *same* discrete step that simulation uses (:attr:`DiscreteModel.forced_step` of
-:mod:`genthermal.discretise`, with the forcing :math:`w = Md`, :math:`M_{ij} = 1/C_i` for node i
-of disturbance j), so filter and simulation cannot drift apart. The Jacobian
-:math:`F_k = \partial (\Phi, d)/\partial(x, d)` at :math:`(\hat x_k, \hat d_k, u_k)` is exact
+:mod:`genthermal.discretise`, with the forcing :math:`w = M(d + \ell(u) m)`, :math:`M_{ij} = 1/C_i`
+for node i of disturbance j), so filter and simulation cannot drift apart. The Jacobian
+:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact
 (CasADi automatic differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`.
 Update and prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place
 of :math:`A` (Joseph-form covariance update; missing sensors drop their rows).
@@ -24,21 +27,24 @@ Process noise, in K² and W² per step:
   :data:`DEFAULT_NODE_HEAT_NOISE_W` (an unmodelled heat flow at every node, as the linear filter,
   but smaller because the systematic part now has its own states);
 * disturbances: :math:`Q_d = \sigma_d^2\,T_s/3600\,I`, a random walk that moves by
-  :math:`\sigma_d` = :data:`DEFAULT_DISTURBANCE_DRIFT_W` (W) in one hour. The scale: the
-  winding's copper loss at rated current is about 180 W; a model calibrated on a healthy record
-  is typically a few W to a few tens of W off at a load it was not fitted at, and the thesis's
-  large blockage removes some tens of W of cooling. Chosen on the plants of
-  ``benchmarks/bench_prediction.py`` (calibrated model, records it was not fitted on): 5-120 W/h
-  and 1-15 W were tried; 15 W/h with 5 W gave the lowest winding errors at 15-60 min on the
-  healthy records with 30-min errors on the blockage within 0.2 K of the best; a larger drift
-  chases the noise and load transients (60 W/h: 15-min error 0.59 instead of 0.45 K). A
-  disturbance that decays (first-order Markov, 10-30 min) helps on healthy records at load steps
-  but loses the blockage (30-min error 6.6-9.6 K instead of 2.5 K), so the walk is not damped.
-  Unknown conductances from the sensor nodes to the coolant (heat :math:`-g_j(\theta_j -
-  T_{inlet})`, alone or next to the heat flows) were tried too: they follow the load, which helps
-  on the varying-load record (30-min winding error 0.4 instead of 1.0 K), but are worse on the
-  Fig. 3.2 flight (60 min: 0.7-1.3 instead of 0.56 K) and no better on the blockage, so they are
-  not part of the filter.
+  :math:`\sigma_d` = :data:`DEFAULT_DISTURBANCE_DRIFT_W` (W) in one hour, and the same for
+  :math:`m` with :data:`DEFAULT_LOAD_SCALED_DRIFT_W`; initial standard deviation
+  :data:`DEFAULT_INITIAL_DISTURBANCE_W` for both. The scale: the winding's copper loss at rated
+  current is about 180 W; a model calibrated on a healthy record is typically a few W to a few
+  tens of W off at a load it was not fitted at, and the thesis's large blockage removes some tens
+  of W of cooling.
+
+The values were chosen by measurement on the plants of ``benchmarks/bench_prediction.py``
+(calibrated model, three records it was not fitted on; winding RMS at 15/30/60 min). With the
+constant heat flows alone (15 W/h, initial 30 W) the varying-load record gave 0.48/1.06/1.03 K,
+worse than the open loop's 0.57/0.48/0.49 K at 30-60 min: the heat flow learnt at one load was
+carried to the next. Adding :math:`m` (15 W/h) with initial 10 W and the constant walk at 8 W/h
+gives 0.41/0.68/0.55 K there, 0.17/0.34/0.43 K (was 0.19/0.39/0.57) on the Fig. 3.2 flight and
+an unchanged 1.0/2.6/6.3 K on the large blockage. A larger node noise (10 W) brings the
+varying-load record to 0.39/0.53/0.48 K but the blockage to 1.2/2.8/6.5 K; an initial 30 W on
+:math:`m` lets it wander (30 min: 1.2 K). A disturbance that decays (first-order Markov, 10-30
+min) loses the blockage (30 min: 6.6-9.6 K); unknown conductances to the coolant were worse on
+the Fig. 3.2 flight (60 min: 0.7-1.3 K). Both are left out.
 
 Predictions hold the disturbance at its last estimate (:meth:`ExtendedKalmanFilter.forecast`):
 a constant model error is carried into the future, which is what makes them offset-free.
@@ -52,7 +58,7 @@ import scipy.linalg
 
 from ..discretise import check_step_accuracy
 from ..errors import InputError
-from ..losses import INPUT_NAMES
+from ..losses import INPUT_NAMES, PHASE_CURRENTS
 from ..model import ThermalModel
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
@@ -68,9 +74,12 @@ from .kalman import (
 #: Standard deviation of the unmodelled heat flow at every node, W (held over a step).
 DEFAULT_NODE_HEAT_NOISE_W = 5.0
 #: How far each disturbance heat flow may drift in one hour (1 sigma of the random walk), W.
-DEFAULT_DISTURBANCE_DRIFT_W = 15.0
+DEFAULT_DISTURBANCE_DRIFT_W = 8.0
+#: How far each load-scaled disturbance (W at rated current, scaled by the load squared) may drift
+#: in one hour, W; 0 leaves those states out.
+DEFAULT_LOAD_SCALED_DRIFT_W = 15.0
 #: Initial standard deviation of each disturbance heat flow, W.
-DEFAULT_INITIAL_DISTURBANCE_W = 30.0
+DEFAULT_INITIAL_DISTURBANCE_W = 10.0
 
 
 def node_heat_capacities(model: ThermalModel) -> np.ndarray:
@@ -97,8 +106,12 @@ class ExtendedKalmanFilter(RecursiveFilter):
     disturbance_nodes : sequence of str, optional
         Nodes that receive an unknown heat flow; default the sensor nodes
         (``model.spec.sensors``), one per measured output, so the disturbances are observable.
+    load_scaled_drift_W : float
+        Hourly drift of each load-scaled loss :math:`m_j`, W at rated current; 0 leaves those
+        states out.
     node_heat_noise_W, disturbance_drift_W, initial_disturbance_W : float
-        :math:`\\sigma_P`, :math:`\\sigma_d` and the initial standard deviation of :math:`d`, W.
+        :math:`\\sigma_P`, :math:`\\sigma_d` and the initial standard deviation of :math:`d`
+        and :math:`m`, W.
     R : array_like, optional
         Measurement noise covariance, K², output order; default thesis eq. 6.10.
     P0 : array_like, optional
@@ -107,10 +120,12 @@ class ExtendedKalmanFilter(RecursiveFilter):
     """
 
     def __init__(self, model: ThermalModel, dt_s: float = 10.0, disturbance_nodes=None,
+                 load_scaled_drift_W: float = DEFAULT_LOAD_SCALED_DRIFT_W,
                  node_heat_noise_W: float = DEFAULT_NODE_HEAT_NOISE_W,
                  disturbance_drift_W: float = DEFAULT_DISTURBANCE_DRIFT_W,
                  initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None):
         for name, value in (("node_heat_noise_W", node_heat_noise_W), ("disturbance_drift_W", disturbance_drift_W),
+                            ("load_scaled_drift_W", load_scaled_drift_W),
                             ("initial_disturbance_W", initial_disturbance_W)):
             if not (np.isfinite(value) and value >= 0):
                 raise InputError(name, value, "must be a heat flow in W >= 0")
@@ -123,12 +138,15 @@ class ExtendedKalmanFilter(RecursiveFilter):
             raise InputError("disturbance_nodes", unknown or nodes,
                              f"must be capacitive nodes of {model.name}: {', '.join(model.state_names)}")
         self.disturbance_nodes = nodes
-        self.disturbance_names = tuple(f"q_{node}" for node in nodes)
+        self.load_scaled = load_scaled_drift_W > 0
+        self.disturbance_names = tuple(f"q_{node}" for node in nodes) + \
+            (tuple(f"q_load_{node}" for node in nodes) if self.load_scaled else ())
         self.output_names = list(model.output_names)
         self.state_names = [*model.state_names, *self.disturbance_names]
-        nx, nd, ny = model.n_states, len(nodes), len(self.output_names)
+        nx, nd, ny = model.n_states, len(self.disturbance_names), len(self.output_names)
+        self.rated_current_A = float(model.spec.rated_current_A)
         capacity = node_heat_capacities(model)
-        self.M = np.zeros((nx, nd))
+        self.M = np.zeros((nx, len(nodes)))
         for j, node in enumerate(nodes):
             index = model.state_names.index(node)
             self.M[index, j] = 1.0 / capacity[index]
@@ -136,8 +154,9 @@ class ExtendedKalmanFilter(RecursiveFilter):
         self.C = C
         self.H = np.hstack([C, np.zeros((ny, nd))])
         self.transition, self.state_step = self._transition_functions(discrete)
+        drift = np.repeat([disturbance_drift_W, load_scaled_drift_W][:1 + self.load_scaled], len(nodes))
         self.Q = scipy.linalg.block_diag(heat_flow_process_noise(model, dt_s, node_heat_noise_W),
-                                         np.eye(nd) * disturbance_drift_W**2 * self.dt_s / 3600.0)
+                                         np.diag(drift**2 * self.dt_s / 3600.0))
         self.R = _covariance("R", THESIS_R_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
@@ -148,9 +167,14 @@ class ExtendedKalmanFilter(RecursiveFilter):
     def _transition_functions(self, discrete) -> tuple[ca.Function, ca.Function]:
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
-        nx, nd = self.model.n_states, self.M.shape[1]
+        nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
         z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(INPUT_NAMES))
-        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ z[nx:]), z[nx:])
+        heat = z[nx:nx + n_nodes]
+        if self.load_scaled:
+            phases = [u[INPUT_NAMES.index(name)] for name in PHASE_CURRENTS]
+            load_squared = sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2)
+            heat = heat + load_squared * z[nx + n_nodes:]
+        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
         return (ca.Function("ekf_transition", [z, u], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
                 ca.Function("ekf_state_step", [z, u], [z_next], ["z", "u"], ["z_next"]))
 
@@ -182,7 +206,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
     def initial_state(self, y0, u0) -> np.ndarray:
         """Nodes from :func:`initial_state_from_measurements`, disturbances zero."""
         return np.concatenate([initial_state_from_measurements(self.model, y0, u0),
-                               np.zeros(len(self.disturbance_nodes))])
+                               np.zeros(len(self.disturbance_names))])
 
     def forecast(self, x_start, U: np.ndarray) -> np.ndarray:
         """Outputs (°C, n × n_outputs) from the filter state ``x_start`` run open loop with inputs

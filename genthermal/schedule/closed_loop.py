@@ -2,8 +2,10 @@ r"""The load management system of thesis 7.2, open loop (``plan``) and closed lo
 
 Closed loop, every ``cycle_s`` (thesis: 5 min):
 
-1. **update** each generator's Kalman filter (design model) with the plant's noisy measurements of
-   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10);
+1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
+   model, ``ManagerSettings.filter``) with the plant's noisy measurements of
+   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
+   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`);
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
    temperature held (thesis 7.3.6) and the faults that have occurred so far (a fault is known at the
    first cycle after its onset);
@@ -31,7 +33,7 @@ from ..simulate import simulate
 from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
-from .monitor import DetectionSettings, FaultMonitor, StateEstimator
+from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, generator_inputs, mission_segments,
                    predict, remaining_after)
@@ -71,8 +73,10 @@ class ManagerSettings:
         Hand the manager every fault's effect and parameters from the first cycle after its onset
         (the comparison case); default False: the manager detects and identifies faults itself
         (:mod:`genthermal.schedule.monitor`).
-    estimator : str
-        Filter in the loop, a key of :data:`genthermal.schedule.monitor.ESTIMATORS`.
+    filter : str
+        Filter in the loop, a key of :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`: ``"ekf"``
+        (default, the extended Kalman filter on the flown nonlinear model) or ``"kf"`` (the
+        thesis linear filter on the design model).
     detection : DetectionSettings
         Fault detection and identification in flight.
     heuristic, engineer, optimal, milp
@@ -87,7 +91,7 @@ class ManagerSettings:
     replan_tolerance_K: float = 0.05
     seed: int = 0
     tell_fault: bool = False
-    estimator: str = "kalman"
+    filter: str = "ekf"
     detection: DetectionSettings = DetectionSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
@@ -344,8 +348,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
-    estimators = [StateEstimator(system.design_generator_for(()), x_true[g], dt, filter_cache, settings.estimator)
-                  for g in range(system.n_generators)]
+    estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
+                                 filter_cache, settings.filter) for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
     recorder = _Recorder(system)
     measured, t = None, 0.0
@@ -357,8 +361,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 monitor.cycle(t, estimators)
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
-            estimator.use(system.design_generator_for(beliefs[g]) if settings.tell_fault else
-                          monitor.design_generator(g))
+            if settings.tell_fault:
+                estimator.use(system.design_generator_for(beliefs[g]),
+                              lambda g=g: believed_model(system.planning_model, beliefs[g]))
+            else:
+                estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [e.generator for e in estimators])
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:

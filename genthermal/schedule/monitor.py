@@ -1,9 +1,11 @@
 r"""What the load manager knows about each generator: a state filter, a fault detector on its
 innovations, and identification of the fault from the in-flight record.
 
-**Filter.** :class:`StateEstimator` runs a filter (``ESTIMATORS``, default the Kalman filter of
-:mod:`genthermal.estimation.kalman`) on the design model of what the manager believes: the
-planning model with the effects identified so far.
+**Filter.** :class:`StateEstimator` runs a filter (``FLIGHT_FILTERS``) on the model of what the
+manager believes: the flown (planning) model with the effects identified so far. The default
+``ekf`` is the extended Kalman filter of :mod:`genthermal.estimation.ekf` on that nonlinear model,
+with disturbance heat flows; ``kf`` is the thesis linear filter on its design model. The planner
+always plans on the design model; :func:`planner_state` hands it the filter's node temperatures.
 
 **Detection.** At every management cycle the filter's innovation :math:`e = y - \hat y^-` of the
 winding sensor is normalised by its predicted standard deviation, :math:`z_g = e_g/\sqrt{S_{ww}}`,
@@ -44,14 +46,17 @@ import time
 import numpy as np
 import pandas as pd
 
+from ..errors import InputError
+from ..estimation.ekf import ExtendedKalmanFilter
 from ..estimation.kalman import KalmanFilter
 from ..losses import INPUT_NAMES
 from ..measurements import WINDING_SENSORS
 from ..exciter import exciter_current
 
-#: Filters the closed loop can use: name → class built from an affine design model and a step (s)
-#: with ``update(x_pred, P, y) -> Update``, ``predict(x, P, u)`` and ``P0``.
-ESTIMATORS = {"kalman": KalmanFilter}
+#: Filters the closed loop can use: name → how to build one from ``(design generator, flown
+#: model, step s)``: ``ekf`` on the flown nonlinear model, ``kf`` on the design model.
+FLIGHT_FILTERS = {"ekf": lambda generator, flown_model, dt_s: ExtendedKalmanFilter(flown_model, dt_s),
+                  "kf": lambda generator, flown_model, dt_s: KalmanFilter(generator.model, dt_s)}
 #: Catalogue effects the manager watches for (heating faults).
 FAULT_EFFECTS = ("coolant_flow_reduction", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
 
@@ -96,49 +101,105 @@ class DetectionSettings:
     max_identifications: int = 3
 
 
+def planner_state(filter_state, filter_state_names, design_model) -> np.ndarray:
+    """The state the planner needs from a filter's state: the design model's node temperatures.
+
+    The extended Kalman filter's state is the flown model's nodes (°C) followed by its disturbance
+    heat flows (W); the planner's design model has the same nodes. Each design-model node takes the
+    filter's estimate of the node of the same name; the disturbances are not handed over (the plan
+    is made on the design model as it is).
+
+    Parameters
+    ----------
+    filter_state : array_like
+        The filter's state, in ``filter_state_names`` order.
+    filter_state_names : sequence of str
+    design_model : ThermalModel
+        The model the planner predicts with.
+
+    Returns
+    -------
+    numpy.ndarray
+        Node temperatures, °C, in ``design_model.state_names`` order.
+    """
+    index = {name: i for i, name in enumerate(filter_state_names)}
+    missing = [name for name in design_model.state_names if name not in index]
+    if missing:
+        raise InputError("design_model", design_model.name,
+                         f"has nodes the filter does not estimate: {', '.join(missing)}")
+    state = np.asarray(filter_state, dtype=float)
+    return np.array([state[index[name]] for name in design_model.state_names])
+
+
 class StateEstimator:
-    """The filter of one generator on the design model the manager believes in.
+    """The filter of one generator on the model the manager believes in.
 
     Parameters
     ----------
     generator : AffineGenerator
-        Design model to start with.
+        Design model to start with (what the planner predicts with).
+    flown_model : callable
+        ``flown_model()`` returns the nonlinear model that ``generator`` was linearised from (called
+        only when a filter for ``generator`` is first built).
     x0 : array_like
-        Initial estimate, °C.
+        Initial node temperatures, °C (disturbances start at zero).
     dt_s : float
         Filter step, s.
     filters : dict
-        Filters by design model, shared between the generators of one flight.
-    estimator : str
-        Key of :data:`ESTIMATORS`.
+        Filters by design generator, shared between the generators of one flight.
+    filter_name : str
+        Key of :data:`FLIGHT_FILTERS`.
     """
 
-    def __init__(self, generator, x0, dt_s: float, filters: dict, estimator: str = "kalman"):
-        self.x, self.P, self.dt_s, self._filters = np.array(x0, dtype=float), None, dt_s, filters
-        self._make = ESTIMATORS[estimator]
+    def __init__(self, generator, flown_model, x0, dt_s: float, filters: dict, filter_name: str = "ekf"):
+        if filter_name not in FLIGHT_FILTERS:
+            raise InputError("filter", filter_name, f"must be one of {', '.join(FLIGHT_FILTERS)}")
+        self.dt_s, self._filters, self._make = dt_s, filters, FLIGHT_FILTERS[filter_name]
+        self.filter, self.z, self.P = None, np.array(x0, dtype=float), None
+        self._names = None
         self.innovation, self.innovation_std = np.full(2, np.nan), np.full(2, np.nan)
-        self.use(generator)
+        self.use(generator, flown_model)
 
-    def use(self, generator) -> None:
-        """Continue on ``generator``'s design model (state and covariance kept)."""
+    @property
+    def x(self) -> np.ndarray:
+        """Node temperatures of the current design model, °C (:func:`planner_state`)."""
+        return planner_state(self.z, self.filter.state_names, self.generator.model)
+
+    def use(self, generator, flown_model) -> None:
+        """Continue on ``generator``'s model (``flown_model()`` builds the nonlinear one if needed).
+
+        Node temperatures carry over by name; the covariance and the disturbances carry over while
+        the filter's state is the same, otherwise they restart from the new filter's ``P0`` and zero.
+        """
         if id(generator) not in self._filters:
-            self._filters[id(generator)] = self._make(generator.model, self.dt_s)
-        self.generator, self.filter = generator, self._filters[id(generator)]
-        if self.P is None:
-            self.P = self.filter.P0
+            self._filters[id(generator)] = self._make(generator, flown_model(), self.dt_s)
+        self.generator, new = generator, self._filters[id(generator)]
+        if self._names != new.state_names:
+            nodes = dict(zip(self._names or generator.model.state_names, self.z))
+            self.z = np.array([nodes.get(name, 0.0) for name in new.state_names])
+            self.P, self._names = new.P0, list(new.state_names)
+        self.filter = new
 
     def update(self, y) -> None:
         """Measurement update with the measured winding and iron temperatures ``y`` (°C); keeps the
         innovation and its predicted standard deviation (K)."""
-        C, R = self.filter.C, self.filter.R
-        self.innovation_std = np.sqrt(np.diag(C @ self.P @ C.T + R))
-        step = self.filter.update(self.x, self.P, y)
-        self.x, self.P, self.innovation = step.x, step.P, step.innovation
+        H = self.filter.H if isinstance(self.filter, ExtendedKalmanFilter) else self.filter.C
+        self.innovation_std = np.sqrt(np.diag(H @ self.P @ H.T + self.filter.R))
+        step = self.filter.update(self.z, self.P, y)
+        self.z, self.P, self.innovation = step.x, step.P, step.innovation
 
     def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
         """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
         for current, inlet in zip(currents_A, inlets_C):
-            self.x, self.P = self.filter.predict(self.x, self.P, self.generator.input(current, inlet, ambient_C))
+            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, ambient_C))
+
+
+def believed_model(base, effects):
+    """``base`` (a nonlinear model) with ``effects`` (``(name, ((parameter, value), ...))`` pairs)
+    applied in order."""
+    for name, values in effects:
+        base = base.with_effect(name, **dict(values))
+    return base
 
 
 class Cusum:
@@ -284,6 +345,11 @@ class FaultMonitor:
     def design_generator(self, g: int):
         """Design model of generator ``g`` as the manager believes it."""
         return self.system.design_generator_for(self.beliefs[g], base=self.model)
+
+    def flown_model(self, g: int):
+        """Nonlinear model of generator ``g`` as the manager believes it (what
+        :meth:`design_generator` linearises)."""
+        return believed_model(self.model, self.beliefs[g])
 
     def cycle(self, t_s: float, estimators) -> None:
         """Run both tests on the cycle's innovations (every estimator just updated)."""
