@@ -2,11 +2,12 @@
 
     python3 benchmarks/fit_chapter7.py [--json FILE] [--write]
 
-Fits the assumed cooling and loss values of the Genco RF201A, and the large blockage's flow
-fraction and convection exponent, to continuous proxies of the thesis's chapter-7 outcomes
+Fits the assumed cooling and loss values of the Genco RF201A (h_top_air, h_end_air, R0, P_iron,
+h_ambient, m_dot_fan), the large blockage's flow fraction and convection exponent, and the time
+constant of its inlet rise to continuous proxies of the thesis's chapter-7 outcomes
 (:mod:`genthermal.machines.chapter7`), with IPOPT and exact derivatives. ``--write`` replaces
-``genthermal/machines/genco_rf201a_chapter7.yaml``; the blockage values go to the chapter-7 scenarios
-by hand (they are printed).
+``genthermal/machines/genco_rf201a_chapter7.yaml``; the blockage values (k_flow, n_flow,
+inlet_rise_tau_min) go to ``scenarios/chapter7_blockage_large.yaml`` by hand (they are printed).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from genthermal.coolant import OUTLET_DIAMETER_MM
 from genthermal.machines import build_model
 from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE, SOURCE, fit_chapter7
 
-MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron")
+MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron", "h_ambient", "m_dot_fan")
 
 
 def main() -> None:

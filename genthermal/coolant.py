@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .errors import InputError
 
 #: Diameter of the unblocked coolant outlet of the thesis rig, mm (thesis 7.3.1).
@@ -69,3 +71,30 @@ def outlet_flow_fraction(diameter_mm: float, healthy_diameter_mm: float = OUTLET
                          f"must be a diameter in (0, {healthy_diameter_mm:g}] mm (the open outlet)")
     ratio = (healthy_diameter_mm / diameter_mm) ** 4
     return math.sqrt((1.0 + loss_share) / (1.0 + loss_share * ratio))
+
+
+def inlet_rise(time_s, onset_s: float, rise_K: float, time_constant_s: float = 0.0) -> np.ndarray:
+    r"""Rise of the coolant inlet temperature after a fault, K, at times ``time_s`` (s).
+
+    :math:`\Delta T\,(1 - e^{-(t - t_0)/\tau})` from the onset :math:`t_0` on, 0 before; a step for
+    :math:`\tau = 0`. A blocked outlet warms the air the rig draws in gradually (thesis Fig 7.4 shows
+    the rise after the 10 mm plate, without its time constant).
+
+    Parameters
+    ----------
+    time_s : array_like
+        Times, s.
+    onset_s : float
+        Fault onset, s.
+    rise_K : float
+        Final rise, K.
+    time_constant_s : float
+        :math:`\tau` >= 0, s.
+    """
+    if not (math.isfinite(time_constant_s) and time_constant_s >= 0):
+        raise InputError("inlet_rise_tau", time_constant_s, "must be a time constant >= 0 s")
+    elapsed = np.asarray(time_s, dtype=float) - onset_s
+    started = elapsed >= -1e-9
+    if time_constant_s == 0:
+        return np.where(started, rise_K, 0.0)
+    return np.where(started, rise_K * -np.expm1(-np.clip(elapsed, 0.0, None) / time_constant_s), 0.0)

@@ -6,7 +6,9 @@ Write the model as :math:`\dot x = Lx + N(x,u)` with :math:`L = \partial f/\part
 :math:`\Gamma_2 = \int_0^h e^{L(h-s)}s\,ds`, all from one matrix exponential (Van Loan):
 
 * **linear design model** (:math:`N` independent of :math:`x`): exact zero-order hold,
-  :math:`x^+ = Ex + \Gamma_1 N(u) = A_d x + B_d u + c_d`;
+  :math:`x^+ = Ex + \Gamma_1 N(u)`, which is :math:`A_d x + B_d u + c_d` wherever no loss floor
+  of the model is active (:class:`~genthermal.losses.LossFloor`: the design model's copper loss
+  below 1.6 A; :math:`B_d, c_d` are those of the affine branch, which the schedulers plan on);
 * **nonlinear model**: the second-order exponential Runge-Kutta scheme of Cox and Matthews
   (ETD2RK), exact for the linear part,
   :math:`a = Ex + \Gamma_1 N(x,u)`, :math:`x^+ = a + \Gamma_2 (N(a,u) - N(x,u))/h`.
@@ -60,7 +62,8 @@ class DiscreteModel:
     exact : bool
         True for the exact zero-order hold of an affine model.
     A, B, c : numpy.ndarray or None
-        :math:`x^+ = Ax + Bu + c` for the exact (affine) case, else None.
+        :math:`x^+ = Ax + Bu + c` for the exact (affine) case, else None; with loss floors, of the
+        affine branch (equal to ``step`` wherever no floor is active).
     """
 
     model: ThermalModel
@@ -105,10 +108,11 @@ def discretise(model: ThermalModel, dt_s: float) -> DiscreteModel:
     E, G1, G2 = phi_matrices(L, dt_s)
     f0 = rhs(ca.SX.zeros(nx), u, p)  # f(0, u)
     if model.is_affine:
-        B = np.asarray(ca.Function("B", [u], [ca.jacobian(f0, u)])(0))
-        c = np.asarray(rhs(np.zeros(nx), np.zeros(nu), p)).ravel()
+        branch = model.functions["rhs_affine_branch"]
+        B = np.asarray(ca.Function("B", [u], [ca.jacobian(branch(ca.SX.zeros(nx), u, p), u)])(0))
+        c = np.asarray(branch(np.zeros(nx), np.zeros(nu), p)).ravel()
         Ad, Bd, cd = E, G1 @ B, G1 @ c
-        x_next = ca.DM(Ad) @ x + ca.DM(Bd) @ u + ca.DM(cd) + ca.DM(G1) @ w
+        x_next = ca.DM(Ad) @ x + ca.DM(G1) @ (f0 + w)
         step, forced = _step_functions(x, u, w, x_next)
         return DiscreteModel(model, float(dt_s), step, forced, True, Ad, Bd, cd)
     jac_x = model.functions["jac_x"]

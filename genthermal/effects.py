@@ -30,7 +30,7 @@ from typing import Callable
 import sympy
 
 from .errors import InputError
-from .losses import PHASE_CURRENTS, input_symbol, mass_shares
+from .losses import LossFloor, PHASE_CURRENTS, input_symbol, mass_shares
 from .network import HeatSource, Network
 from .parameters import Parameter
 
@@ -215,7 +215,8 @@ def _quadratic_copper(network, roles, weight):
     squares = {input_symbol(p): input_symbol(p) ** 2 for p in PHASE_CURRENTS}
 
     def rewrite(source):
-        per_current = sympy.expand(source.power).coeff(slope)  # the loss per unit slope: c sum_p I_p
+        line = source.power.replace(LossFloor, lambda value: value)  # the line through its floor
+        per_current = sympy.expand(line).coeff(slope)  # the loss per unit slope: c sum_p I_p
         return (1 - weight) * source.power + weight * per_current.subs(squares, simultaneous=True)
     return _replace_copper(network, rewrite)
 

@@ -5,6 +5,10 @@ Every error that reaches a user names the offending field and value; the CLI pri
 """
 
 
+#: Longest ``repr`` of a bad value an error message shows, characters.
+SHOWN_VALUE_CHARS = 120
+
+
 class GenthermalError(Exception):
     """Base class of every error genthermal raises on purpose."""
 
@@ -17,7 +21,8 @@ class InputError(GenthermalError, ValueError):
     field : str
         Where the bad value sits (``"actions[2].duration_min"``, ``"column T_iron, row 17"``).
     value : object
-        The offending value, shown with ``repr``.
+        The offending value, shown with ``repr`` (a long one cut to its first
+        :data:`SHOWN_VALUE_CHARS` characters: a whole file read as a value must not flood the terminal).
     reason : str
         What is wrong and, where it helps, what would be accepted.
     """
@@ -26,7 +31,10 @@ class InputError(GenthermalError, ValueError):
         self.field = field
         self.value = value
         self.reason = reason
-        super().__init__(f"{field} = {value!r}: {reason}")
+        shown = repr(value)
+        if len(shown) > SHOWN_VALUE_CHARS:
+            shown = f"{shown[:SHOWN_VALUE_CHARS]}... ({len(shown)} characters)"
+        super().__init__(f"{field} = {shown}: {reason}")
 
 
 class ParameterError(InputError):

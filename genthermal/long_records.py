@@ -27,8 +27,10 @@ from .errors import InputError
 from .losses import INPUT_NAMES, PHASE_CURRENTS
 from .measurements import MeasurementData
 
-#: Most samples a record given to calibration or diagnosis keeps (one week at 60 s is 10 080).
-MAX_FITTING_SAMPLES = 12_000
+#: Most samples a record given to calibration or diagnosis keeps: the diagnosis's cost grows with the
+#: samples (one week at 1 s, 300-s blocks: 2017 samples, about 3 min of diagnosis; 60-s blocks took
+#: over 9 min, ``benchmarks/bench_long_record.py``); two weeks fit, longer records are refused.
+MAX_FITTING_SAMPLES = 4_000
 #: Block lengths tried in order, s: 10 s is the thesis logging and filter step; the longest is the
 #: 5-minute management cycle, well below the 6.5-minute fastest slow mode of the thesis generator.
 FITTING_STEPS_S = (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)

@@ -6,7 +6,11 @@ r"""Loss models: heat sources written as sympy expressions of inputs, states and
   (thesis 4.2.3). Each division's resistance follows its own temperature.
 * Iron loss: a constant :math:`P_{iron}`, split between back iron and teeth by mass.
 * The linear design model (thesis 5.2): :math:`I^2 \approx a I + b` by least squares over a current
-  range (eq. 5.3) and :math:`R = R_0(1+\alpha_{cu}\theta_{ref})` held constant.
+  range (eq. 5.3) and :math:`R = R_0(1+\alpha_{cu}\theta_{ref})` held constant. The line is
+  negative below :math:`I_0 = -b/a` (1.6 A for the thesis range), and a loss cannot be: each phase's
+  term is :math:`\max(aI_p + b, 0)` (:class:`LossFloor`), so at zero load the design model cools to
+  ambient instead of 20 K below it. Over the fit range (and wherever every phase carries at least
+  :math:`I_0`) the model is the thesis's affine one.
 """
 
 from __future__ import annotations
@@ -23,6 +27,23 @@ from .network import HeatSource, Network
 #: temperatures (°C).
 INPUT_NAMES = ("I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
 PHASE_CURRENTS = ("I_u", "I_v", "I_w")
+
+
+class LossFloor(sympy.Function):
+    r""":math:`\max(v, 0)` of a linearised loss term that would otherwise go negative.
+
+    A model is still called affine (:attr:`genthermal.model.ThermalModel.is_affine`) when its only
+    non-affine parts are loss floors: its affine branch (every floor taken as the identity) holds
+    wherever the floored terms are positive, and its exact step applies the floors.
+    """
+
+    nargs = 1
+
+    @classmethod
+    def eval(cls, value):
+        if value.is_Number:
+            return sympy.Max(value, 0)
+        return None
 
 
 def input_symbol(name: str) -> sympy.Symbol:
@@ -128,8 +149,9 @@ def linearise_copper_sources(sources: tuple[HeatSource, ...], network: Network,
                              slope: sympy.Symbol, intercept: sympy.Symbol,
                              theta_ref: sympy.Symbol) -> tuple[HeatSource, ...]:
     """Return ``sources`` with every copper loss made affine in the currents and independent of
-    temperature: :math:`I_p^2 \\to a I_p + b`, :math:`\\theta_k \\to \\theta_{ref}` (thesis 5.2)."""
-    substitutions = {input_symbol(p) ** 2: slope * input_symbol(p) + intercept for p in PHASE_CURRENTS}
+    temperature: :math:`I_p^2 \\to \\max(a I_p + b, 0)`, :math:`\\theta_k \\to \\theta_{ref}`
+    (thesis 5.2; the floor keeps the loss >= 0 below the line's zero, see :class:`LossFloor`)."""
+    substitutions = {input_symbol(p) ** 2: LossFloor(slope * input_symbol(p) + intercept) for p in PHASE_CURRENTS}
     out = []
     for source in sources:
         if source.label == "copper":

@@ -67,6 +67,10 @@ MAX_CURRENT_FACTOR = 3.0
 #: Median temperatures above these (°C) mean the column is in kelvin: inputs are cooling air,
 #: sensors a machine whose insulation fails near 200 °C.
 KELVIN_MEDIAN_C = {"input": 150.0, "sensor": 200.0}
+#: Median sample periods accepted, s: outside them ``time_s`` is not in seconds (milliseconds give
+#: periods of hours for a logger at seconds; hours give milliseconds). The thesis rig logs at 10 s;
+#: at more than an hour per sample the fastest slow mode (6.5 min) is not resolved at all.
+SAMPLE_PERIOD_RANGE_S = (0.05, 3600.0)
 #: A time step longer than this multiple of the median step is a gap, flagged.
 GAP_FACTOR = 5.0
 #: A sensor with more than this share of its samples outside the PT100 range is an error, not a flag.
@@ -256,6 +260,7 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: 
     for name in ("time_s", *INPUT_NAMES):
         _check_input_column(frame[name].to_numpy(), name, from_file)
     _check_time_increasing(frame["time_s"].to_numpy(), from_file)
+    _check_sample_period(frame["time_s"].to_numpy())
     _check_units(frame, present_sensors, from_file, _rated_current(rated_current_A))
     flags = [f"{source}: {note}" for note in notes or []]
     flags.extend(_gap_flags(frame["time_s"].to_numpy(), from_file))
@@ -297,6 +302,20 @@ def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A:
                              "temperatures must be in °C; these look like kelvin: subtract 273.15")
 
 
+def _check_sample_period(time_s: np.ndarray) -> None:
+    """Refuse a median sample period outside :data:`SAMPLE_PERIOD_RANGE_S`: time not in seconds."""
+    if time_s.size < 2:
+        return
+    period = float(np.median(np.diff(time_s)))
+    low, high = SAMPLE_PERIOD_RANGE_S
+    if low <= period <= high:
+        return
+    hint = ("if time_s is in milliseconds, divide it by 1000" if period > high else
+            "if time_s is in hours or minutes, multiply it by 3600 or 60")
+    raise InputError("column time_s", f"median step {period:g}", f"the sample period must be {low:g} to "
+                     f"{high:g} s: time_s must be in seconds ({hint})")
+
+
 def _gap_flags(time_s: np.ndarray, from_file: bool) -> list[str]:
     """Flag steps longer than GAP_FACTOR median steps (the sensors are missing across them)."""
     steps = np.diff(time_s)
@@ -324,7 +343,10 @@ def _require_columns(columns, source: str) -> None:
             continue
         reason = f"required column missing in {source}"
         close = difflib.get_close_matches(name, [c for c in present if c not in REQUIRED_COLUMNS], n=1)
-        if close:
+        same_letters = [c for c in present if c.lower() == name.lower()]
+        if same_letters:
+            reason += f"; column names are case-sensitive: rename {same_letters[0]!r} to {name!r}"
+        elif close:
             reason += f"; did you mean {close[0]!r}?"
         else:
             reason += f"; the header must contain {', '.join(REQUIRED_COLUMNS)}"

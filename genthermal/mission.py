@@ -40,6 +40,7 @@ import yaml
 
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
+from .yaml_input import load_user_yaml
 from .exciter import DEFAULT_POWER_FACTOR, exciter_current
 from .resources import SCENARIO_DIR
 from .sizes import check_grid
@@ -301,7 +302,7 @@ class Mission:
         except (OSError, UnicodeDecodeError) as error:
             raise InputError("scenario", str(path), f"cannot read the file: {error}") from None
         try:
-            document = yaml.safe_load(text)
+            document = load_user_yaml(text, str(path))
         except yaml.YAMLError as error:
             raise _yaml_syntax_error(path, text, error) from None
         return cls.from_dict(document, source=str(path))

@@ -25,15 +25,20 @@ import numpy as np
 import sympy
 
 from .errors import InputError, ParameterError
-from .losses import INPUT_NAMES, input_symbol
+from .losses import INPUT_NAMES, LossFloor, input_symbol
 from .network import Network
 from .parameters import ParameterSet
 
+#: A steady state this far below the coldest boundary temperature (K) is the non-physical root of a
+#: thermal runaway: the model has no heat sinks, and no loss cools a machine 50 K below its air.
+COLDEST_STEADY_STATE_BELOW_K = 50.0
+
 _CASADI_FUNCTIONS = {"log": ca.log, "exp": ca.exp, "sqrt": ca.sqrt, "Abs": ca.fabs,
-                     "Max": ca.fmax, "Min": ca.fmin, "Heaviside": lambda v: ca.if_else(v >= 0, 1, 0)}
+                     "Max": ca.fmax, "Min": ca.fmin, "Heaviside": lambda v: ca.if_else(v >= 0, 1, 0),
+                     "LossFloor": lambda v: ca.fmax(v, 0)}
 
 
-def to_casadi(expressions, symbols, values):
+def to_casadi(expressions, symbols, values, loss_floors: bool = True):
     """Evaluate sympy ``expressions`` with ``symbols`` replaced by CasADi ``values``.
 
     Parameters
@@ -42,12 +47,16 @@ def to_casadi(expressions, symbols, values):
     symbols : list of sympy.Symbol
     values : list of casadi.SX
         Same length as ``symbols``.
+    loss_floors : bool
+        Apply :class:`~genthermal.losses.LossFloor` (True) or take it as the identity: the affine
+        branch of a design model (False).
 
     Returns
     -------
     list of casadi.SX
     """
-    function = sympy.lambdify(symbols, list(expressions), modules=[_CASADI_FUNCTIONS, "math"])
+    functions = _CASADI_FUNCTIONS if loss_floors else {**_CASADI_FUNCTIONS, "LossFloor": lambda v: v}
+    function = sympy.lambdify(symbols, list(expressions), modules=[functions, "math"])
     return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in function(*values)]
 
 
@@ -230,7 +239,14 @@ class ThermalModel:
         """SX expressions of the reduced model (built once per network structure)."""
         return self._shared_value("symbolic", self._build_symbolic)
 
-    def _build_symbolic(self) -> dict:
+    @property
+    def _affine_branch(self) -> dict:
+        """:attr:`_symbolic` with every loss floor taken as the identity (the same when there is none)."""
+        if not any(source.power.has(LossFloor) for source in self.network.heat_sources):
+            return self._symbolic
+        return self._shared_value("affine_branch", lambda: self._build_symbolic(loss_floors=False))
+
+    def _build_symbolic(self, loss_floors: bool = True) -> dict:
         net = self.network
         x = ca.SX.sym("x", self.n_states)
         u = ca.SX.sym("u", len(INPUT_NAMES))
@@ -246,7 +262,7 @@ class ThermalModel:
         link_R = to_casadi([l.resistance for l in net.links], symbols, values)
         stream_R = to_casadi([s.resistance for s in net.air_streams], symbols, values)
         caps = to_casadi([net.node(n).capacitance for n in self.state_names], symbols, values)
-        powers = to_casadi([s.power for s in net.heat_sources], symbols, values)
+        powers = to_casadi([s.power for s in net.heat_sources], symbols, values, loss_floors)
 
         # sparse conductance rows: G[i][j] (W/K) and the remainder r[i] = (G_b b + q)_i (W)
         G: dict[int, dict[int, ca.SX]] = {i: {} for i in range(len(internal))}
@@ -313,6 +329,9 @@ class ThermalModel:
             "outputs": ca.Function("outputs", args, [s["y"]], names, ["y"]),
             "heat": ca.Function("heat", args, [s["heat"]], names, ["power"]),
         }
+        branch = self._affine_branch
+        f["rhs_affine_branch"] = ca.Function("rhs_affine_branch", [branch["x"], branch["u"], branch["p"]],
+                                             [branch["xdot"]], names, ["xdot"])
         return f
 
     @property
@@ -342,10 +361,17 @@ class ThermalModel:
 
     @functools.cached_property
     def is_affine(self) -> bool:
-        """True when dx/dt is affine in (x, u): the linear design model."""
-        s = self._symbolic
-        J = ca.jacobian(s["xdot"], ca.vertcat(s["x"], s["u"]))
-        return not ca.depends_on(J, ca.vertcat(s["x"], s["u"]))
+        """True when dx/dt is affine in (x, u) up to loss floors: the linear design model.
+
+        Its only non-affine parts may be :class:`~genthermal.losses.LossFloor` terms (a linearised
+        copper loss held at 0 W where its line goes negative, below 1.6 A for the thesis's design
+        model); ``functions["rhs_affine_branch"]`` is dx/dt with the floors taken as the identity.
+        """
+        s, branch = self._symbolic, self._affine_branch
+        J = ca.jacobian(branch["xdot"], ca.vertcat(branch["x"], branch["u"]))
+        in_x = ca.jacobian(s["xdot"], s["x"])
+        return not ca.depends_on(J, ca.vertcat(branch["x"], branch["u"])) and not ca.depends_on(
+            in_x, ca.vertcat(s["x"], s["u"]))
 
     def steady_state(self, u, p=None, tol: float = 1e-12) -> np.ndarray:
         """Steady state x (°C) for constant input ``u``, by Newton's method on dx/dt = 0.
@@ -353,7 +379,9 @@ class ThermalModel:
         Raises
         ------
         InputError
-            If Newton's method does not converge in 50 iterations.
+            If Newton's method does not converge in 50 iterations, or converges to temperatures far
+            below the coolant and ambient (:data:`COLDEST_STEADY_STATE_BELOW_K`): the root of a
+            thermal runaway, where the copper resistance :math:`R_0(1+\\alpha_{cu}\\theta)` vanishes.
         """
         u = np.asarray(u, dtype=float)
         x = np.full(self.n_states, float(u[INPUT_NAMES.index("T_ambient")]))
@@ -361,8 +389,17 @@ class ThermalModel:
             step = np.linalg.solve(self.jacobian_x(x, u, p), self.rhs(x, u, p))
             x = x - step
             if np.max(np.abs(step)) < tol * max(1.0, np.max(np.abs(x))):
-                return x
+                return self._physical_steady_state(x, u)
         raise InputError("u", u.tolist(), "no steady state found (Newton did not converge)")
+
+    def _physical_steady_state(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        coldest = min(float(u[INPUT_NAMES.index(name)]) for name in ("T_inlet", "T_ambient"))
+        if x.min() < coldest - COLDEST_STEADY_STATE_BELOW_K:
+            raise InputError("steady state", f"{x.min():.4g} °C", f"is far below the coolant and ambient "
+                             f"({coldest:g} °C): at this load the losses grow with temperature faster than the "
+                             "cooling removes them (thermal runaway), so there is no physical steady state; "
+                             "check the loss and cooling parameters (R0, h_*)")
+        return x
 
     def discretise(self, dt_s: float):
         """The :class:`~genthermal.discretise.DiscreteModel` for step ``dt_s`` (s), cached."""

@@ -34,6 +34,7 @@ import yaml
 from .design import linear_design_model
 from .effects import CATALOGUE, apply_effect
 from .errors import InputError
+from .yaml_input import load_user_yaml
 from .machines import MACHINES, build_model
 from .model import ThermalModel
 from .outputs import write_text
@@ -71,7 +72,7 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
         known = ", ".join(f"{m}, {m}:linear, " + ", ".join(f"{m}:{v}" for v in PARAMETER_SETS) for m in MACHINES)
         raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
     try:
-        document = yaml.safe_load(path.read_text(encoding="utf-8"))
+        document = load_user_yaml(path.read_text(encoding="utf-8"), str(path))
     except UnicodeDecodeError:
         raise InputError("model file", str(path), "not a text file (UTF-8 YAML expected)") from None
     except yaml.YAMLError as exc:

@@ -9,7 +9,9 @@ Three rules, applied by every command:
   outputs that name the same file, is refused even with ``--force``.
 * **Nothing is left half-written.** Every file is written to a temporary file in the same folder
   and moved into place only when it is complete (:func:`replacing`); an error or Ctrl-C leaves the
-  old file as it was and no partial file behind.
+  old file as it was and no partial file behind. A command that writes several files into a folder
+  (C sources and library, a report) builds them in a temporary folder next to it and moves them in
+  only when all are complete (:func:`replacing_folder`).
 
 JSON output holds finite numbers only: :func:`write_json` writes NaN and ±inf as ``null`` and
 returns where it did so, for the command to say.
@@ -20,6 +22,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import tempfile
 from contextlib import contextmanager, suppress
 from pathlib import Path
@@ -137,6 +140,46 @@ def replacing(path) -> Iterator[Path]:
         with suppress(FileNotFoundError):
             os.unlink(temporary)
         raise
+
+
+@contextmanager
+def replacing_folder(path, stale_patterns: tuple[str, ...] = ()) -> Iterator[Path]:
+    """Yield an empty temporary folder next to ``path``; move its files into ``path`` if the block completes.
+
+    When ``path`` does not exist (or is an empty folder) the temporary folder is renamed onto it in
+    one step. Otherwise each file is moved into place with one atomic rename, after all of them
+    were complete, and files of ``path`` matching ``stale_patterns`` (glob patterns) that the new
+    output does not hold are removed. On any exception, Ctrl-C included, the temporary folder is
+    deleted and ``path`` is left as it was.
+
+    Parameters
+    ----------
+    path : path-like
+        The output folder.
+    stale_patterns : tuple of str
+        Glob patterns of files a previous run wrote that the new output replaces as a set.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    try:
+        os.chmod(temporary, 0o777 & ~_umask())
+        yield temporary
+        if path.is_dir() and not any(path.iterdir()):
+            path.rmdir()
+        if not path.exists():
+            os.replace(temporary, path)
+            return
+        new = {item.relative_to(temporary) for item in temporary.rglob("*") if not item.is_dir()}
+        for name in new:
+            (path / name).parent.mkdir(parents=True, exist_ok=True)
+            os.replace(temporary / name, path / name)
+        for pattern in stale_patterns:
+            for old in path.glob(pattern):
+                if old.relative_to(path) not in new and old.is_file():
+                    old.unlink()
+    finally:
+        shutil.rmtree(temporary, ignore_errors=True)
 
 
 def _umask() -> int:

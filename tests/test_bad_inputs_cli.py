@@ -56,6 +56,10 @@ BAD_OPTIONS = [
     ("scheduler unknown", ["plan", "blockage_large", "--scheduler", "magic"], "--scheduler"),
     ("fly with a negative seed", ["fly", "blockage_large", "--seed", "-1"], "--seed"),
     ("management cycle of a millisecond", ["plan", "blockage_large", "--cycle-min", "1e-5"], "--cycle-min"),
+    ("only commas as parameter names", ["calibrate", "{rig}", "--params", ",,"], "--params = ',,'"),
+    ("a data file as the scenario", ["simulate", "{rig}", "--out", "{out}/x.csv"], "characters)"),
+    ("--dt beyond a double", ["simulate", "step_rated", "--out", "{out}/x.csv", "--dt", "1e400"], "--dt"),
+    ("parameter beyond a double", ["describe", "--param", "R0=1e999"], "finite"),
 ]
 
 

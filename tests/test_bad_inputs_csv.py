@@ -73,6 +73,10 @@ REFUSED = [
     ("time not increasing", csv_bytes(rows(time_s=lambda i, v: 50.0 if i == 6 else v)), "strictly increasing"),
     ("empty input cell", csv_bytes(rows(T_inlet=lambda i, v: "" if i == 4 else v)), "empty cell"),
     ("inlet above PT100 range", csv_bytes(rows(T_inlet=lambda i, v: 350.0 if i == 4 else v)), "PT100"),
+    ("time in milliseconds", csv_bytes(rows(time_s=lambda i, v: v * 1000)), "divide it by 1000"),
+    ("time in hours", csv_bytes(rows(time_s=lambda i, v: v / 3600)), "multiply it by 3600"),
+    ("time steps of 1e300 s", csv_bytes(rows(time_s=lambda i, v: 1e300 * (i + 1))), "time_s must be in seconds"),
+    ("header in capitals", csv_bytes(header=[c.upper() for c in REQUIRED_COLUMNS]), "case-sensitive"),
 ]
 
 # (case, file content, text one of the flags must contain, or None for no flag)

@@ -44,6 +44,9 @@ BAD_MODEL_FILES = [
      "k_flow"),
     ("misspelt effect key", EFFECT.format("{name: coolant_flow_reduction, paramters: {k_flow: 0.5}}"),
      "paramters"),
+    ("parameter given twice", "machine: genco_rf201a\nparameters:\n  h_end_air: {value: 15}\n  h_end_air: {value: 16}\n",
+     "given twice"),
+    ("brackets nested 5000 deep", "machine: genco_rf201a\nx: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),
 ]
 
 
@@ -64,3 +67,13 @@ def test_numbers_written_as_numbers_are_read(tmp_path):
     path.write_text(PARAMETER.format("{value: 17, provenance: fitted, source: rig}"))
     model = load_model(path)
     assert model.parameters.value("h_end_air") == 17.0 and model.parameters["h_end_air"].provenance == "fitted"
+
+
+def test_a_runaway_model_has_no_steady_state_rather_than_one_below_ambient(tmp_path):
+    """R0 of 1e200 ohm: Newton's only root is where the copper resistance vanishes (-256 °C); it is
+    refused, not used as the initial state of a comparison."""
+    path = tmp_path / "model.yaml"
+    path.write_text("machine: genco_rf201a\nparameters:\n  R0: {value: 1.0e+200}\n")
+    model = load_model(path)
+    with pytest.raises(InputError, match="thermal runaway"):
+        model.steady_state(model.input_vector(7.0, 7.0, 7.0, 1.0, 20.0, 20.0))

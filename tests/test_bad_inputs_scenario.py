@@ -36,6 +36,18 @@ BAD_SCENARIOS = [
      "rated_current_A"),
     ("inlet at 500 °C", "name: x\nT_inlet_C: 500\nactions:\n  - {condition: 5, duration_min: 30}\n", "T_inlet_C"),
     ("inlet as text", "name: x\nT_inlet_C: warm\nactions:\n  - {condition: 5, duration_min: 30}\n", "T_inlet_C"),
+    ("a key given twice", "name: x\nname: y\nactions:\n  - {condition: 5, duration_min: 30}\n", "given twice"),
+    ("brackets nested 5000 deep", "name: x\nd: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),
+]
+
+FLEET = "name: x\ngenerators: {{count: 2}}\nfaults:\n  - {}\nactions:\n  - {{condition: 5, duration_min: 30}}\n"
+# the generators and faults of a fleet scenario, read by plan and fly (same promise)
+BAD_FLEET_SCENARIOS = [
+    ("fault after the mission's end", FLEET.format("{generator: 1, kind: coolant_blockage, onset_min: 1000, k_flow: 0.5}"),
+     "would never happen"),
+    ("fault on generator 3 of 2", FLEET.format("{generator: 3, kind: coolant_blockage, onset_min: 10, k_flow: 0.5}"),
+     "faults[0].generator"),
+    ("unknown fault kind", FLEET.format("{generator: 1, kind: fire, onset_min: 10}"), "faults[0].kind"),
 ]
 
 
@@ -48,6 +60,16 @@ def test_bad_scenario_exits_2_naming_the_field(content, named, tmp_path, capsys)
     err = capsys.readouterr().err
     assert named in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("content, named", [c[1:] for c in BAD_FLEET_SCENARIOS],
+                         ids=[c[0] for c in BAD_FLEET_SCENARIOS])
+def test_bad_fleet_scenario_exits_2_naming_the_field(content, named, tmp_path, capsys):
+    path = tmp_path / "fleet.yaml"
+    path.write_text(content)
+    assert main(["plan", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert named in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
 def test_scenario_that_is_a_folder(tmp_path, capsys):

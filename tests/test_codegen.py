@@ -9,6 +9,7 @@ import io
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -291,6 +292,25 @@ def test_cli_codegen_writes_sources_library_and_example(libraries, tmp_path, cap
     library = next(tmp_path.glob("libgt.*"))
     loaded = CompiledModel(library, libraries["nonlinear"][0])
     assert loaded.n_states == 8 and loaded.dt_s == 10.0
+
+
+def test_ctrl_c_during_codegen_leaves_no_partial_files(tmp_path, monkeypatch, capsys):
+    import genthermal.commands.codegen as codegen_command
+
+    def interrupted(generated, out_dir):
+        assert (Path(out_dir) / "gt_casadi_step.c").is_file()  # the sources are written, the library is not
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(codegen_command, "compile_library", interrupted)
+    out = tmp_path / "code"
+    assert main(["codegen", "--out", str(out), "--no-kalman"]) == 130
+    assert list(tmp_path.iterdir()) == []
+    out.mkdir()
+    (out / "gt.h").write_text("the previous header")
+    assert main(["codegen", "--out", str(out), "--no-kalman", "--force"]) == 130
+    assert [p.name for p in tmp_path.iterdir()] == ["code"]
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"gt.h": "the previous header"}
+    assert "interrupted" in capsys.readouterr().err
 
 
 def test_cli_rejects_bad_step(tmp_path, capsys):

@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
-from genthermal.coolant import OUTLET_DIAMETER_MM, OUTLET_LOSS_SHARE, outlet_flow_fraction
+from genthermal.coolant import OUTLET_DIAMETER_MM, OUTLET_LOSS_SHARE, inlet_rise, outlet_flow_fraction
 from genthermal.errors import InputError
+from genthermal.mission import Mission
+from genthermal.schedule.power_system import PowerSystem
 
 U_RATED = dict(I_u=7.0, I_v=7.0, I_w=7.0, I_exc=1.0, T_inlet=20.0, T_ambient=20.0)
 
@@ -78,3 +80,23 @@ def test_flow_exponent_survives_a_model_file(plant_model, tmp_path):
     blocked = plant_model.with_effect("coolant_flow_reduction", k_flow=0.3, n_flow=0.55)
     loaded = load_model(save_model(blocked, tmp_path / "blocked.yaml"))
     assert loaded.parameters.value("n_flow") == 0.55 and loaded.parameters.value("k_flow") == 0.3
+
+
+def test_inlet_rise_is_a_step_or_a_first_order_approach():
+    t = np.array([0.0, 599.0, 600.0, 600.0 + 1200.0, 1e6])
+    assert inlet_rise(t, 600.0, 31.0).tolist() == [0.0, 0.0, 31.0, 31.0, 31.0]
+    gradual = inlet_rise(t, 600.0, 31.0, 1200.0)
+    assert gradual[:3].tolist() == [0.0, 0.0, 0.0]
+    assert gradual[3] == pytest.approx(31.0 * (1 - np.exp(-1.0))) and gradual[4] == pytest.approx(31.0)
+    with pytest.raises(InputError, match="inlet_rise_tau"):
+        inlet_rise(t, 600.0, 31.0, -1.0)
+    # a scenario's fault carries it to every consumer of the inlet temperature
+    document = {"name": "x", "generators": {"count": 2}, "actions": [{"condition": 5, "duration_min": 60}],
+                "faults": [{"generator": 1, "kind": "inlet_rise", "onset_min": 10, "inlet_rise_C": 10,
+                            "inlet_rise_tau_min": 20}]}
+    system = PowerSystem.from_mission(Mission.from_dict(document))
+    assert system.inlet_C(0, 1800.0) == pytest.approx(20.0 + 10.0 * (1 - np.exp(-1.0)))
+    assert system.inlet_C(1, 1800.0) == pytest.approx(20.0)
+    document["faults"][0]["inlet_rise_tau_min"] = -5
+    with pytest.raises(InputError, match="inlet_rise_tau_min"):
+        PowerSystem.from_mission(Mission.from_dict(document))

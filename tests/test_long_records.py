@@ -37,7 +37,8 @@ def test_a_week_at_1s_is_bounded_and_keeps_mean_loss_and_timing():
     # a sensor is the centred average: it is the value at the grid time, not half a block later
     interior = averaged.frame.iloc[1:-1]
     exact = 40.0 + 10.0 * np.sin(2 * np.pi * interior["time_s"] / 7200.0)
-    assert np.max(np.abs(interior["T_iron"] - exact)) < 0.01
+    # (a 300-s window flattens the 2-hour cycle by 0.03 K; half a block late would be 1.3 K off)
+    assert np.max(np.abs(interior["T_iron"] - exact)) < 0.05
     assert step in (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)
 
 

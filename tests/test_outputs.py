@@ -7,7 +7,7 @@ import stat
 import numpy as np
 import pytest
 
-from genthermal.outputs import replacing, write_json
+from genthermal.outputs import replacing, replacing_folder, write_json
 
 
 def test_json_never_holds_nan_or_infinity_and_says_where(tmp_path):
@@ -38,3 +38,28 @@ def test_a_written_file_has_the_permissions_of_a_new_file(tmp_path):
     mask = os.umask(0)
     os.umask(mask)
     assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~mask
+
+
+def test_a_folder_appears_whole_or_not_at_all(tmp_path):
+    out = tmp_path / "code"
+    with pytest.raises(KeyboardInterrupt):
+        with replacing_folder(out) as build:
+            (build / "gt.c").write_text("complete")
+            (build / "gt.h").write_text("half")
+            raise KeyboardInterrupt
+    assert list(tmp_path.iterdir()) == []  # neither the folder nor a temporary one
+    with replacing_folder(out) as build:
+        (build / "gt_casadi_old.c").write_text("old")
+        (build / "gt.c").write_text("old")
+    with pytest.raises(KeyboardInterrupt):
+        with replacing_folder(out, ("gt_casadi_*.c",)) as build:
+            (build / "gt.c").write_text("new")
+            raise KeyboardInterrupt
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"gt_casadi_old.c": "old", "gt.c": "old"}
+    (out / "notes.txt").write_text("the user's")
+    with replacing_folder(out, ("gt_casadi_*.c",)) as build:
+        (build / "gt.c").write_text("new")
+        (build / "gt_casadi_new.c").write_text("new")
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"gt.c": "new", "gt_casadi_new.c": "new",
+                                                               "notes.txt": "the user's"}
+    assert [p.name for p in tmp_path.iterdir()] == ["code"]

@@ -43,3 +43,19 @@ def test_summary_keys_and_the_best_baseline_ratio():
 def test_sweep_rejects_an_unknown_scheduler(tmp_path, capsys):
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer,magic", "--json", str(tmp_path / "s.json")]) == 2
     assert "--schedulers" in capsys.readouterr().err
+
+
+def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsys, monkeypatch):
+    import json
+
+    import genthermal.schedule.sweep as sweep
+    records = [{"name": "a", "faulty": False, "runs": {"engineer": run(0, 0.0)}}]
+    monkeypatch.setattr(sweep, "run_sweep", lambda documents, schedulers, *rest: records)
+    assert main(["sweep", "--cases", "1", "--schedulers", "engineer"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["cases"] == records and printed["robustness"]["cases"] == 1
+    target = tmp_path / "s.json"
+    assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target)]) == 0
+    assert json.loads(target.read_text())["cases"] == records
+    assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target)]) == 2  # no --force
+    assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target), "--force"]) == 0

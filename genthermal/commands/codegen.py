@@ -1,9 +1,10 @@
 """``genthermal codegen --out DIR [--model NAME|FILE] [--dt 10]``: C code of the model.
 
 Writes the CasADi-generated sources, their header, the ABI layer (``gt.c``, ``gt.h``), the
-example program with its Makefile and ``ABI.md`` into DIR, then compiles ``libgt.so`` there. The
-sources are written before compiling, so without a C compiler they are still there; the command
-then prints why nothing was compiled and exits with code 2.
+example program with its Makefile and ``ABI.md`` into DIR, then compiles ``libgt.so`` there.
+Everything is built in a temporary folder next to DIR and moved in when complete, so an error or
+Ctrl-C leaves DIR as it was. Without a C compiler the sources are still moved in; the command then
+prints why nothing was compiled and exits with code 2.
 """
 
 from __future__ import annotations
@@ -11,12 +12,13 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from ..ccompile import compile_library
+from ..ccompile import CompilerNotFoundError, compile_library
 from ..codegen import generate_c
 from ..design import linear_design_model
 from ..errors import InputError
 from ..estimation.ekf import embedded_functions as ekf_functions
 from ..estimation.kalman import embedded_functions
+from ..outputs import replacing_folder
 from ..resources import TEMPLATE_DIR, shipped_file
 from ._common import add_model_arguments, model_from_args, positive_float
 
@@ -60,15 +62,23 @@ def run(args) -> int:
         design = model if model.is_affine else linear_design_model(model)
         extra = {**embedded_functions(design, dt_s=dt, predict_steps=steps),
                  **ekf_functions(model, dt_s=dt, predict_steps=steps)}
-    generated = generate_c(model, out, dt_s=dt, extra_functions=extra)
-    companions = [Path(shutil.copyfile(shipped_file(TEMPLATE_DIR / name), out / name)) for name in COMPANION_FILES]
+    missing_compiler = None
+    with replacing_folder(out, stale_patterns=("gt_casadi_*.c",)) as build:
+        generated = generate_c(model, build, dt_s=dt, extra_functions=extra)
+        companions = [Path(shutil.copyfile(shipped_file(TEMPLATE_DIR / name), build / name))
+                      for name in COMPANION_FILES]
+        try:
+            library = compile_library(generated, build)
+        except CompilerNotFoundError as error:  # the sources are useful without the library
+            missing_compiler = error
     step = "exact zero-order hold" if generated.exact else "exponential integrator (ETD2RK)"
     print(f"{model.name}: C code with dt = {dt:g} s ({step}) in {out}")
     for signature in generated.extra_functions:
         print(f"  extra entry point gt_{signature.name}")
     for path in (*generated.headers, *generated.sources, *companions):
         print(f"  wrote {path.name}")
-    library = compile_library(generated, out)
+    if missing_compiler is not None:
+        raise missing_compiler
     print(f"  wrote {library.name} (callers provide {generated.work_size} double(s) of work memory)")
     print(f"build the example program with: make -C {out}")
     return 0

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from ..outputs import report_json
+from pathlib import Path
+
+from ..outputs import replacing_folder, report_json
 from ._common import add_model_arguments, model_from_args, positive_float
 
 
@@ -68,5 +70,7 @@ def run(args) -> int:
     if args.report:
         from ..diagnose.report import write_compare_report
 
-        print(f"wrote {write_compare_report(comparison, args.report)}")
+        with replacing_folder(args.report) as folder:  # the report appears whole or not at all
+            written = write_compare_report(comparison, folder)
+        print(f"wrote {Path(args.report) / written.name}")
     return 0

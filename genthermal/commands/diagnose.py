@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from ..model_file import save_model
-from ..outputs import report_json
+from ..outputs import replacing_folder, report_json
 from ..progress import say, working
 from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step, fitting_data
@@ -55,7 +57,9 @@ def run(args) -> int:
     if args.report:
         from ..diagnose.report import write_diagnosis_report
 
-        print(f"wrote {write_diagnosis_report(result, args.report)}")
+        with replacing_folder(args.report) as folder:  # the report appears whole or not at all
+            written = write_diagnosis_report(result, folder)
+        print(f"wrote {Path(args.report) / written.name}")
     if args.out:
         print(f"wrote {save_model(result.improved_model(), args.out, {f.effect: f.onset_s for f in result.found})}")
     return 0

@@ -1,4 +1,4 @@
-"""``genthermal sweep --cases N [--schedulers a,b] [--cluster ADDRESS] --json FILE``.
+"""``genthermal sweep --cases N [--schedulers a,b] [--cluster ADDRESS] [--json FILE]``.
 
 Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweep`): N seeded cases (missions
 of 2-8 h, 2-4 generators, plant parameters off by up to ±30 %, a fault the manager is not told)
@@ -8,9 +8,9 @@ flown with each scheduler on Dask — a local cluster by default, or an existing
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from ..errors import InputError
+from ..outputs import finite_document, report_json
 from ..schedule.closed_loop import SCHEDULERS
 
 
@@ -24,13 +24,15 @@ def register(subparsers) -> None:
     parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: a local cluster)")
     parser.add_argument("--workers", default=2, type=int, help="workers of the local cluster (default 2)")
     parser.add_argument("--seed", default=0, type=int, help="seed of the cases (default 0)")
-    parser.add_argument("--json", required=True, help="write the summary and every case here")
+    parser.add_argument("--json", metavar="FILE", help="write the summary and every case to FILE as well "
+                        "(default: the whole document goes to standard output)")
+    parser.add_argument("--force", action="store_true", help="replace the --json file if it exists")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    """Run the sweep and write the JSON."""
+    """Run the sweep; print the summary and write every case to ``--json``, or print it all."""
     from ..schedule.sweep import robustness_case, run_sweep, summarise
 
     schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
@@ -44,9 +46,10 @@ def run(args) -> int:
     documents = [robustness_case(i, args.seed) for i in range(args.cases)]
     records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress)
     report = {**summarise(records, schedulers), "cases": records}
-    path = Path(args.json)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2, default=str))
-    print(json.dumps({k: v for k, v in report.items() if k != "cases"}, default=str))
-    print(f"wrote {path}")
+    if not args.json:
+        print(json.dumps(finite_document(report), indent=2, default=str, allow_nan=False))
+        return 0
+    print(json.dumps(finite_document({k: v for k, v in report.items() if k != "cases"}), default=str,
+                     allow_nan=False))
+    report_json(args.json, report)
     return 0

@@ -220,9 +220,10 @@ def check_parameter_names(model: ThermalModel, names: Sequence[str], field: str 
     """Return ``names`` if every one is a parameter of ``model``, else raise InputError naming it."""
     import difflib
 
+    given = ",".join(names)
     names = [n.strip() for n in names if n.strip()]
     if not names:
-        raise InputError(field, "", "name at least one parameter to fit")
+        raise InputError(field, given, "name at least one parameter to fit")
     for name in names:
         if name not in model.parameters:
             close = difflib.get_close_matches(name, model.parameter_names, n=3)

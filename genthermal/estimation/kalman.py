@@ -181,6 +181,7 @@ class KalmanFilter(RecursiveFilter):
         self.model = design_model
         self.dt_s = float(dt_s)
         self.A, self.B, self.c = discrete.A, discrete.B, discrete.c
+        self._step = discrete.step
         self.C, self.e = output_matrices(design_model)
         self.state_names = list(design_model.state_names)
         self.output_names = list(design_model.output_names)
@@ -225,8 +226,9 @@ class KalmanFilter(RecursiveFilter):
         return Update(x, P_filtered, gain, innovation)
 
     def predict(self, x, P, u) -> tuple[np.ndarray, np.ndarray | None]:
-        """One step ahead: :math:`(Ax + Bu + c,\\ APA^T + Q)`; ``P`` None stays None."""
-        x_next = self.A @ x + self.B @ np.asarray(u, dtype=float) + self.c
+        """One step ahead: :math:`(Ax + Bu + c,\\ APA^T + Q)` (the model's exact step, loss floors
+        applied); ``P`` None stays None."""
+        x_next = np.asarray(self._step(x, np.asarray(u, dtype=float))).ravel()
         return x_next, None if P is None else self.A @ P @ self.A.T + self.Q
 
     # --- starting and forecasting ---------------------------------------------------------
@@ -271,7 +273,7 @@ class KalmanFilter(RecursiveFilter):
                 indicator = indicator * (measured[i] if used else 1.0 - measured[i])
             correction += indicator * (ca.DM(gain) @ innovation)
         x_filtered = x_pred + correction
-        x_next = ca.DM(self.A) @ x_filtered + ca.DM(self.B) @ u + ca.DM(self.c)
+        x_next = self._step(x_filtered, u)
         return ca.Function("kalman_update", [x_pred, u, y], [x_filtered, x_next],
                            ["x_pred", "u", "y"], ["x_filtered", "x_next_pred"])
 

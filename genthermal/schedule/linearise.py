@@ -62,8 +62,9 @@ def planning_design_model(model: ThermalModel, current_range_A=DEFAULT_CURRENT_R
     mean_phase = sum(input_symbol(p) for p in PHASE_CURRENTS) / len(PHASE_CURRENTS)
     sources = []
     for source in design.network.heat_sources:
-        polynomial = sympy.Poly(sympy.expand(source.power), *currents) if source.power.has(*currents) else None
-        if polynomial is not None and polynomial.total_degree() > 1 and source.label != "copper":
+        nonlinear_in_currents = source.label != "copper" and source.power.has(*currents) and \
+            sympy.Poly(sympy.expand(source.power), *currents).total_degree() > 1  # copper: already a line
+        if nonlinear_in_currents:
             alpha, beta = _load_path_line(source.power, values, current_range_A)
             source = dataclasses.replace(source, power=alpha * mean_phase + beta)
         sources.append(source)

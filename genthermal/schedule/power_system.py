@@ -17,6 +17,8 @@ validated here)::
       machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration)
     faults:                        # optional list
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
+      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 31,
+         inlet_rise_tau_min: 40}   # the inlet approaches +31 K with a 40-min time constant
       - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
       - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
       - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
@@ -35,7 +37,7 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
-from ..coolant import OUTLET_DIAMETER_MM, outlet_flow_fraction
+from ..coolant import OUTLET_DIAMETER_MM, inlet_rise, outlet_flow_fraction
 from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
 from ..effects import get_effect
@@ -55,8 +57,9 @@ DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
                    "plant_mismatch", "machine")
-_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C"),
-               "inlet_rise": ("inlet_rise_C",), "effect": ("effect", "values", "inlet_rise_C")}
+_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C", "inlet_rise_tau_min"),
+               "inlet_rise": ("inlet_rise_C", "inlet_rise_tau_min"),
+               "effect": ("effect", "values", "inlet_rise_C", "inlet_rise_tau_min")}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -78,6 +81,8 @@ class Fault:
         blockage), None for an inlet rise alone.
     values : dict
         Parameter values of ``effect`` (``{"k_flow": 0.2}``).
+    inlet_rise_tau_s : float
+        Time constant of the inlet rise, s (0: a step; :func:`genthermal.coolant.inlet_rise`).
     """
 
     generator: int
@@ -86,6 +91,7 @@ class Fault:
     inlet_rise_C: float = 0.0
     effect: str | None = None
     values: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    inlet_rise_tau_s: float = 0.0
 
     def describe(self, names: tuple[str, ...]) -> str:
         """One line: what happens to which generator when."""
@@ -136,8 +142,10 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
     generator = _generator_index(entry["generator"], names, path)
     onset_s = 60.0 * _number(entry, "onset_min", path, 0.0, 1e5, "min")
     rise = _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K", default=0.0)
+    tau_s = 60.0 * _number(entry, "inlet_rise_tau_min", path, 0.0, 600.0, "min", default=0.0)
     if kind == "inlet_rise":
-        return Fault(generator, onset_s, kind, _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K"))
+        return Fault(generator, onset_s, kind, _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K"),
+                     inlet_rise_tau_s=tau_s)
     if kind == "coolant_blockage":
         if ("k_flow" in entry) == ("outlet_diameter_mm" in entry):
             raise InputError(f"{path}.k_flow", entry.get("k_flow"),
@@ -149,7 +157,7 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
         values = {"k_flow": k_flow}
         if "n_flow" in entry:  # exponent of the internal convection, h ∝ flow^n (effect default 0.8)
             values["n_flow"] = _number(entry, "n_flow", path, 0.0, 1.5, "(convection exponent)")
-        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values)
+        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values, tau_s)
     try:
         effect = get_effect(entry.get("effect"))
     except InputError as error:
@@ -164,7 +172,7 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
             raise InputError(f"{path}.values.{name}", value, f"unknown; {effect.name} takes {', '.join(bounds)}")
         checked[name] = _number(values, name, f"{path}.values", bounds[name].lower, bounds[name].upper,
                                 bounds[name].unit)
-    return Fault(generator, onset_s, kind, rise, effect.name, checked)
+    return Fault(generator, onset_s, kind, rise, effect.name, checked, tau_s)
 
 
 class AffineGenerator:
@@ -192,7 +200,9 @@ class AffineGenerator:
             raise InputError("model", model.name, "the scheduler plans on the linear design model")
         nx, nu = model.n_states, len(INPUT_NAMES)
         x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
-        xdot = model.functions["rhs"](x, u, model.p0)
+        # the affine branch: the copper-loss floor of the design model acts below 1.6 A only, under
+        # the planner's rest current (27.3 % of rated)
+        xdot = model.functions["rhs_affine_branch"](x, u, model.p0)
         y = model.functions["outputs"](x, u, model.p0)
         matrices = ca.Function("m", [x, u], [ca.jacobian(xdot, x), ca.jacobian(xdot, u),
                                              ca.jacobian(y, x), ca.jacobian(y, u), xdot, y])
@@ -331,6 +341,10 @@ class PowerSystem:
         if not isinstance(fault_entries, list):
             raise InputError("faults", fault_entries, "must be a list of faults")
         faults = tuple(parse_fault(e, names, f"faults[{i}]") for i, e in enumerate(fault_entries))
+        for i, fault in enumerate(faults):
+            if fault.onset_s >= mission.duration_s:
+                raise InputError(f"faults[{i}].onset_min", fault.onset_s / 60.0, f"is not before the mission's end "
+                                 f"({mission.duration_s / 60.0:g} min): the fault would never happen")
         return cls(mission, names, faults,
                    rest_percent=_number(config, "rest_percent", "generators", 0.0, 100.0, "%", DEFAULT_REST_PERCENT),
                    limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC", DEFAULT_LIMIT_C),
@@ -370,7 +384,7 @@ class PowerSystem:
         inlet = np.full(t.shape, self.mission.T_inlet_C)
         for fault in self.faults:
             if fault.generator == generator:
-                inlet = inlet + np.where(t >= fault.onset_s - 1e-9, fault.inlet_rise_C, 0.0)
+                inlet = inlet + inlet_rise(t, fault.onset_s, fault.inlet_rise_C, fault.inlet_rise_tau_s)
         return inlet
 
     # --- models -----------------------------------------------------------------------------
