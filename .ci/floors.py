@@ -13,7 +13,10 @@ def floors(pyproject_path: str) -> list[str]:
     """``name==floor`` for each runtime and test dependency; SystemExit if one has no floor."""
     with open(pyproject_path, "rb") as file:
         project = tomllib.load(file)["project"]
-    requirements = [*project["dependencies"], *project["optional-dependencies"]["test"]]
+    # fmpy's own floor (0.3.30, the first to pass tests/test_fmu.py) needs numpy >= 2.1.3, so it
+    # cannot share an environment with numpy's floor 1.26; it is checked by the tests job instead.
+    requirements = [*project["dependencies"],
+                    *(r for r in project["optional-dependencies"]["test"] if not r.startswith("fmpy"))]
     pinned = []
     for requirement in requirements:
         match = re.match(r"^\s*([A-Za-z0-9_.\-\[\]]+)\s*>=\s*([0-9][0-9.]*)", requirement)
