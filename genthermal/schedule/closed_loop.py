@@ -262,15 +262,22 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
 
 
 def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:
-    """``result`` with its rests cut to ``problem.rest_budget_s``, re-evaluated when cut."""
-    if result.schedule.added_rest_s <= problem.rest_budget_s + 1e-6:
+    """``result`` with its rests cut to ``problem.rest_budget_s`` and the rest before the first
+    segment to ``max_rest_s`` minus the rest already taken before it; re-evaluated when cut."""
+    schedule = result.schedule.within_rest_budget(problem.rest_budget_s, _first_rest_max_s(problem))
+    if np.allclose(schedule.rest_before_s, result.schedule.rest_before_s, rtol=0.0, atol=1e-6):
         return result
-    cut = evaluate(problem, result.schedule.within_rest_budget(problem.rest_budget_s), result.method,
-                   result.solve_s, result.warnings)
+    cut = evaluate(problem, schedule, result.method, result.solve_s, result.warnings)
     cut.feasible = cut.feasible and result.feasible
     cut.details = dict(result.details, rest_cut_to_budget_s=problem.rest_budget_s)
-    cut.warnings.append(f"rests cut to the {problem.rest_budget_s / 60:.1f} min left of the flight's rest budget")
+    cut.warnings.append(f"rests cut to the {problem.rest_budget_s / 60:.1f} min left of the flight's rest budget "
+                        f"and {problem.max_rest_s / 60:g} min before one action")
     return cut
+
+
+def _first_rest_max_s(problem: PlanningProblem) -> float:
+    """Rest still allowed before the first segment, s."""
+    return max(problem.max_rest_s - problem.rest_taken_s, 0.0)
 
 
 def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
@@ -296,14 +303,15 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
-             rest_budget_s: float) -> PlanningProblem:
-    """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight."""
+             rest_budget_s: float, rest_taken_s: float = 0.0) -> PlanningProblem:
+    """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
+    ``rest_taken_s`` (s) of rest already flown right before the first segment."""
     inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
     budget = max(float(rest_budget_s), 0.0)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
                            system.limit_C - settings.margin_K, min(settings.max_rest_s, budget), settings.dt_s,
-                           settings.rise_backoff, settings.cycle_s, budget)
+                           settings.rise_backoff, settings.cycle_s, budget, float(rest_taken_s))
 
 
 class _Recorder:
@@ -456,7 +464,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     monitor = FaultMonitor(system, settings.detection, dt)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
-    measured, t, rested_s, cycles = None, 0.0, 0.0, 0
+    measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
     while segments:
         cycles += 1
         if measured is not None:
@@ -472,11 +480,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             else:
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt)
+                           [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
+                           resting_s)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off)
-            schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
+            schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
+                                                                      _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
         n = min(cycle_steps, timeline.n_steps)
@@ -491,6 +501,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         rested_s += float(np.count_nonzero(applied.resting)) * dt
+        running = np.flatnonzero(~applied.resting)
+        resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
     return recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles, rest_budget_s=budget)

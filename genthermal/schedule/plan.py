@@ -152,11 +152,14 @@ class Schedule:
         """The schedule with rests rounded up to whole steps of ``dt_s`` (s)."""
         return Schedule(self.displaced_A, np.ceil(self.rest_before_s / dt_s - 1e-6) * dt_s, self.switched_off)
 
-    def within_rest_budget(self, budget_s: float) -> "Schedule":
-        """The schedule with its rests cut, earliest first kept, so that they add up to at most
-        ``budget_s`` (s)."""
-        allowed = np.clip(budget_s - np.concatenate([[0.0], np.cumsum(self.rest_before_s)[:-1]]), 0.0, None)
-        return Schedule(self.displaced_A, np.minimum(self.rest_before_s, allowed), self.switched_off)
+    def within_rest_budget(self, budget_s: float, first_max_s: float = np.inf) -> "Schedule":
+        """The schedule with the first rest cut to ``first_max_s`` (s) and then its rests cut,
+        earliest kept, so that they add up to at most ``budget_s`` (s)."""
+        rests = self.rest_before_s.copy()
+        if rests.size:
+            rests[0] = min(rests[0], max(first_max_s, 0.0))
+        allowed = np.clip(budget_s - np.concatenate([[0.0], np.cumsum(rests)[:-1]]), 0.0, None)
+        return Schedule(self.displaced_A, np.minimum(rests, allowed), self.switched_off)
 
     def table(self, segments, generator_names) -> pd.DataFrame:
         """One row per segment: action, rest before (min), duration (min), nominal and applied
@@ -330,6 +333,9 @@ class PlanningProblem:
         Total rest the plan may add, s (what is left of the flight's rest budget); the schedulers
         bound each rest by ``max_rest_s`` and the manager cuts the total to this
         (:meth:`Schedule.within_rest_budget`).
+    rest_taken_s : float
+        Rest already flown right before the first segment (a rest in progress), s: the rest
+        before that segment may add only ``max_rest_s`` minus this.
     """
 
     segments: tuple
@@ -345,6 +351,7 @@ class PlanningProblem:
     rise_backoff: float = 0.0
     window_s: float = 300.0
     rest_budget_s: float = np.inf
+    rest_taken_s: float = 0.0
 
     @property
     def n_generators(self) -> int:

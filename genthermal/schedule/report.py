@@ -69,7 +69,8 @@ def flight_summary(result: FlightResult) -> dict:
         "replans": len(result.plans),
         "median_solve_s": float(np.median(solve_times)) if solve_times else 0.0,
         "displaced_Ah": float((moved_off.sum() - lost.sum()) * dt / 3600.0),
-        "feasible": all(plan["feasible"] for plan in result.plans) and not result.shed_events and lost.sum() == 0,
+        "feasible": bool(all(plan["feasible"] for plan in result.plans) and not result.shed_events
+                         and not lost.any()),
         "lowest_reachable_peak_C": float(max(lowest)) if lowest else None,
         "manager_response": list(dict.fromkeys(plan["response"] for plan in result.plans if plan.get("response"))),
         "rest_budget_s": float(result.rest_budget_s),

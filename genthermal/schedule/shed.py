@@ -30,6 +30,9 @@ from .engineer import receiver_room
 from .heuristic import SegmentResponse
 from .plan import PlanningProblem, PlanResult, Schedule, evaluate
 
+#: Smaller shortfalls of the total phase current are rounding of the schedulers' displacements, A.
+NOT_SERVED_TOLERANCE_A = 1e-6
+
 
 def shed_plan(problem: PlanningProblem, switched_off) -> PlanResult:
     """Plan the generators still on when ``switched_off`` ones carry nothing (module docstring).
@@ -94,7 +97,8 @@ def not_served(nominal_A: np.ndarray, currents_A: np.ndarray, resting: np.ndarra
         (n_generators, n) phase current not served, A (0 during rests).
     """
     shortfall = np.clip(nominal_A[None, :] - currents_A, 0.0, None)
-    unserved = np.clip(currents_A.shape[0] * nominal_A - currents_A.sum(axis=0), 0.0, None)
+    unserved = currents_A.shape[0] * nominal_A - currents_A.sum(axis=0)
+    unserved[unserved < NOT_SERVED_TOLERANCE_A] = 0.0  # displacements sum to zero only to rounding
     total = shortfall.sum(axis=0)
     share = np.divide(shortfall, total[None, :], out=np.zeros_like(shortfall), where=total[None, :] > 1e-12)
     result = share * unserved[None, :]
