@@ -53,18 +53,18 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
     assert summary["mission_time_s"] <= system.mission.duration_s + summary["rest_budget_s"] + 1e-6
     assert summary["feasible"] is False
     assert summary["lowest_reachable_peak_C"] > system.limit_C
-    assert summary["shed"]["switched_off"] == ["gen1"]
+    assert summary["shed"]["generators"][0] == "gen1"
     event = summary["shed"]["events"][0]
-    assert event["generator"] == "gen1" and event["time_s"] >= 600.0  # not before the onset
-    assert event["lowest_reachable_peak_C"] > system.limit_C and "switch off gen1" in event["response"]
-    assert summary["shed"]["not_served_Ah"]["gen1"] > 0.5
-    assert any("switch off gen1" in response for response in summary["manager_response"])
+    assert event["shedding"] == ["gen1"] and event["time_s"] >= 600.0  # not before the onset
+    assert event["lowest_reachable_peak_C"] > system.limit_C and "shed load of gen1" in event["response"]
+    assert summary["shed"]["not_served_Ah"]["gen1"] > 0.5 and summary["shed"]["first_s"] >= event["time_s"]
+    assert any("shed load of gen1" in response for response in summary["manager_response"])
     # the healthy generator takes load but never goes over θmax; nothing is above θmax
     assert summary["max_T_winding"]["gen2"] <= system.limit_C and summary["max_T_iron"]["gen2"] <= system.limit_C
     assert summary["breach_s"] == 0.0
-    switched = result.time_s[:-1] >= event["time_s"]
-    assert np.all(result.currents_A[0, switched] == 0.0)
-    assert np.any(result.currents_A[1, switched] > result.nominal_A[switched] + 1e-6)  # gen2 takes some load
+    shedding = (result.time_s[:-1] >= event["time_s"]) & ~result.resting
+    assert np.all(result.currents_A[0, shedding] < result.nominal_A[shedding] - 0.5)  # gen1 sheds load
+    assert np.any(result.currents_A[1, shedding] > result.nominal_A[shedding] + 0.5)  # gen2 takes some of it
 
 
 def test_rest_budget_bounds_the_rest_and_the_cycles(tmp_path):
@@ -86,7 +86,7 @@ def test_normal_flight_is_unchanged_no_shed_and_feasible(tmp_path):
     result = fly(system, "heuristic")
     summary = flight_summary(result)
     assert summary["feasible"] is True and summary["breach_s"] == 0.0
-    assert summary["shed"]["events"] == [] and summary["shed"]["switched_off"] == []
+    assert summary["shed"]["events"] == [] and summary["shed"]["generators"] == []
     assert all(v == 0.0 for v in summary["shed"]["not_served_As"].values()) and summary["shed"]["first_s"] is None
     assert summary["lowest_reachable_peak_C"] is None and summary["manager_response"] == []
     assert summary["rest_budget_s"] == DEFAULT_REST_BUDGET_FRACTION * system.mission.duration_s
@@ -131,6 +131,23 @@ def test_shed_plan_keeps_the_generators_on_within_the_planning_limit(tmp_path):
         shed_plan(problem, [True])
 
 
+def test_a_generator_too_hot_even_carrying_nothing_is_switched_off(tmp_path):
+    from genthermal.schedule.closed_loop import plan_with
+
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    x0[0] = 95.0  # gen1 already above θmax, with its inlet at 100 °C
+    problem = PlanningProblem(segments, generators, x0, np.array([100.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, system.limit_C - 2.5, rise_backoff=0.3, rest_budget_s=600.0)
+    result = plan_with("heuristic", problem, ManagerSettings(), system.generator_names, system.limit_C)
+    assert not result.feasible and result.method == "shed"
+    assert result.details["switched_off"] == ["gen1"] and "switch off gen1" in result.details["response"]
+    assert result.details["lowest_peak_C"] > system.limit_C
+    assert predict(problem, result.schedule).outputs[1].max() <= system.limit_C
+
+
 def test_fly_command_rest_budget_option(tmp_path, capsys):
     scenario = tmp_path / "hot.yaml"
     scenario.write_text(HOT_AT_REST)
@@ -138,7 +155,7 @@ def test_fly_command_rest_budget_option(tmp_path, capsys):
     assert main(["fly", str(scenario), "--scheduler", "engineer", "--rest-budget-min", "5", "--json", str(out)]) == 0
     summary = json.loads(out.read_text())
     assert summary["rest_budget_s"] == 300.0 and summary["added_rest_s"] <= 300.0
-    assert summary["feasible"] is False and summary["shed"]["switched_off"] == ["gen1"]
-    assert "shed: switched off gen1" in capsys.readouterr().out
+    assert summary["feasible"] is False and summary["shed"]["generators"][0] == "gen1"
+    assert "shed: load of gen1" in capsys.readouterr().out
     assert main(["fly", str(scenario), "--rest-budget-min", "-3", "--json", str(tmp_path / "bad.json")]) == 2
     assert "--rest-budget-min" in capsys.readouterr().err

@@ -19,9 +19,11 @@ mismatch; its cost in mission time is measured by flying with and without it.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
-the generator and the action. When that peak is above θmax itself, the manager **sheds**: the
-generator is switched off for the rest of the mission and the others take what their limits allow
-(:mod:`genthermal.schedule.shed`); the flight reports ``feasible: false`` and the load not served.
+the generator and the action. When that peak is above θmax itself, rest cannot help and the manager
+**sheds** load (:mod:`genthermal.schedule.shed`): each generator carries at most what keeps it
+within the planning limit, the others take what their limits allow, the rest is not served; a
+generator too hot even when carrying nothing is switched off for the rest of the mission. The
+flight reports ``feasible: false`` and the load not served.
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
@@ -164,8 +166,9 @@ class FlightResult:
     rest_budget_s : float
         The flight's rest budget, s.
     shed_events : list of dict
-        One per generator switched off: ``time_s``, ``generator``, ``action``,
-        ``lowest_reachable_peak_C``, ``response``.
+        One when the manager starts shedding load and one per generator switched off: ``time_s``,
+        ``shedding`` (names), ``switched_off`` (names switched off then),
+        ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
     """
 
     system: PowerSystem
@@ -214,11 +217,12 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
         reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
         (``planned_peak_C``) and what the manager does about it (``response``); when that peak is
-        above θmax even so, the generator is switched off (``shed``: the names switched off).
+        above θmax, the plan sheds load (``method`` ``shed``; ``shedding``: the generators whose
+        load is shed, ``switched_off``: the generators off).
     """
     if switched_off is not None and np.any(switched_off):
         off = np.array(switched_off, dtype=bool)
-        return _shed(problem, off, off, names, limit_C, "")
+        return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
 
     def run(p):
         if scheduler == "heuristic":
@@ -238,9 +242,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
                  lowest_peak_action=segment.action_index + 1)
     if lowest.peak_C > limit_C:
-        off = np.zeros(problem.n_generators, dtype=bool)
-        off[lowest.peak_generator] = True
-        shed = _shed(problem, np.zeros_like(off), off, names, limit_C, where)
+        nobody = np.zeros(problem.n_generators, dtype=bool)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
@@ -281,24 +284,32 @@ def _first_rest_max_s(problem: PlanningProblem) -> float:
 
 
 def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
-          where: str) -> PlanResult:
-    """Switch off ``off`` (``already`` were off before) and, while the plan of the others still
-    breaches θmax on a generator still on, that one too; the :func:`~.shed.shed_plan` result,
-    never ``feasible``."""
+          where: str, receiver_margin_K: float) -> PlanResult:
+    """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
+    breaches θmax on a generator still on, switch that one off too; the
+    :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
+    ``feasible``."""
     off = off.copy()
-    result = shed_plan(problem, off)
+    result = shed_plan(problem, off, receiver_margin_K)
     while result.peak_C > limit_C and not off[result.peak_generator]:
         off[result.peak_generator] = True
-        result = shed_plan(problem, off)
+        result = shed_plan(problem, off, receiver_margin_K)
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
-    if newly:
-        response = (f"switch off {', '.join(newly)} (no rest within the rest budget and no displacement keeps "
-                    f"it within θmax {limit_C:g} °C); the others take what their limits allow, the rest of "
-                    "the load is not served")
-        result.warnings.append(f"shed: {where}; {response}")
-        result.details.update(response=response, shed=newly)
+    shedding = [names[g] for g in result.details["shedding"]]
+    if where:
+        response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
+                    f"displacement keeps it within θmax {limit_C:g} °C; each generator carries at most what keeps "
+                    "it within the planning limit, the others take what their limits allow, the rest is not served"
+                    + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
+        result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+        result.details.update(response=response)
+    elif newly:
+        response = f"switch off {', '.join(newly)} (too hot even carrying nothing)"
+        result.warnings.append(f"shed: {response}")
+        result.details.update(response=response)
     result.feasible = False
-    result.details.update(planned_peak_C=result.peak_C, switched_off=[names[g] for g in np.flatnonzero(off)])
+    result.details.update(planned_peak_C=result.peak_C, shedding=shedding,
+                          switched_off=[names[g] for g in np.flatnonzero(off)])
     return result
 
 
@@ -334,8 +345,10 @@ class _Recorder:
         self.plans.append(record)
         self.warnings += result.warnings
         newly = result.schedule.switched_off & ~self.switched_off
-        for g in np.flatnonzero(newly):
-            self.shed_events.append({"time_s": float(t_s), "generator": self.system.generator_names[g],
+        starts = result.method == "shed" and (not self.plans[:-1] or self.plans[-2]["method"] != "shed")
+        if starts or newly.any():
+            self.shed_events.append({"time_s": float(t_s), "shedding": list(result.details.get("shedding", [])),
+                                     "switched_off": [self.system.generator_names[g] for g in np.flatnonzero(newly)],
                                      "lowest_reachable_peak_C": result.details.get("lowest_peak_C"),
                                      "lowest_peak_action": result.details.get("lowest_peak_action"),
                                      "response": result.details.get("response", "")})
@@ -482,7 +495,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
                            resting_s)
-        if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+        shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
+        if shedding or predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,

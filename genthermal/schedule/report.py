@@ -16,8 +16,9 @@ Keys of :func:`flight_summary`:
                         plans feasible)
 ``manager_response``    what the manager did about infeasible plans (rest, displacement, shed)
 ``rest_budget_s``       the flight's rest budget, s (:class:`ManagerSettings` ``rest_budget_s``)
-``shed``                load shedding: ``events`` (time_s, generator, lowest reachable peak and
-                        the action where it falls, response), ``switched_off`` (generator names),
+``shed``                load shedding: ``events`` (time_s, the generators shedding load and those
+                        switched off then, lowest reachable peak and the action where it falls,
+                        response), ``generators`` (names that shed load), ``switched_off`` (names),
                         ``not_served_As`` / ``not_served_Ah`` per generator (phase current not
                         carried by anyone, A·s / A·h), ``first_s`` / ``last_s`` of the load not
                         served (None without)
@@ -88,7 +89,8 @@ def shed_summary(result: FlightResult, lost: np.ndarray, dt_s: float) -> dict:
     names = result.system.generator_names
     steps = np.flatnonzero(lost.sum(axis=0) > 1e-9)
     return {"events": list(result.shed_events),
-            "switched_off": list(dict.fromkeys(event["generator"] for event in result.shed_events)),
+            "generators": list(dict.fromkeys(n for event in result.shed_events for n in event["shedding"])),
+            "switched_off": list(dict.fromkeys(n for event in result.shed_events for n in event["switched_off"])),
             "not_served_As": {n: float(lost[g].sum() * dt_s) for g, n in enumerate(names)},
             "not_served_Ah": {n: float(lost[g].sum() * dt_s / 3600.0) for g, n in enumerate(names)},
             "first_s": float(result.time_s[steps[0]]) if steps.size else None,
@@ -130,10 +132,11 @@ def summary_text(summary: dict, limit_C: float) -> str:
                              if i["effect"] else "") for i in summary["identified"]) or "no fault alarm"
         lines.append(f"in-flight detection: {found}; false alarms {summary['false_alarms']}")
     shed = summary.get("shed") or {}
-    if shed.get("switched_off"):
+    if shed.get("events"):
         served = ", ".join(f"{n} {v:.2f} A·h" for n, v in shed["not_served_Ah"].items() if v > 0)
         when = ", ".join(f"{event['time_s'] / 60:.0f} min" for event in shed["events"])
-        lines.append(f"shed: switched off {', '.join(shed['switched_off'])} at {when}; "
+        off = f"; switched off {', '.join(shed['switched_off'])}" if shed["switched_off"] else ""
+        lines.append(f"shed: load of {', '.join(shed['generators'])} shed from {when}{off}; "
                      f"load not served {served or 'none'}")
     lines += [w if w.startswith("infeasible") else f"warning: {w}" for w in summary["warnings"]]
     return "\n".join(lines)
