@@ -330,8 +330,9 @@ class PlanningProblem:
         Longest window of the back-off, s (the management cycle: the filter corrects the state
         once per cycle, so model errors build up over at most one window).
     rest_budget_s : float
-        Total rest the plan may add, s (what is left of the flight's rest budget); the schedulers
-        bound each rest by ``max_rest_s`` and the manager cuts the total to this
+        Total rest the plan may add, s (what is left of the flight's rest budget): a constraint of
+        the optimal scheduler and of the lowest-peak search; the other schedulers bound each rest
+        by ``max_rest_s`` and the manager cuts their total to this, earliest rests kept
         (:meth:`Schedule.within_rest_budget`).
     rest_taken_s : float
         Rest already flown right before the first segment (a rest in progress), s: the rest
