@@ -99,7 +99,7 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
 
 def series_for(model: ThermalModel, data, dt_s: float | None = None) -> MeasuredSeries:
     """Measurements of ``data`` on a uniform grid for ``model``'s outputs."""
-    return measured_series(data, dt_s, model.output_names)
+    return measured_series(data, dt_s, model.output_names, model.spec.interface)
 
 
 @dataclasses.dataclass
@@ -391,7 +391,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                               explain(best, search, runner_up))
         if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
-                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names)["unexplained"]):
+                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names, model.spec.interface)["unexplained"]):
             iteration.pairs = PairSearch(search).rank(
                 ranked, progress=lambda done, total, label: report(f"pair {done}/{total} fitted: {label}"))
             chosen = choose_pair(iteration.pairs, ranked, search.noise)
@@ -413,7 +413,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         if not iterate or len(iterations) >= max_iterations:
             break
     noise = noise_std(series.outputs)
-    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names)
+    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names, model.spec.interface)
     report(residual["summary"])
     experiment, other = None, rival(iterations[0])
     if other is not None and design_experiment:

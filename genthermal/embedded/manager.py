@@ -23,7 +23,7 @@ from ..codegen import generate_c
 from ..design import linear_design_model
 from ..errors import InputError
 from ..estimation.kalman import THESIS_R_K2, KalmanFilter, output_matrices
-from ..losses import INPUT_NAMES
+from ..mission import input_columns
 from ..exciter import exciter_line
 from ..schedule.closed_loop import DEFAULT_MARGIN_K
 from ..schedule.power_system import PowerSystem
@@ -138,8 +138,9 @@ def sensor_states(model) -> tuple:
     if np.any(e != 0) or not np.all((C == 0) | (C == 1)) or not np.all(C.sum(axis=1) == 1):
         raise InputError("model outputs", model.output_names, "the onboard manager needs sensors that read one "
                          "node temperature each")
-    if tuple(model.input_names) != INPUT_NAMES:
-        raise InputError("model inputs", model.input_names, f"the onboard manager expects {INPUT_NAMES}")
+    expected = input_columns(model.spec.interface.generator)[1:]
+    if tuple(model.input_names) != expected:
+        raise InputError("model inputs", model.input_names, f"the onboard manager expects {expected}")
     return tuple(int(np.argmax(row)) for row in C)
 
 
