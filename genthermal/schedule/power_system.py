@@ -363,7 +363,8 @@ class PowerSystem:
                                  f"({mission.duration_s / 60.0:g} min): the fault would never happen")
         return cls(mission, names, faults,
                    rest_percent=_number(config, "rest_percent", "generators", 0.0, 100.0, "%", DEFAULT_REST_PERCENT),
-                   limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC", None),
+                   limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC")
+                   if "limit_C" in config else None,
                    current_limit_percent=_number(config, "current_limit_percent", "generators", 50.0, 150.0,
                                                  "%", 100.0),
                    plant_mismatch=factors, machine=machine)
