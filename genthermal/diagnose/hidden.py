@@ -146,11 +146,14 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
     healthy = simulate(plant, inputs)
     faulty = simulate(plant, inputs, switches=switches)
     changed = record.copy()
-    for column in [c for c in record.columns if c.startswith("T_winding_")]:
-        changed[column] += faulty["T_winding"] - healthy["T_winding"]
-    for column in ("T_iron", "T_outlet"):
-        if column in record and column in faulty:
-            changed[column] += faulty[column] - healthy[column]
+    interface = plant.spec.interface
+    sensors = [*interface.sensors, *([interface.outlet_sensor] if interface.outlet_sensor else [])]
+    for sensor in sensors:
+        if sensor.output not in faulty:
+            continue
+        for column in sensor.columns:
+            if column in record:
+                changed[column] += faulty[sensor.output] - healthy[sensor.output]
     return changed
 
 
