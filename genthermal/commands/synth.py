@@ -92,7 +92,7 @@ def apply_scenario_faults(plant, mission, dt_s: float, generator: int):
     if not 1 <= generator <= system.n_generators:
         raise InputError("--generator", generator, f"the scenario has generators 1..{system.n_generators}")
     index = generator - 1
-    inputs["T_inlet"] = system.inlet_C(index, inputs["time_s"].to_numpy())
+    inputs[plant.spec.interface.generator.coolant_input] = system.inlet_C(index, inputs["time_s"].to_numpy())
     faults = sorted((f for f in system.faults if f.generator == index), key=lambda f: f.onset_s)
     switches, model = [], plant
     for fault in faults:

@@ -199,7 +199,7 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
     inputs = load_mission(mission).to_inputs(dt_s)
     if unbalance:
         elapsed = inputs["time_s"] - inputs["time_s"].iloc[0]
-        inputs["I_u"] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
+        inputs[plant.spec.interface.generator.phase_inputs[0]] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
     duration = float(inputs["time_s"].iloc[-1] - inputs["time_s"].iloc[0])
     injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng) for e in effects]
     for injection in injections:

@@ -177,7 +177,8 @@ def blockage_flight(system: PowerSystem, rule_margin_K: float = DEFAULT_MARGIN_K
         raise InputError("generators/faults", f"{system.n_generators} generators, {len(faults)} fault(s)",
                          "the onboard manager flight needs 2 generators and one fault with an effect on the first")
     design = linear_design_model(system.nominal_model)
-    profile = system.mission.to_inputs(dt_s)["I_u"].to_numpy()[:-1]
+    first_phase = system.nominal_model.spec.interface.generator.phase_inputs[0]
+    profile = system.mission.to_inputs(dt_s)[first_phase].to_numpy()[:-1]
     settings = ManagerSettings(profile, system.limit_C - rule_margin_K, system.rest_current_A,
                                system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s)
     healthy, faulty = system.plant_model(0), system.plant_model(0, (0,))

@@ -40,8 +40,6 @@ UNITS = {
 }
 #: Start value of every state, °C (a cold machine at 20 °C); set them before initialisation.
 STATE_START_C = 20.0
-#: Start values of the inputs by name (A, °C).
-INPUT_START = {"T_inlet": 20.0, "T_ambient": 20.0}
 
 
 class FmuError(CodegenError):
@@ -62,11 +60,6 @@ class Variable:
     derivative_of: int | None = None
 
 
-def input_unit(name: str) -> str:
-    """Unit of a model input: A for currents (``I_*``), °C for temperatures (``T_*``)."""
-    return "A" if name.startswith("I_") else "degC"
-
-
 def variables(model: ThermalModel) -> list[Variable]:
     """Every variable of the FMU of ``model``, in value-reference order.
 
@@ -79,8 +72,8 @@ def variables(model: ThermalModel) -> list[Variable]:
                        STATE_START_C, "exact") for n in model.state_names]
     derivatives = [Variable(f"der(x_{n})", "local", "continuous", "K/s", f"d/dt of the temperature of node {n}",
                             derivative_of=i + 1) for i, n in enumerate(model.state_names)]
-    inputs = [Variable(n, "input", "continuous", input_unit(n), "RMS current" if n.startswith("I_") else
-                       "temperature", INPUT_START.get(n, 0.0)) for n in model.input_names]
+    inputs = [Variable(i.name, "input", "continuous", i.unit, i.description, i.default)
+              for i in model.spec.interface.inputs]
     outputs = [Variable(n, "output", "continuous", "degC", f"sensor temperature of node {model.spec.sensors[n]}")
                for n in model.output_names]
     parameters = []
