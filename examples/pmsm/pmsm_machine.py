@@ -88,38 +88,40 @@ INTERFACE = MachineInterface(
     rated_inputs={"motor_speed": 6000.0, "i_d": -90.0, "i_q": 120.0})
 
 
-def _p(name, value, unit, provenance, source, **bounds):
-    return Parameter(name, value, unit, provenance, source, **bounds)
-
-
 def default_parameters() -> ParameterSet:
     """Parameter set of the example motor with the provenance of every value."""
     return ParameterSet([
         # heat capacities, J/K: mass x specific heat (steel 460, copper 385 J/(kg K), literature)
-        _p("C_yoke", 3700.0, "J/K", "assumed", "8 kg of laminated steel x 460 J/(kg K)"),
-        _p("C_tooth", 1850.0, "J/K", "assumed", "4 kg of laminated steel x 460 J/(kg K)"),
-        _p("C_winding", 2300.0, "J/K", "assumed", "5 kg copper x 385 J/(kg K) + 0.3 kg resin/insulation"),
-        _p("C_rotor", 5200.0, "J/K", "assumed", "rotor lamination, shaft and 1.5 kg NdFeB lumped with the magnet"),
+        Parameter("C_yoke", 3700.0, "J/K", "assumed", "8 kg of laminated steel x 460 J/(kg K)"),
+        Parameter("C_tooth", 1850.0, "J/K", "assumed", "4 kg of laminated steel x 460 J/(kg K)"),
+        Parameter("C_winding", 2300.0, "J/K", "assumed", "5 kg copper x 385 J/(kg K) + 0.3 kg resin/insulation"),
+        Parameter("C_rotor", 5200.0, "J/K", "assumed",
+                  "rotor lamination, shaft and 1.5 kg NdFeB lumped with the magnet"),
         # conductances, W/K
-        _p("G_yoke_coolant", 65.0, "W/K", "assumed", "water jacket: h ~ 1500 W/(m^2 K) on ~0.06 m^2 of bore "
-           "in series with the housing-lamination contact"),
-        _p("G_yoke_tooth", 160.0, "W/K", "assumed", "radial conduction through the tooth roots (steel 25 W/(m K))"),
-        _p("G_winding_tooth", 28.0, "W/K", "assumed", "slot liner and impregnation between conductors and teeth"),
-        _p("G_winding_yoke", 6.0, "W/K", "assumed", "slot bottoms and end winding potting towards the housing"),
-        _p("G_air_gap", 3.5, "W/K", "assumed", "1 mm air gap, rotating-gap convection at a few thousand rpm"),
-        _p("G_rotor_ambient", 1.2, "W/K", "assumed", "shaft, bearings and end-space air towards the housing ends"),
-        _p("G_housing_ambient", 1.5, "W/K", "assumed", "natural convection from ~0.2 m^2 of housing"),
+        Parameter("G_yoke_coolant", 65.0, "W/K", "assumed", "water jacket: h ~ 1500 W/(m^2 K) on ~0.06 m^2 of "
+                  "bore in series with the housing-lamination contact"),
+        Parameter("G_yoke_tooth", 160.0, "W/K", "assumed",
+                  "radial conduction through the tooth roots (steel 25 W/(m K))"),
+        Parameter("G_winding_tooth", 28.0, "W/K", "assumed",
+                  "slot liner and impregnation between conductors and teeth"),
+        Parameter("G_winding_yoke", 6.0, "W/K", "assumed", "slot bottoms and end winding potting towards the housing"),
+        Parameter("G_air_gap", 3.5, "W/K", "assumed", "1 mm air gap, rotating-gap convection at a few thousand rpm"),
+        Parameter("G_rotor_ambient", 1.2, "W/K", "assumed",
+                  "shaft, bearings and end-space air towards the housing ends"),
+        Parameter("G_housing_ambient", 1.5, "W/K", "assumed", "natural convection from ~0.2 m^2 of housing"),
         # losses
-        _p("R_s0", 0.0125, "ohm", "assumed", "phase resistance at 0 °C: 0.0174 ohm at 100 °C, 590 W copper loss "
-           "at 150 A (~1.2 % of 50 kW)"),
-        _p("alpha_cu", 0.00393, "1/K", "literature", "temperature coefficient of copper resistivity near 20 °C"),
-        _p("P_fe_ref", 650.0, "W", "assumed", "iron loss at 6000 rpm (4 pole pairs: 400 Hz) in ~12 kg of stator steel, ~1.3 % of 50 kW",
-           lower_inclusive=True),
-        _p("n_ref", 6000.0, "rpm", "assumed", "reference speed of the loss maps: the rating point"),
-        _p("a_hyst", 0.55, "1", "assumed", "hysteresis share of the iron loss at n_ref (Bertotti split for "
-           "0.3 mm M330 lamination near 400 Hz)", lower_inclusive=True, upper=1.0),
-        _p("P_pm_ref", 150.0, "W", "assumed", "magnet eddy-current loss at n_ref from slot and PWM harmonics "
-           "(segmented magnets)", lower_inclusive=True),
+        Parameter("R_s0", 0.0125, "ohm", "assumed",
+                  "phase resistance at 0 °C: 0.0174 ohm at 100 °C, 590 W copper loss at 150 A (~1.2 % of 50 kW)"),
+        Parameter("alpha_cu", 0.00393, "1/K", "literature",
+                  "temperature coefficient of copper resistivity near 20 °C"),
+        Parameter("P_fe_ref", 650.0, "W", "assumed",
+                  "iron loss at 6000 rpm (4 pole pairs: 400 Hz) in ~12 kg of stator steel, ~1.3 % of 50 kW",
+                  lower_inclusive=True),
+        Parameter("n_ref", 6000.0, "rpm", "assumed", "reference speed of the loss maps: the rating point"),
+        Parameter("a_hyst", 0.55, "1", "assumed", "hysteresis share of the iron loss at n_ref (Bertotti split "
+                  "for 0.3 mm M330 lamination near 400 Hz)", lower_inclusive=True, upper=1.0),
+        Parameter("P_pm_ref", 150.0, "W", "assumed", "magnet eddy-current loss at n_ref from slot and PWM "
+                  "harmonics (segmented magnets)", lower_inclusive=True),
     ])
 
 

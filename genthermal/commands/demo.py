@@ -144,7 +144,8 @@ def blockage(plant, inputs, out: Path) -> dict:
     """The thesis large blockage without load management: the winding breaks its limit."""
     limited, limit = _limited_sensor(plant)
     faulty_inputs = inputs.copy()
-    faulty_inputs.loc[faulty_inputs["time_s"] >= BLOCKAGE_ONSET_S, plant.spec.interface.coolant_input] = BLOCKAGE_INLET_C
+    coolant = plant.spec.interface.coolant_input
+    faulty_inputs.loc[faulty_inputs["time_s"] >= BLOCKAGE_ONSET_S, coolant] = BLOCKAGE_INLET_C
     blocked = plant.with_effect("coolant_flow_reduction", **BLOCKAGE_EFFECT)
     result = simulate(plant, faulty_inputs, switches=[(BLOCKAGE_ONSET_S, blocked)])
     plot_simulation(result, plant.spec.interface, title="Large coolant blockage at 1.1 h, no load management",
