@@ -3,8 +3,9 @@
 Every command that uses a model names it the same way: ``--model NAME|FILE`` (a built-in or
 plug-in machine, optionally with its variant, ``genco_rf201a`` or ``genco_rf201a:linear``, a
 ``.py`` machine file, or a model file written by ``calibrate --out`` / ``diagnose --out``:
-:func:`genthermal.model_file.load_model`), and ``--param NAME=VALUE`` overrides parameters on top of it (to make a mismatched plant for ``synth``
-or a what-if for ``simulate``; provenance ``assumed``).
+:func:`genthermal.model_file.load_model`), and ``--param NAME=VALUE`` overrides parameters on top
+of it (to make a mismatched plant for ``synth`` or a what-if for ``simulate``; provenance
+``assumed``).
 """
 
 from __future__ import annotations
