@@ -62,7 +62,8 @@ def run(args) -> int:
     mission = load_mission(args.scenario)
     plant = model_from_args(args, source="synthetic plant, set on the command line")
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
-    frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
+    winding, iron = noise  # the outlet PT100 shares the iron's variance (--noise-iron)
+    frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=(winding, iron, iron), current_noise=current_noise,
                        switches=switches)
     out = write_csv(frame, args.out, float_format="%.5f")
     changed = "".join(f", {name}={value:g}" for name, value in overrides.items())

@@ -135,7 +135,8 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
            noise_var=THESIS_NOISE_VARIANCE_K2) -> pd.DataFrame:
     """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets."""
     dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
-    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=noise_var)
+    # the outlet PT100 is a channel of the iron PT100s kind: it shares their variance
+    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=(*noise_var, noise_var[-1]))
     if not injections:
         return record
     switches, model = [], plant
