@@ -154,3 +154,21 @@ def test_the_generator_power_system_refuses_the_motor(motor):
         PowerSystem(load_mission("thesis_fig_7_7"), model=motor)
     with pytest.raises(InputError, match="machine has no generator role"):
         planning_design_model(motor)
+
+
+def test_the_command_line_runs_on_the_motor(motor, tmp_path, capsys):
+    """compare, calibrate, estimate and diagnose read the motor's CSV schema through --model FILE."""
+    from genthermal.cli import main
+
+    data = tmp_path / "motor.csv"
+    record(motor, drive_cycle(2.0), x0=65.0).to_csv(data, index=False)
+    model = str(MACHINE_FILE)
+    assert main(["compare", str(data), "--model", model, "--report", str(tmp_path / "cmp")]) == 0
+    assert (tmp_path / "cmp" / "report.md").is_file()
+    assert main(["calibrate", str(data), "--model", model, "--params", "G_yoke_coolant",
+                 "--out", str(tmp_path / "fitted.yaml")]) == 0
+    assert main(["estimate", str(data), "--model", str(tmp_path / "fitted.yaml"), "--predict-from", "20"]) == 0
+    assert main(["diagnose", str(data), "--model", model]) == 0
+    out = capsys.readouterr().out
+    assert "T_stator_winding: RMSE" in out and "estimated unmeasured temperatures at the end" in out
+    assert "permanent_magnet" in out and "verdict: none" in out  # the true model: nothing is missing

@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
+from ..machines.interface import Role
 from ..measurements import MeasurementData, dataframe_to_measurements, load_measurements, resample
 from ..model import ThermalModel
 from ..simulate import simulate
@@ -44,9 +45,19 @@ LOAD_BANDS = ((40.0, "low load (< 40 %)"), (70.0, "medium load (40-70 %)"), (mat
 STEADY_RATE_K_PER_MIN = 0.05
 #: Window of the smoothed winding temperature derivative, s.
 RATE_WINDOW_S = 300.0
-#: Candidate regressors of the residual (column → label).
-REGRESSORS = {"I_squared": "mean I² [A²]", "theta_winding": "measured θ_w [°C]", "I_exc": "I_exc [A]",
-              "T_inlet": "T_inlet [°C]", "dtheta_dt": "dθ_w/dt [K/min]"}
+
+
+def regressors(interface) -> dict:
+    """Candidate regressors of the residual of a machine (column of the comparison frame → label):
+    the mean squared load current, the first sensor's temperature and its rate, the excitation
+    current when the machine has one, and the coolant temperature."""
+    columns = {"I_squared": "mean I² [A²]", "theta_winding": "measured θ_w [°C]"}
+    if interface.has_role(Role.EXCITATION_CURRENT):
+        excitation = interface.role(Role.EXCITATION_CURRENT)
+        columns[excitation] = f"{excitation} [A]"
+    columns[interface.coolant_input] = f"{interface.coolant_input} [°C]"
+    columns["dtheta_dt"] = "dθ_w/dt [K/min]"
+    return columns
 
 
 @dataclasses.dataclass(frozen=True)
@@ -202,12 +213,14 @@ class Comparison:
     source : str
     frame : pandas.DataFrame
         ``time_s``, inputs, ``<sensor>_measured``, ``<sensor>_model``, ``<sensor>_residual``
-        (model − measured, K) and the regressors of :data:`REGRESSORS`.
+        (model − measured, K) and the regressors (``regressor_labels``).
     metrics : dict
         JSON-ready: ``overall`` per sensor, ``by_load_band``, ``by_temperature_band``,
         ``by_heating``, ``by_hour`` (band → sensor → metrics), ``trend_K_per_h`` per sensor,
         ``initial_state``.
     output_names : list of str
+    regressor_labels : dict
+        Column of ``frame`` → label of the candidate regressors (:func:`regressors`).
     """
 
     model_name: str
@@ -215,6 +228,7 @@ class Comparison:
     frame: pd.DataFrame
     metrics: dict
     output_names: list
+    regressor_labels: dict = dataclasses.field(default_factory=dict)
 
     def rmse(self) -> float:
         """Root-mean-square error over every valid sample of every sensor, K."""
@@ -293,6 +307,6 @@ def compare(model: ThermalModel, data, dt_s: float | None = None) -> Comparison:
         "initial_state": {"a": float(coefficients[0]), "c_C": float(coefficients[1]),
                           "method": "blend of soaked and loaded steady state matching the first sample"},
     }
-    comparison = Comparison(model.name, series.source, frame, metrics, outputs)
+    comparison = Comparison(model.name, series.source, frame, metrics, outputs, regressors(model.spec.interface))
     metrics["rmse_all_sensors"] = comparison.rmse()
     return comparison
