@@ -22,7 +22,7 @@ import numpy as np
 from ..codegen import generate_c
 from ..design import linear_design_model
 from ..errors import InputError
-from ..estimation.kalman import THESIS_R_K2, KalmanFilter, output_matrices
+from ..estimation.kalman import KalmanFilter, output_matrices
 from ..mission import input_columns
 from ..exciter import exciter_line
 from ..schedule.closed_loop import DEFAULT_MARGIN_K
@@ -183,7 +183,8 @@ def blockage_flight(system: PowerSystem, rule_margin_K: float = DEFAULT_MARGIN_K
                                system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s)
     healthy, faulty = system.plant_model(0), system.plant_model(0, (0,))
     rng = np.random.default_rng(seed)
-    noise = rng.normal(0.0, np.sqrt(THESIS_R_K2), (len(profile) + spare_samples, 2, 2))
+    variances = np.asarray(healthy.spec.interface.noise_variances_K2)
+    noise = rng.normal(0.0, np.sqrt(variances), (len(profile) + spare_samples, 2, variances.size))
     flight = Flight(healthy, faulty, int(round(faults[0].onset_s / dt_s)), system.mission.T_inlet_C,
                     faults[0].inlet_rise_C, sensor_states(healthy), noise)
     return design, settings, flight

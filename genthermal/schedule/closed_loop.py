@@ -28,7 +28,6 @@ import dataclasses
 
 import numpy as np
 
-from ..estimation.kalman import THESIS_R_K2
 from ..simulate import simulate
 from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
@@ -344,7 +343,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     dt = settings.dt_s
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
     rng = np.random.default_rng(settings.seed)
-    noise_sd = np.sqrt(np.asarray(THESIS_R_K2))
+    noise_sd = np.sqrt(np.asarray(system.planning_model.spec.interface.noise_variances_K2))
     segments = mission_segments(system.mission)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
