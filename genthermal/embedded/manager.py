@@ -57,8 +57,10 @@ class ManagerSettings:
         Sample time, s.
     field_no_load_A, field_gain : float
         Exciter law ``I_exc = field_no_load_A + field_gain * I`` on the target: the least-squares
-        line of the AVR law (:func:`genthermal.exciter.exciter_line`, power factor 0.8 lagging,
-        7 A rated) over 0 … rated current, so that the C code needs no square root per sample.
+        line of the AVR law (:func:`genthermal.exciter.exciter_line`, power factor 0.8 lagging;
+        defaults: the default law at its default rating; :func:`blockage_flight` passes the
+        machine's generator law at its rated current) over 0 … rated current, so that the C code
+        needs no square root per sample.
     """
 
     profile_A: np.ndarray
@@ -177,10 +179,13 @@ def blockage_flight(system: PowerSystem, rule_margin_K: float = DEFAULT_MARGIN_K
         raise InputError("generators/faults", f"{system.n_generators} generators, {len(faults)} fault(s)",
                          "the onboard manager flight needs 2 generators and one fault with an effect on the first")
     design = linear_design_model(system.nominal_model)
-    first_phase = system.nominal_model.spec.interface.generator.phase_inputs[0]
-    profile = system.mission.to_inputs(dt_s)[first_phase].to_numpy()[:-1]
+    generator = system.nominal_model.spec.interface.generator
+    profile = system.mission.to_inputs(dt_s, generator)[generator.phase_inputs[0]].to_numpy()[:-1]
+    field_no_load_A, field_gain = exciter_line(rated_current_A=system.nominal_model.spec.rated_current_A,
+                                               law=generator.exciter_law)
     settings = ManagerSettings(profile, system.limit_C - rule_margin_K, system.rest_current_A,
-                               system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s)
+                               system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s,
+                               field_no_load_A=field_no_load_A, field_gain=field_gain)
     healthy, faulty = system.plant_model(0), system.plant_model(0, (0,))
     rng = np.random.default_rng(seed)
     variances = np.asarray(healthy.spec.interface.noise_variances_K2)
