@@ -172,3 +172,21 @@ def test_the_command_line_runs_on_the_motor(motor, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "T_stator_winding: RMSE" in out and "estimated unmeasured temperatures at the end" in out
     assert "permanent_magnet" in out and "verdict: none" in out  # the true model: nothing is missing
+
+
+def test_the_motor_exports_as_an_fmu_with_its_units(motor, tmp_path):
+    pytest.importorskip("fmpy")
+    from fmpy.model_description import read_model_description
+
+    from genthermal.fmu import export_fmu
+
+    try:
+        find_compiler()
+    except CompilerNotFoundError as exc:
+        pytest.skip(f"no C compiler: {exc}")
+    export = export_fmu(motor, tmp_path / "pmsm.fmu")
+    description = read_model_description(str(export.path))
+    units = {unit.name: unit for unit in description.unitDefinitions}
+    assert {"rpm", "W/K", "J/K", "degC"} <= set(units)
+    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
+    assert inputs == list(motor.input_names)

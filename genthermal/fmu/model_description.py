@@ -16,13 +16,18 @@ parameters use. A unit outside it cannot be declared and is refused (:class:`Fmu
 from __future__ import annotations
 
 import dataclasses
+import math
 import xml.etree.ElementTree as ET
 
 from ..codegen import CodegenError
 from ..model import ThermalModel
 
-#: FMI unit name -> SI base-unit exponents (and for degC the offset to kelvin).
+#: FMI unit name -> SI base-unit exponents (and for degC the offset to kelvin, for rpm the factor
+#: to rad/s).
 UNITS = {
+    "rpm": {"rad": 1, "s": -1, "factor": 2 * math.pi / 60.0},
+    "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1},
+    "J/K": {"kg": 1, "m": 2, "s": -2, "K": -1},
     "1": {},
     "m": {"m": 1},
     "A": {"A": 1},
@@ -121,8 +126,12 @@ def description_xml(model: ThermalModel, model_identifier: str, guid: str, sourc
             if name.endswith(".c"):
                 ET.SubElement(files, "File", {"name": name})
     units = ET.SubElement(root, "UnitDefinitions")
+    unknown = sorted({v.unit for v in every} - set(UNITS))
+    if unknown:
+        raise FmuError(f"unit {unknown[0]!r} of {model.name} has no FMI base-unit definition "
+                       f"(known: {', '.join(UNITS)}); add it to genthermal.fmu.model_description.UNITS")
     for name in sorted({v.unit for v in every}):
-        base = {k: str(v) for k, v in UNITS[name].items()}
+        base = {k: repr(v) if isinstance(v, float) else str(v) for k, v in UNITS[name].items()}
         ET.SubElement(ET.SubElement(units, "Unit", {"name": name}), "BaseUnit", base)
     ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": "14400", "tolerance": "1e-8"})
     listed = ET.SubElement(root, "ModelVariables")
