@@ -78,6 +78,7 @@ SENSORS = (
 ROLES = {
     Role.SLOT_WINDING: "stator_winding",
     Role.IRON: IRON_NODES,
+    Role.ROTOR: ("permanent_magnet",),  # the rotor is lumped with its magnets
     Role.WINDING_INSULATION: (("stator_winding", "stator_tooth"), ("stator_winding", "stator_yoke")),
     Role.FRAME_TO_AMBIENT: (("stator_yoke", "ambient"),),
     Role.LOAD_CURRENTS: CURRENTS,

@@ -59,7 +59,8 @@ def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
     """Node groups of ``model`` for extra heat flows: plain name → capacitive nodes."""
     roles, states = model.spec.roles, set(model.state_names)
     groups = {"slot winding": (roles.get(Role.SLOT_WINDING),), "end windings": tuple(roles.get(Role.END_WINDINGS, ())),
-              "stator iron": tuple(roles.get(Role.IRON, ())), "rotor": ("rotor",), "frame": ("frame",)}
+              "stator iron": tuple(roles.get(Role.IRON, ())), "rotor": tuple(roles.get(Role.ROTOR, ())),
+              "frame": tuple(roles.get(Role.FRAME, ()))}
     return {g: nodes for g, nodes in groups.items() if nodes and all(n in states for n in nodes)}
 
 

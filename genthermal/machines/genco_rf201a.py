@@ -67,6 +67,8 @@ ROLES = {
     Role.SLOT_WINDING: "stator_winding",
     Role.END_WINDINGS: ("end_winding_in", "end_winding_out"),
     Role.IRON: IRON_NODES,
+    Role.ROTOR: ("rotor",),
+    Role.FRAME: ("frame",),
     Role.WINDING_INSULATION: (("stator_winding_radial", "yoke_teeth_interface"),
                               ("stator_winding_radial", "stator_teeth_radial")),
     Role.FRAME_TO_AMBIENT: (("frame", "ambient"),),

@@ -33,7 +33,8 @@ class Role(enum.Enum):
 
     The value a machine gives each role is, by role:
 
-    * node roles (``SLOT_WINDING``: a node; ``END_WINDINGS``, ``IRON``: tuples of nodes),
+    * node roles (``SLOT_WINDING``: a node; ``END_WINDINGS``, ``IRON``, ``ROTOR``, ``FRAME``: tuples
+      of nodes),
     * link roles (``WINDING_INSULATION``, ``FRAME_TO_AMBIENT``: tuples of (node, node) links),
     * ``INTERNAL_CONVECTION``: names of convection-coefficient parameters swept by the coolant flow,
     * ``COOLANT_FLOW``: True when the coolant is modelled as advected air streams,
@@ -46,6 +47,8 @@ class Role(enum.Enum):
     SLOT_WINDING = "slot_winding"
     END_WINDINGS = "end_windings"
     IRON = "iron"
+    ROTOR = "rotor"
+    FRAME = "frame"
     WINDING_INSULATION = "winding_insulation"
     FRAME_TO_AMBIENT = "frame_to_ambient"
     INTERNAL_CONVECTION = "internal_convection"
