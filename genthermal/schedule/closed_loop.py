@@ -246,7 +246,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
-    relaxed = _within_budget(problem, run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)))
+    within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
+    relaxed = _within_budget(problem, run(within_lowest))
     if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
         relaxed = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(relaxed.warnings))
     response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
