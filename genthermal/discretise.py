@@ -28,7 +28,7 @@ This module is the only place that integrates a model over a step. Its consumers
 :func:`discretise`); calibration's :class:`~genthermal.diagnose.trajectory.ParametricSimulator`
 (through :func:`parametric_step`: the same scheme with the parameters symbolic, so its derivatives
 with respect to them are exact); the schedulers' design generators and the MILP's prediction
-matrices (through :func:`zoh_matrices` and :class:`ModalDecay`, the exact zero-order hold of an
+matrices (through :func:`phi_matrices` and :class:`ModalDecay`, the exact zero-order hold of an
 affine model at a numeric or a free step length).
 
 Matrix exponential
@@ -59,7 +59,7 @@ from .errors import InputError
 from .model import ThermalModel
 
 
-#: Taylor degree of the symbolic :math:`\varphi_2` series (truncation below 1e-15 at
+#: Taylor degree of the :math:`\varphi_2` series (truncation below 1e-15 at
 #: :math:`\lVert A\rVert_1 \le 1`).
 PHI_TAYLOR_DEGREE = 16
 #: How much larger than at the nominal parameters :math:`\lVert hL(\theta)\rVert_1` may become
@@ -86,25 +86,6 @@ def phi_matrices(L: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nd
         raise InputError("h_s", h, "the step length must be a number of seconds >= 0")
     L = np.asarray(L, dtype=float)
     return _phi_series(L, float(h), _doublings(L, h, 1.0), np.eye(L.shape[0]))
-
-
-def zoh_matrices(L: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact zero-order hold of :math:`\\dot x = Lx + f` over ``h`` s: :math:`x^+ = Ex + \\Gamma_1 f`.
-
-    Parameters
-    ----------
-    L : numpy.ndarray
-        State matrix, 1/s, (n_states × n_states).
-    h : float
-        Step length, s (>= 0).
-
-    Returns
-    -------
-    (numpy.ndarray, numpy.ndarray)
-        :math:`E = e^{hL}` (dimensionless) and :math:`\\Gamma_1 = \\int_0^h e^{Ls}ds` (s).
-    """
-    E, G1, _ = phi_matrices(L, h)
-    return E, G1
 
 
 def symbolic_phi_matrices(L: ca.SX, h: float, nominal_L: np.ndarray) -> tuple[ca.SX, ca.SX, ca.SX]:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from genthermal.discretise import (PHI_NORM_HEADROOM, ModalDecay, parametric_step, phi_matrices,
-                                   symbolic_phi_matrices, zoh_matrices)
+                                   symbolic_phi_matrices)
 from genthermal.errors import InputError
 
 
@@ -35,8 +35,8 @@ def test_numeric_exponential_matches_40_digits(plant_model, h):
 
 
 def test_zero_step_is_the_identity(plant_model):
-    E, G1 = zoh_matrices(_state_matrix(plant_model), 0.0)
-    assert np.array_equal(E, np.eye(8)) and not G1.any()
+    E, G1, G2 = phi_matrices(_state_matrix(plant_model), 0.0)
+    assert np.array_equal(E, np.eye(8)) and not G1.any() and not G2.any()
 
 
 @pytest.mark.parametrize("factor", [1.0, 0.05, 30.0])
@@ -65,7 +65,7 @@ def test_parametric_step_is_the_discrete_step(plant_model, design_model, dt_s):
 def test_modal_decay_is_the_exponential(design_model):
     L = _state_matrix(design_model)
     decay, v = ModalDecay.of(L, design_model.name), np.linspace(-5.0, 40.0, 8)
-    E, _ = zoh_matrices(L, 450.0)
+    E = phi_matrices(L, 450.0)[0]
     assert np.max(np.abs(decay.apply(v, 450.0) - E @ v)) < 1e-10
     h = ca.SX.sym("h")
     symbolic = ca.Function("decay", [h], [decay.apply(v, h)])

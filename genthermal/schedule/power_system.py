@@ -40,7 +40,7 @@ import numpy as np
 from ..coolant import OUTLET_DIAMETER_MM, inlet_rise, outlet_flow_fraction
 from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
-from ..discretise import ModalDecay, zoh_matrices
+from ..discretise import ModalDecay, phi_matrices
 from ..effects import get_effect
 from ..errors import InputError
 from ..losses import INPUT_NAMES
@@ -183,7 +183,7 @@ class AffineGenerator:
     :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases; :math:`I_{exc} \approx I_{exc,0} + g_{exc} I`,
     the least-squares line of the AVR exciter law at the load's power factor,
     :func:`genthermal.exciter.exciter_line`). Time stepping is :mod:`genthermal.discretise`'s:
-    :meth:`step` is its exact zero-order hold (:func:`~genthermal.discretise.zoh_matrices`), and
+    :meth:`step` is its exact zero-order hold (:func:`~genthermal.discretise.phi_matrices`), and
     ``decay`` (:class:`~genthermal.discretise.ModalDecay`) gives a rest of free length :math:`h` at
     constant input exactly, :math:`x(h) = x_{ss} + e^{hL}(x(0) - x_{ss})`.
 
@@ -230,10 +230,10 @@ class AffineGenerator:
 
     def step(self, h_s: float) -> tuple[np.ndarray, np.ndarray]:
         r"""Exact ZOH step of length ``h_s`` (s): :math:`x^+ = Ex + \Gamma(Bu + c)` → ``(E, Γ)``,
-        by :func:`genthermal.discretise.zoh_matrices` (cached per length)."""
+        by :func:`genthermal.discretise.phi_matrices` (cached per length)."""
         key = round(float(h_s), 9)
         if key not in self._steps:
-            self._steps[key] = zoh_matrices(self.L, key)
+            self._steps[key] = phi_matrices(self.L, key)[:2]
         return self._steps[key]
 
     def steady_state(self, u: np.ndarray) -> np.ndarray:
