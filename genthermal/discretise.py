@@ -34,8 +34,8 @@ affine model at a numeric or a free step length).
 Matrix exponential
 ------------------
 :math:`E, \Gamma_1, \Gamma_2` come from one scaled Taylor series, with numbers
-(:func:`phi_matrices`) or with the parameters symbolic (:func:`symbolic_phi_matrices`): with
-:math:`A = hL/2^s`, :math:`\varphi_2(A) = \sum_{j=0}^{m} A^j/(j+2)!` (Horner, :math:`m` =
+(:func:`phi_matrices`) or with the parameters symbolic (:func:`symbolic_phi_function`): with
+:math:`A = hL/2^s`, :math:`\varphi_2(A) = \sum_{j=0}^{m} A^j/(j+2)!` (Paterson-Stockmeyer, :math:`m` =
 :data:`PHI_TAYLOR_DEGREE`), :math:`\varphi_1 = I + A\varphi_2`, :math:`D = e^{A} - I = A\varphi_1`,
 then :math:`s` doublings of the step length :math:`\tau \to 2\tau`:
 :math:`\Gamma_2 \to (2I + D)\Gamma_2 + \tau\Gamma_1`, :math:`\Gamma_1 \to (2I + D)\Gamma_1`,
@@ -65,6 +65,8 @@ PHI_TAYLOR_DEGREE = 16
 #: How much larger than at the nominal parameters :math:`\lVert hL(\theta)\rVert_1` may become
 #: before the symbolic exponential's scaled norm exceeds 1 (a fit moves rates by far less).
 PHI_NORM_HEADROOM = 1024.0
+#: Block of the Paterson-Stockmeyer evaluation of the series (powers of A up to A^4).
+_PS_BLOCK = 4
 
 
 def phi_matrices(L: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -85,24 +87,44 @@ def phi_matrices(L: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.nd
     if not (np.isfinite(h) and h >= 0):
         raise InputError("h_s", h, "the step length must be a number of seconds >= 0")
     L = np.asarray(L, dtype=float)
-    return _phi_series(L, float(h), _doublings(L, h, 1.0), np.eye(L.shape[0]))
+    doublings = _doublings(L, h, 1.0)
+    tau = float(h) / 2.0 ** doublings
+    D, G1, G2 = _series(L, tau, np.eye(L.shape[0]))
+    for _ in range(doublings):
+        D, G1, G2 = _doubled(D, G1, G2, tau)
+        tau *= 2.0
+    return np.eye(L.shape[0]) + D, G1, G2
 
 
-def symbolic_phi_matrices(L: ca.SX, h: float, nominal_L: np.ndarray) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """:math:`(e^{hL}, \\Gamma_1, \\Gamma_2)` of a symbolic ``L`` (scaling and squaring, see the
-    module docstring), differentiable in whatever ``L`` depends on.
+def symbolic_phi_function(n_states: int, h: float, nominal_L: np.ndarray) -> ca.Function:
+    """``(L) -> (E, Γ1, Γ2)`` for a symbolic ``L`` (scaling and squaring, see the module docstring),
+    differentiable in whatever ``L`` depends on.
+
+    An MX function calling two small SX blocks (the series, one doubling): their derivatives are
+    built once however many doublings there are, so differentiating it stays cheap.
 
     Parameters
     ----------
-    L : casadi.SX
-        State matrix, 1/s, (n_states × n_states), e.g. a function of symbolic parameters.
+    n_states : int
+        Size of ``L``.
     h : float
         Step length, s (> 0).
     nominal_L : numpy.ndarray
-        ``L`` at the nominal parameters: sets the number of doublings (with
+        ``L`` (1/s) at the nominal parameters: sets the number of doublings (with
         :data:`PHI_NORM_HEADROOM`).
     """
-    return _phi_series(L, float(h), _doublings(np.asarray(nominal_L), h, PHI_NORM_HEADROOM), ca.SX.eye(L.size1()))
+    doublings = _doublings(np.asarray(nominal_L), h, PHI_NORM_HEADROOM)
+    tau = h / 2.0 ** doublings
+    L_block, identity = ca.SX.sym("L", n_states, n_states), ca.SX.eye(n_states)
+    series = ca.Function("phi_series", [L_block], list(_series(L_block, tau, identity)))
+    blocks = [ca.SX.sym(name, n_states, n_states) for name in ("D", "G1", "G2")] + [ca.SX.sym("tau")]
+    doubling = ca.Function("phi_doubling", blocks, list(_doubled(*blocks)))
+    L = ca.MX.sym("L", n_states, n_states)
+    D, G1, G2 = series(L)
+    for _ in range(doublings):
+        D, G1, G2 = doubling(D, G1, G2, tau)
+        tau *= 2.0
+    return ca.Function("phi_matrices", [L], [ca.MX.eye(n_states) + D, G1, G2], ["L"], ["E", "G1", "G2"])
 
 
 def _doublings(L: np.ndarray, h: float, headroom: float) -> int:
@@ -111,23 +133,27 @@ def _doublings(L: np.ndarray, h: float, headroom: float) -> int:
     return max(0, int(np.ceil(np.log2(norm)))) if norm > 1.0 else 0
 
 
-def _phi_series(L, h: float, doublings: int, identity):
-    """Taylor series of :math:`\\varphi_2` at :math:`hL/2^s`, then ``doublings`` doublings (module
-    docstring); ``L`` and ``identity`` both numpy arrays or both CasADi SX."""
-    tau = h / 2.0 ** doublings
+def _series(L, tau: float, identity):
+    """``(D, Γ1, Γ2)`` at step ``tau`` from the Taylor series of :math:`\\varphi_2(\\tau L)`
+    (:math:`D = e^{\\tau L} - I`); ``L`` and ``identity`` both numpy arrays or both CasADi SX."""
     A = tau * L
-    phi2 = identity / math.factorial(PHI_TAYLOR_DEGREE + 2)
-    for j in reversed(range(PHI_TAYLOR_DEGREE)):
-        phi2 = identity / math.factorial(j + 2) + A @ phi2
+    powers = [identity, A]  # Paterson-Stockmeyer: I..A^q, then Horner in A^q (q + m/q products)
+    for _ in range(_PS_BLOCK - 1):
+        powers.append(A @ powers[-1])
+    coefficients = [1.0 / math.factorial(j + 2) for j in range(PHI_TAYLOR_DEGREE + 1)]
+    blocks = [sum((c * powers[r] for r, c in enumerate(coefficients[i:i + _PS_BLOCK])), 0.0 * identity)
+              for i in range(0, len(coefficients), _PS_BLOCK)]
+    phi2 = blocks[-1]
+    for block in reversed(blocks[:-1]):
+        phi2 = block + powers[_PS_BLOCK] @ phi2
     phi1 = identity + A @ phi2
-    # D = E - I, doubled without forming E (I + a small D would lose D's digits at every doubling)
-    D, G1, G2 = A @ phi1, tau * phi1, tau ** 2 * phi2
-    for _ in range(doublings):
-        G2 = 2.0 * G2 + D @ G2 + tau * G1
-        G1 = 2.0 * G1 + D @ G1
-        D = 2.0 * D + D @ D
-        tau *= 2.0
-    return identity + D, G1, G2
+    return A @ phi1, tau * phi1, tau ** 2 * phi2
+
+
+def _doubled(D, G1, G2, tau):
+    """``(D, Γ1, Γ2)`` at step ``2 tau`` from those at ``tau`` (D = E - I is doubled without forming
+    E: I + a small D would lose D's digits at every doubling)."""
+    return 2.0 * D + D @ D, 2.0 * G1 + D @ G1, 2.0 * G2 + D @ G2 + tau * G1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,10 +263,33 @@ def discretise(model: ThermalModel, dt_s: float) -> DiscreteModel:
     return DiscreteModel(model, float(dt_s), step, forced, True, E, G1 @ B, G1 @ c)
 
 
-def parametric_step(model: ThermalModel, x: ca.SX, u: ca.SX, p: ca.SX, dt_s: float) -> ca.SX:
-    """The step of :func:`discretise` with symbolic parameters ``p``: ``x_next`` as an SX
-    expression of ``(x, u, p)``, exact in ``p`` (matrix exponential by
-    :func:`symbolic_phi_matrices`); calibration differentiates it.
+@dataclasses.dataclass(frozen=True)
+class ParametricStep:
+    """The step of :func:`discretise` with symbolic parameters, exact in them; calibration
+    differentiates it. In two parts, so that the matrix exponential, which depends on the
+    parameters only, is computed once per trajectory: ``x_next`` uses the symbols ``phis``, whose
+    values are ``exponential(state_matrix)``.
+
+    Attributes
+    ----------
+    x_next : casadi.SX
+        State after the step (°C), an expression of ``(x, u, p)`` and ``phis``.
+    phis : tuple of casadi.SX
+        Symbols of :math:`(e^{hL}, \\Gamma_1, \\Gamma_2)`, each (n_states × n_states).
+    state_matrix : casadi.SX
+        :math:`L(p)`, 1/s.
+    exponential : casadi.Function
+        ``(L) -> (E, Γ1, Γ2)``, :func:`symbolic_phi_function`.
+    """
+
+    x_next: ca.SX
+    phis: tuple
+    state_matrix: ca.SX
+    exponential: ca.Function
+
+
+def parametric_step(model: ThermalModel, x: ca.SX, u: ca.SX, p: ca.SX, dt_s: float) -> ParametricStep:
+    """The step of :func:`discretise` with symbolic parameters ``p`` (see :class:`ParametricStep`).
 
     Parameters
     ----------
@@ -254,9 +303,11 @@ def parametric_step(model: ThermalModel, x: ca.SX, u: ca.SX, p: ca.SX, dt_s: flo
     """
     if not (np.isfinite(dt_s) and dt_s > 0):
         raise InputError("dt_s", dt_s, "the step length must be a positive number of seconds")
+    n = model.n_states
     nominal_L = np.asarray(_state_matrix(model, ca.DM(model.p0)))
-    phis = symbolic_phi_matrices(_state_matrix(model, p), dt_s, nominal_L)
-    return step_expression(model, x, u, ca.SX.zeros(model.n_states), p, dt_s, phis)
+    phis = tuple(ca.SX.sym(name, n, n) for name in ("E", "G1", "G2"))
+    return ParametricStep(step_expression(model, x, u, ca.SX.zeros(n), p, dt_s, phis), phis,
+                          _state_matrix(model, p), symbolic_phi_function(n, dt_s, nominal_L))
 
 
 def _state_matrix(model: ThermalModel, p):

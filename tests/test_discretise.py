@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from genthermal.discretise import (PHI_NORM_HEADROOM, ModalDecay, parametric_step, phi_matrices,
-                                   symbolic_phi_matrices)
+                                   symbolic_phi_function)
 from genthermal.errors import InputError
 
 
@@ -44,7 +44,8 @@ def test_symbolic_exponential_holds_far_from_the_nominal_parameters(plant_model,
     """Built for the nominal ``L``, evaluated at ``L`` scaled by ``factor`` (a fit moving every rate)."""
     nominal = _state_matrix(plant_model)
     symbol = ca.SX.sym("k")
-    phis = ca.Function("phis", [symbol], list(symbolic_phi_matrices(symbol * ca.DM(nominal), 60.0, nominal)))
+    exponential = symbolic_phi_function(8, 60.0, nominal)
+    phis = ca.Function("phis", [symbol], exponential.call([symbol * ca.DM(nominal)]))
     assert factor < PHI_NORM_HEADROOM
     for got, expected in zip(phis(factor), _reference_phis(factor * nominal, 60.0)):
         assert np.max(np.abs(np.asarray(got) - expected)) <= 1e-12 * np.max(np.abs(expected))
@@ -57,9 +58,12 @@ def test_parametric_step_is_the_discrete_step(plant_model, design_model, dt_s):
     u0 = plant_model.input_vector(5.0, 6.0, 7.0, 1.0, 40.0, 30.0)
     for model in (plant_model, design_model):
         p = ca.SX.sym("p", len(model.p0))
-        step = ca.Function("step", [x, u, p], [parametric_step(model, x, u, p, dt_s)])
+        parametric = parametric_step(model, x, u, p, dt_s)
+        step = ca.Function("step", [x, u, p, *parametric.phis], [parametric.x_next])
+        L = ca.Function("L", [p], [parametric.state_matrix])(model.p0)
+        got = step(x0, u0, model.p0, *parametric.exponential.call([L]))
         expected = np.asarray(model.discretise(dt_s).step(x0, u0))
-        assert np.max(np.abs(np.asarray(step(x0, u0, model.p0)) - expected)) < 1e-10
+        assert np.max(np.abs(np.asarray(got) - expected)) < 1e-10
 
 
 def test_modal_decay_is_the_exponential(design_model):

@@ -103,14 +103,16 @@ class ParametricSimulator:
         theta = ca.SX.sym("theta", len(self.fitted))
         x, u, s = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("s", n_regimes)
         parameters = [self._regime_parameters(theta, r) for r in self.regimes]
-        steps = [parametric_step(model, x, u, p, self.dt_s) for p in parameters]
+        regime_steps = [parametric_step(model, x, u, p, self.dt_s) for p in parameters]
         outputs = [model.functions["outputs"](x, u, p) for p in parameters]
         x_next, y = ((sum((s[r] * parts[r] for r in range(n_regimes)), ca.SX(0)) if n_regimes > 1 else parts[0])
-                     for parts in (steps, outputs))
+                     for parts in ([regime.x_next for regime in regime_steps], outputs))
         (x_next, y), symbols, parametric = ca.extract_parametric([x_next, y], theta, {"extract_trivial": True})
         e = ca.vertcat(*symbols) if symbols else ca.SX.zeros(0)
-        step = ca.Function("step", [x, ca.vertcat(u, s), e], [x_next, y])
+        phis = ca.vertcat(*[ca.vec(m) for regime in regime_steps for m in regime.phis])
+        step = ca.Function("step", [x, ca.vertcat(u, s), e, phis], [x_next, y])
         hoisted = ca.Function("hoisted", [theta], [ca.vertcat(*parametric) if parametric else ca.SX.zeros(0)])
+        state_matrices = ca.Function("state_matrices", [theta], [regime.state_matrix for regime in regime_steps])
         J0, f00 = _affine_parts(model, parameters[0], x, u)
         steady = ca.Function("steady", [u, theta], [-ca.solve(J0, f00)])
 
@@ -118,13 +120,21 @@ class ParametricSimulator:
         S = ca.MX.sym("indicator", n_regimes, self.n_samples)
         U = ca.MX.sym("inputs", nu, self.n_samples)
         x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index("T_inlet"), 0])
-        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th))
-        decision = ca.vertcat(th, ac)
+        exponentials = ca.vertcat(*[ca.vec(m) for regime, L in zip(regime_steps, state_matrices.call([th]))
+                                    for m in regime.exponential(L)])
+        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th), exponentials)
         args = [th, ac, S, U]
         self._trajectory = ca.Function("trajectory", args, [Y], ["theta", "x0_coefficients", "indicator", "inputs"], ["y"])
-        self._with_jacobian = ca.Function("trajectory_jac", args, [Y, ca.jacobian(ca.vec(Y), decision)])
-        self._with_theta_jacobian = ca.Function("trajectory_jac_theta", args, [Y, ca.jacobian(ca.vec(Y), th)])
+        self._jacobian_of = (args, Y, {"decision": ca.vertcat(th, ac), "theta": th})
+        self._jacobians: dict = {}  # built on first use (most callers need one or none), shared by with_inputs
         self._steady = steady
+
+    def _jacobian_function(self, wrt: str) -> ca.Function:
+        """``(...) -> (Y, d vec(Y)/d wrt)`` for ``wrt`` "decision" (theta, a, c) or "theta"."""
+        if wrt not in self._jacobians:
+            args, Y, variables = self._jacobian_of
+            self._jacobians[wrt] = ca.Function(f"trajectory_jac_{wrt}", args, [Y, ca.jacobian(ca.vec(Y), variables[wrt])])
+        return self._jacobians[wrt]
 
     def with_inputs(self, inputs: np.ndarray) -> "ParametricSimulator":
         """The same simulator (same model, parameters, regimes, period, length) on other inputs."""
@@ -159,12 +169,12 @@ class ParametricSimulator:
     def outputs_and_jacobian(self, theta, x0_coefficients, indicator) -> tuple[np.ndarray, np.ndarray]:
         """Outputs and the exact Jacobian of ``vec(Y)`` (column-major: samples of output 0 and 1
         interleaved per sample) w.r.t. ``(theta, a, c)``, shape (n_outputs·N, n_theta + 2)."""
-        Y, jac = self._with_jacobian(theta, x0_coefficients, indicator, self.inputs)
+        Y, jac = self._jacobian_function("decision")(theta, x0_coefficients, indicator, self.inputs)
         return np.asarray(Y), np.asarray(jac)
 
     def outputs_and_theta_jacobian(self, theta, x0_coefficients, indicator) -> tuple[np.ndarray, np.ndarray]:
         """As :meth:`outputs_and_jacobian`, w.r.t. ``theta`` only (initial state held)."""
-        Y, jac = self._with_theta_jacobian(theta, x0_coefficients, indicator, self.inputs)
+        Y, jac = self._jacobian_function("theta")(theta, x0_coefficients, indicator, self.inputs)
         return np.asarray(Y), np.asarray(jac)
 
     def steady_state(self, theta) -> np.ndarray:
