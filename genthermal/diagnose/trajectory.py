@@ -5,10 +5,11 @@ zero-order hold) by :func:`genthermal.discretise.parametric_step`: the step :fun
 <genthermal.simulate.simulate>`, the filters and the C library take (exact for an affine model,
 ETD2RK otherwise), with the fitted parameters :math:`\theta` symbolic, so trajectories equal
 ``simulate``'s to round-off and their derivatives are exact. Everything that depends on
-:math:`\theta` only (conductances, capacitances, the elimination of the massless nodes, the matrix
-exponential) is extracted from the step by ``casadi.extract_parametric`` and evaluated once per
-trajectory, so a 4-hour run at 10 s costs a few ms and its exact Jacobian
-:math:`\partial y/\partial\theta` (forward AD through ``mapaccum``) a few times that.
+:math:`\theta` only is evaluated once per trajectory: the matrix exponential
+(:func:`genthermal.discretise.symbolic_phi_function`) and what ``casadi.extract_parametric``
+extracts from the step (conductances, capacitances, the elimination of the massless nodes). A
+4-hour run at 10 s costs about 3 ms of CPU and its exact Jacobian :math:`\partial y/\partial\theta`
+(forward AD through ``mapaccum``, two parameters and the initial state) about 50 ms.
 
 Parameters can change at an onset: the simulator takes *regimes* (parameter overrides) and a
 one-hot indicator per sample saying which regime holds — the semantics of
