@@ -50,6 +50,7 @@ that factor larger than at their nominal values.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import casadi as ca
@@ -113,7 +114,13 @@ def symbolic_phi_function(n_states: int, h: float, nominal_L: np.ndarray) -> ca.
         ``L`` (1/s) at the nominal parameters: sets the number of doublings (with
         :data:`PHI_NORM_HEADROOM`).
     """
-    doublings = _doublings(np.asarray(nominal_L), h, PHI_NORM_HEADROOM)
+    return _phi_function(int(n_states), float(h), _doublings(np.asarray(nominal_L), h, PHI_NORM_HEADROOM))
+
+
+@functools.lru_cache(maxsize=64)
+def _phi_function(n_states: int, h: float, doublings: int) -> ca.Function:
+    """:func:`symbolic_phi_function` for ``doublings``; one instance per key, so that CasADi builds
+    the derivatives of its blocks once for every simulator that uses it."""
     tau = h / 2.0 ** doublings
     L_block, identity = ca.SX.sym("L", n_states, n_states), ca.SX.eye(n_states)
     series = ca.Function("phi_series", [L_block], list(_series(L_block, tau, identity)))
