@@ -111,7 +111,8 @@ class ParametricSimulator:
         (x_next, y), symbols, parametric = ca.extract_parametric([x_next, y], theta, {"extract_trivial": True})
         e = ca.vertcat(*symbols) if symbols else ca.SX.zeros(0)
         phis = ca.vertcat(*[ca.vec(m) for regime in regime_steps for m in regime.phis])
-        step = ca.Function("step", [x, ca.vertcat(u, s), e, phis], [x_next, y])
+        used = [i for i, depends in enumerate(ca.which_depends(x_next, phis, 1, False)) if depends]
+        step = ca.Function("step", [x, ca.vertcat(u, s), e, phis[used]], [x_next, y])
         hoisted = ca.Function("hoisted", [theta], [ca.vertcat(*parametric) if parametric else ca.SX.zeros(0)])
         state_matrices = ca.Function("state_matrices", [theta], [regime.state_matrix for regime in regime_steps])
         J0, f00 = _affine_parts(model, parameters[0], x, u)
@@ -122,7 +123,7 @@ class ParametricSimulator:
         U = ca.MX.sym("inputs", nu, self.n_samples)
         x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index("T_inlet"), 0])
         exponentials = ca.vertcat(*[ca.vec(m) for regime, L in zip(regime_steps, state_matrices.call([th]))
-                                    for m in regime.exponential(L)])
+                                    for m in regime.exponential(L)])[used]  # the entries the step uses
         _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th), exponentials)
         args = [th, ac, S, U]
         self._trajectory = ca.Function("trajectory", args, [Y], ["theta", "x0_coefficients", "indicator", "inputs"], ["y"])
