@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from genthermal.diagnose.discover import diagnose
+from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import make_hidden_effect_case
 from genthermal.effects import CATALOGUE
 from genthermal.machines import build_model
@@ -39,11 +39,11 @@ def main() -> int:
     names = [n for n, e in CATALOGUE.items() if e.unavailable_reason(plant) is None]
     pairs = list(itertools.combinations(names, 2))
     order = np.random.default_rng(2026).permutation(len(pairs))[:args.records]
-    cache, rows, started = {}, [], time.perf_counter()
+    discovery, rows, started = Discovery(), [], time.perf_counter()
     for seed, index in enumerate(order, start=101):
         case = make_hidden_effect_case(list(pairs[index]), mission="thesis_fig_7_7", dt_s=60.0, seed=seed, plant=plant)
         t0 = time.perf_counter()
-        result = diagnose(plant, case.data, cache=cache)
+        result = discovery.fit(plant, case.data)
         found = {f.effect: f.onset_s for f in result.found}
         truth = {i.effect: i.onset_s for i in case.injections}
         named = set(found) == set(truth)

@@ -29,14 +29,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
-    from ..diagnose.discover import diagnose
+    from ..diagnose.discovery import Discovery
 
     model = model_from_args(args)
     data = fitting_data(args.data, model, args)
     baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
     with working("diagnose"):
-        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args),
-                          progress=lambda line: say(f"  ... {line}"))
+        discovery = Discovery(iterate=args.iterate, progress=lambda line: say(f"  ... {line}"))
+        result = discovery.fit(model, data, baseline=baseline, dt_s=data_step(args))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:

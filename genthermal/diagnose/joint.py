@@ -36,7 +36,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
-from .search import (Candidate, EffectSearch, _bic_delta, _indicator, _Problem, _regimes, _Structure,
+from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
 from .trajectory import ParametricSimulator
 
@@ -48,8 +48,11 @@ PAIR_GRID = 5
 _GRID_ITERATIONS = 2
 #: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
 POLISHED_PAIRS = 3
-#: Rounds of coordinate descent over the two onsets.
-_DESCENT_ROUNDS = 2
+#: Rounds of coordinate descent over the two onsets (the first over the whole record).
+_DESCENT_ROUNDS = 3
+#: Starting points of the descent kept (least RSS first) among the best grid point, both onsets
+#: where each effect was fitted alone, and each of those with the other effect from the start.
+_DESCENTS = 2
 
 
 @dataclasses.dataclass
@@ -125,7 +128,8 @@ class PairSearch:
 
     def _structure(self, pair: Sequence[str], series) -> _Structure:
         search = self.search
-        key = ("pair model", search.model, tuple(pair))
+        effects = tuple(search.effect(name) for name in pair)
+        key = ("pair model", search.model, effects)
         if key not in search._cache:
             model = search.model
             for name in pair:
@@ -134,10 +138,11 @@ class PairSearch:
         model = search._cache[key]
         groups = [[p.name for p in search.effect(name).parameters] for name in pair]
         names = [n for group in groups for n in group]
-        simulator_key = ("pair simulator", search.model, tuple(pair), series.time_s.size, series.dt_s)
+        simulator_key = ("pair simulator", search.model, search.view, effects, series.time_s.size, series.dt_s)
         if simulator_key not in search._cache:
             regimes = _regimes([(g, {n: n for n in g}) for g in groups])
-            search._cache[simulator_key] = ParametricSimulator(model, series.dt_s, series.input_matrix, names, regimes)
+            search._cache[simulator_key] = ParametricSimulator(search.viewed(model), series.dt_s, series.input_matrix,
+                                                               names, regimes)
         simulator = search._cache[simulator_key].with_inputs(series.input_matrix)
         scalings = [parameter_scaling(model, p.name, typical=p.typical)
                     for name in pair for p in search.effect(name).parameters]
@@ -156,7 +161,7 @@ class PairSearch:
         n = search.coarse.time_s.size
         last = n - max(3, int(0.05 * n))
         grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
-        best = (math.inf, None, z)
+        best, z_alone = (math.inf, None, z), z
         for i, a in enumerate(grid):
             z_row = z
             for b in grid:
@@ -164,12 +169,30 @@ class PairSearch:
                 if rss < best[0]:
                     best = (rss, (i, int(np.searchsorted(grid, b))), z_row)
         _, (i, j), z = best
-        onsets = [int(grid[i]), int(grid[j])]
-        ranges = [(int(grid[max(g - 1, 0)]), int(grid[min(g + 1, grid.size - 1)])) for g in (i, j)]
-        rss = best[0]
-        for _ in range(_DESCENT_ROUNDS):
-            for position, (low, high) in enumerate(ranges):
-                onsets[position], z, rss = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+        starts = [((int(grid[i]), int(grid[j])), z, best[0])]
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        alone = (first.onset_index // factor, second.onset_index // factor)
+        for onsets in {alone, (alone[0], 0), (0, alone[1])} - {starts[0][0]}:
+            starts.append((onsets, *coarse.fit(list(onsets), z_alone, search.x0_coefficients)))
+        starts.sort(key=lambda start: start[2])
+        step = int(grid[1] - grid[0])
+        return min((self._descend(coarse, list(onsets), z_start, step) for onsets, z_start, _ in starts[:_DESCENTS]),
+                   key=lambda result: result[2])
+
+    def _descend(self, coarse: _Structure, onsets: list, z, step: int):
+        """Coordinate descent from ``onsets``: each onset searched over the whole record (grid, then
+        golden section) with the values refitted, then within ± ``step`` samples until a round moves
+        neither; returns (onsets, z, RSS)."""
+        n, rss = coarse.series.time_s.size, math.inf
+        for round_ in range(_DESCENT_ROUNDS):
+            before = list(onsets)
+            for position in range(2):
+                bounds = ((None, None) if round_ == 0 else
+                          (max(onsets[position] - step, 0), min(onsets[position] + step, n - 1)))
+                onsets[position], z, rss = coarse.search_onset(onsets, position, z, self.search.x0_coefficients,
+                                                               *bounds)
+            if onsets == before:
+                break
         return onsets, z, rss
 
     def _finish(self, pair: tuple, onsets, z, polish: bool) -> JointCandidate:
@@ -198,7 +221,7 @@ class PairSearch:
         return JointCandidate(effects, {e: values[e] for e in effects},
                               {pair[m]: search.elapsed_s(onsets[m]) for m in order},
                               {pair[m]: int(onsets[m]) for m in order}, rss, k, search.rmse_before,
-                              math.sqrt(rss / search.n_valid), _bic_delta(rss, search.rss_before, search.n_valid, k),
+                              math.sqrt(rss / search.n_valid), search.criterion.delta(rss, search.rss_before, search.n_valid, k),
                               predicted)
 
     def fit(self, first: Candidate, second: Candidate, polish: bool = True) -> JointCandidate:

@@ -1,0 +1,231 @@
+r"""Discovery as one composed object: candidates, a criterion and a fitter behind ``fit``.
+
+In the manner of pysindy's ``SINDy(feature_library, optimizer)``, a :class:`Discovery` is built
+from three parts and does nothing until :meth:`Discovery.fit` is called:
+
+* ``candidates`` — a :class:`~genthermal.diagnose.catalogue.Catalogue` (default: the registered
+  catalogue effects, of which each fit uses those that apply to the model);
+* ``criterion`` — scores each candidate against the model without it
+  (:class:`~genthermal.diagnose.criterion.BIC` by default);
+* ``fitter`` — how effects and onsets are fitted (:class:`~genthermal.diagnose.fitter.OnsetFitter`:
+  single effects, then pairs jointly when one effect leaves more than noise).
+
+``fit(model, data)`` returns a :class:`~genthermal.diagnose.discover.Diagnosis`: its ``ranking``,
+its ``verdict`` and :meth:`~genthermal.diagnose.discover.Diagnosis.improved_model`. The decision
+rules (the four tests, "something is still missing", look-alikes and the separating experiment)
+are those of :mod:`genthermal.diagnose.discover`.
+
+The models with effects at neutral values and their compiled simulators take most of a search's
+time; a Discovery keeps them in a private memo so that fitting the same model to several records
+of the same length builds them once. The memo's keys hold the model object itself (not its
+``id``), so an entry can never be mistaken for a later model that reuses a freed address.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import ThermalModel
+from .compare import MeasuredSeries, as_measurements
+from .catalogue import Catalogue
+from .criterion import BIC
+from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
+                       choose_pair, explain, explain_pair, is_significant, rival, series_for)
+from .experiment import separating_experiment
+from .fitter import OnsetFitter
+from .phase_winding import PhaseResolved, phases_differ
+from .residual import residual_tests
+from .search import EffectSearch, FoundEffect, noise_std
+
+
+class Discovery:
+    """Find the effect(s) a model lacks to explain a record.
+
+    Parameters
+    ----------
+    candidates : Catalogue, mapping of str to Effect, or sequence of Effect or str, optional
+        The effects searched. Default: the registered catalogue
+        (:meth:`Catalogue.registered`, taken when the Discovery is built); each fit searches those
+        that apply to its model.
+    criterion : BIC, AIC or compatible, optional
+        Information criterion (:mod:`genthermal.diagnose.criterion`); default BIC.
+    fitter : OnsetFitter, optional
+        Fitting settings (:class:`~genthermal.diagnose.fitter.OnsetFitter`); default: pairs on.
+    iterate : bool
+        After the first verdict, add it and search again until nothing is significant.
+    max_iterations : int
+        Bound on the rounds with ``iterate`` (≥ 1).
+    baseline_parameters : sequence of str
+        Parameters calibrated on a healthy baseline record when :meth:`fit` gets one (those the
+        model lacks are skipped).
+    design_experiment : bool
+        When another explanation fits about as well as the verdict, design the rig test that
+        separates them (:func:`~genthermal.diagnose.experiment.separating_experiment`).
+    progress : callable, optional
+        Called with one line of text as each stage finishes.
+    phases : {"auto", "resolved", "lumped"}
+        Winding sensors: ``"resolved"`` fits the phase-resolved winding view of the model
+        (:mod:`genthermal.diagnose.phase_winding`) to ``T_winding_u/v/w`` one by one; ``"lumped"``
+        fits the model's single winding node to their mean; ``"auto"`` resolves the phases when the
+        record has the three columns and they differ by more than noise
+        (:func:`~genthermal.diagnose.phase_winding.phases_differ`) — a fault in one phase, or an
+        unbalanced load.
+    """
+
+    PHASE_MODES = ("auto", "resolved", "lumped")
+
+    def __init__(self, candidates=None, criterion=None, fitter: OnsetFitter | None = None, iterate: bool = False,
+                 max_iterations: int = 4, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
+                 design_experiment: bool = True, progress: Callable[[str], None] | None = None,
+                 phases: str = "auto"):
+        if phases not in self.PHASE_MODES:
+            raise InputError("phases", phases, f"must be one of {', '.join(self.PHASE_MODES)}")
+        self.phases = phases
+        if int(max_iterations) != max_iterations or max_iterations < 1:
+            raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
+        self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
+        self.criterion = BIC() if criterion is None else criterion
+        for attribute in ("delta", "evidence_limit", "name"):
+            if not hasattr(self.criterion, attribute):
+                raise InputError("criterion", repr(self.criterion), f"has no {attribute!r}: use BIC() or AIC()")
+        self.fitter = OnsetFitter() if fitter is None else fitter
+        if not isinstance(self.fitter, OnsetFitter):
+            raise InputError("fitter", repr(self.fitter), "expected an OnsetFitter")
+        self.iterate, self.max_iterations = bool(iterate), int(max_iterations)
+        self.baseline_parameters = tuple(baseline_parameters)
+        self.design_experiment, self.progress = bool(design_experiment), progress
+        self._memo: dict = {}
+
+    def __repr__(self) -> str:
+        return (f"Discovery(candidates={self.candidates!r}, criterion={self.criterion!r}, fitter={self.fitter!r}, "
+                f"iterate={self.iterate})")
+
+    def with_settings(self, **changes) -> "Discovery":
+        """The same discovery with some constructor settings changed (``candidates``,
+        ``criterion``, ``fitter``, ``iterate``, ...), sharing this one's memo: models and
+        simulators already built are reused (memo keys hold the Effect objects, so effects of the
+        same name in different catalogues never mix)."""
+        settings = dict(candidates=self.candidates, criterion=self.criterion, fitter=self.fitter,
+                        iterate=self.iterate, max_iterations=self.max_iterations,
+                        baseline_parameters=self.baseline_parameters, design_experiment=self.design_experiment,
+                        progress=self.progress, phases=self.phases)
+        unknown = sorted(set(changes) - set(settings))
+        if unknown:
+            raise InputError("setting", unknown[0], f"unknown; Discovery takes {', '.join(settings)}")
+        other = Discovery(**{**settings, **changes})
+        other._memo = self._memo
+        return other
+
+    def _view(self, model: ThermalModel, data):
+        """The phase-resolved view when ``phases`` asks for it (or, with "auto", the record's phases
+        differ), else None."""
+        if self.phases == "lumped":
+            return None
+        if self.phases == "auto":
+            if "slot_winding" not in model.spec.roles or isinstance(data, MeasuredSeries):
+                return None
+            measured = as_measurements(data)
+            if not phases_differ(measured.frame, float(np.median(np.diff(measured.time_s)))):
+                return None
+        return PhaseResolved()
+
+    def _report(self, text: str) -> None:
+        if self.progress:
+            self.progress(text)
+
+    def fit(self, model: ThermalModel, data, baseline=None, dt_s: float | None = None) -> Diagnosis:
+        """Search ``data`` for the candidates ``model`` lacks.
+
+        Parameters
+        ----------
+        model : ThermalModel
+        data : MeasurementData, pandas.DataFrame or path
+            The measurements to explain.
+        baseline : MeasurementData, pandas.DataFrame or path, optional
+            Healthy measurements of the same machine: ``baseline_parameters`` are calibrated on
+            them first, so that what remains in ``data`` is the effect.
+        dt_s : float, optional
+            Resample the data (and baseline) to this period first, s.
+
+        Returns
+        -------
+        Diagnosis
+            ``ranking``, ``verdict``, ``improved_model()``, the residual tests and, for
+            look-alikes, the separating experiment.
+        """
+        from .calibrate import calibrate
+
+        if not isinstance(model, ThermalModel):
+            raise InputError("model", type(model).__name__, "expected a ThermalModel")
+        view = self._view(model, data)
+        calibration = None
+        if baseline is not None:
+            names = [n for n in self.baseline_parameters if n in model.parameters]
+            calibration = calibrate(model, baseline, names, dt_s)
+            model = calibration.model
+            self._report(f"baseline calibrated: {', '.join(names)}")
+        memo = self._memo if calibration is None else {}
+        if view is not None and ("view", model, view) not in memo:
+            memo[("view", model, view)] = view(model)
+        viewed = model if view is None else memo[("view", model, view)]
+        series = series_for(viewed, data, dt_s)
+        if view is not None:
+            self._report(f"the phase readings differ: fitting one winding node per phase ({', '.join(viewed.output_names)})")
+        catalogue = self.candidates
+        evidence = self.criterion.evidence_limit
+        found: list[FoundEffect] = []
+        iterations: list[Iteration] = []
+        while True:
+            search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view)
+            ranked = self.fitter.singles(search)
+            for candidate in ranked:
+                candidate.significant = is_significant(candidate, search.noise, evidence)
+            self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
+                         + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
+            best = ranked[0] if ranked and ranked[0].significant else None
+            runner_up = ranked[1] if len(ranked) > 1 else None
+            iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
+                                  explain(best, search, runner_up))
+            if (self.fitter.pairs and not found and len(ranked) >= 2
+                    and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
+                    and residual_tests(series, ranked[0].predicted, search.noise, viewed.output_names)["unexplained"]):
+                iteration.pairs = self.fitter.joint(
+                    search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
+                chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence)
+                if chosen is not None:
+                    chosen.significant = True
+                    iteration.added, iteration.added_pair = None, chosen
+                    iteration.explanation = explain_pair(chosen, search, ranked[0])
+            iterations.append(iteration)
+            if iteration.added_pair:
+                chosen = iteration.added_pair
+                found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e])
+                         for e in chosen.effects]
+            elif best is None:
+                break
+            else:
+                found = [FoundEffect(f.effect, best.found_values[f.effect],
+                                     search.elapsed_s(best.found_onsets[f.effect]), best.found_onsets[f.effect])
+                         for f in found]
+                found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
+            if not self.iterate or len(iterations) >= self.max_iterations:
+                break
+        noise = noise_std(series.outputs)
+        residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names)
+        self._report(residual["summary"])
+        experiment, other = None, rival(iterations[0])
+        if other is not None and self.design_experiment:
+            chosen = iterations[0].added_pair or iterations[0].added
+            experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)
+            self._report(f"look-alike: {' + '.join(_explanations(other))}; designed a "
+                         f"{experiment.mission.duration_s / 60:.0f}-min test that separates them by "
+                         f"{experiment.separation_sigma:.0f} σ")
+            if iterations[0].added_pair:
+                iterations[0].explanation += (f" Caution: {' + '.join(_explanations(other))} explains the data "
+                                              f"almost as well (RMSE {other.rmse_after:.3f} K): these data cannot "
+                                              "tell them apart.")
+        return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
+                         criterion=self.criterion.name, output_names=viewed.output_names)
