@@ -66,14 +66,14 @@ def test_shorted_turn_under_nearly_balanced_load_is_told_from_end_winding_stray_
     assert phases_differ(case.data, DT_S)
     look_alikes = Discovery(["phase_short_circuit", "end_winding_stray_loss"], design_experiment=False)
     resolved_fit = look_alikes.fit(plant_model, case.data)
-    assert resolved_fit.output_names == [*PHASE_SENSORS, "T_iron"]
+    assert resolved_fit.output_names == [*PHASE_SENSORS, "T_iron", "T_outlet"]
     winner, other = resolved_fit.ranking
     assert resolved_fit.verdict == "phase_short_circuit"
     assert abs(resolved_fit.found[0].onset_s - 3000.0) <= 600.0
     assert winner.values["R_short"] == pytest.approx(0.3, rel=0.1)
     assert other.rmse_after >= 1.05 * winner.rmse_after and other.delta_bic - winner.delta_bic > 100
     lumped_fit = look_alikes.with_settings(phases="lumped").fit(plant_model, case.data)
-    assert lumped_fit.output_names == ["T_winding", "T_iron"]
+    assert lumped_fit.output_names == ["T_winding", "T_iron", "T_outlet"]
     first, second = lumped_fit.ranking
     assert second.rmse_after <= 1.02 * first.rmse_after  # look-alikes on the mean winding temperature
 

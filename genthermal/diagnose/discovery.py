@@ -36,8 +36,8 @@ from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosi
                        choose_pair, explain, explain_pair, is_significant, rival, series_for)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
-from .phase_winding import PhaseResolved, phases_differ
-from .residual import residual_tests
+from .sensor_view import SensorView, view_for
+from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
 
 
@@ -73,6 +73,10 @@ class Discovery:
         record has the three columns and they differ by more than noise
         (:func:`~genthermal.diagnose.phase_winding.phases_differ`) — a fault in one phase, or an
         unbalanced load.
+    outlet : bool or None
+        Fit the cooling-air outlet sensor ``T_outlet`` too (less coolant flow heats the outlet
+        air, better frame cooling does not); None: when the record has it and the model has an
+        outlet node (:mod:`genthermal.diagnose.sensor_view`).
     """
 
     PHASE_MODES = ("auto", "resolved", "lumped")
@@ -80,10 +84,10 @@ class Discovery:
     def __init__(self, candidates=None, criterion=None, fitter: OnsetFitter | None = None, iterate: bool = False,
                  max_iterations: int = 4, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
                  design_experiment: bool = True, progress: Callable[[str], None] | None = None,
-                 phases: str = "auto"):
+                 phases: str = "auto", outlet: bool | None = None):
         if phases not in self.PHASE_MODES:
             raise InputError("phases", phases, f"must be one of {', '.join(self.PHASE_MODES)}")
-        self.phases = phases
+        self.phases, self.outlet = phases, outlet
         if int(max_iterations) != max_iterations or max_iterations < 1:
             raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
         self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
@@ -111,7 +115,7 @@ class Discovery:
         settings = dict(candidates=self.candidates, criterion=self.criterion, fitter=self.fitter,
                         iterate=self.iterate, max_iterations=self.max_iterations,
                         baseline_parameters=self.baseline_parameters, design_experiment=self.design_experiment,
-                        progress=self.progress, phases=self.phases)
+                        progress=self.progress, phases=self.phases, outlet=self.outlet)
         unknown = sorted(set(changes) - set(settings))
         if unknown:
             raise InputError("setting", unknown[0], f"unknown; Discovery takes {', '.join(settings)}")
@@ -119,18 +123,29 @@ class Discovery:
         other._memo = self._memo
         return other
 
-    def _view(self, model: ThermalModel, data):
-        """The phase-resolved view when ``phases`` asks for it (or, with "auto", the record's phases
-        differ), else None."""
-        if self.phases == "lumped":
+    def _view(self, model: ThermalModel, data) -> SensorView | None:
+        """The sensors of the record to fit (:func:`~genthermal.diagnose.sensor_view.view_for`),
+        None when they are the model's own."""
+        if isinstance(data, MeasuredSeries):
+            if self.phases == "resolved" or self.outlet:
+                raise InputError("data", "MeasuredSeries", "give the record itself to fit phase or outlet sensors")
             return None
-        if self.phases == "auto":
-            if "slot_winding" not in model.spec.roles or isinstance(data, MeasuredSeries):
-                return None
-            measured = as_measurements(data)
-            if not phases_differ(measured.frame, float(np.median(np.diff(measured.time_s)))):
-                return None
-        return PhaseResolved()
+        measured = as_measurements(data)
+        view = view_for(model, measured.frame, float(np.median(np.diff(measured.time_s))), self.phases, self.outlet)
+        return view if view.changes_model else None
+
+    @staticmethod
+    def _worth_pairs(ranked, search: EffectSearch, output_names) -> bool:
+        """Fit pairs when the best single effect leaves more than noise: above
+        :data:`~genthermal.diagnose.discover.NOISE_FLOOR_FACTOR` σ, and either called unexplained by
+        the residual tests or above their structure level
+        (:data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` σ: a weaker second effect can
+        leave a residual too small to show clear structure; whether a pair is kept is decided by
+        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here)."""
+        if len(ranked) < 2 or ranked[0].rmse_after <= NOISE_FLOOR_FACTOR * search.noise:
+            return False
+        return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
+                or residual_tests(search.series, ranked[0].predicted, search.noise, output_names)["unexplained"])
 
     def _report(self, text: str) -> None:
         if self.progress:
@@ -173,7 +188,8 @@ class Discovery:
         viewed = model if view is None else memo[("view", model, view)]
         series = series_for(viewed, data, dt_s)
         if view is not None:
-            self._report(f"the phase readings differ: fitting one winding node per phase ({', '.join(viewed.output_names)})")
+            self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
+                         + (" (the phase readings differ: one winding node per phase)" if view.phases else ""))
         catalogue = self.candidates
         evidence = self.criterion.evidence_limit
         found: list[FoundEffect] = []
@@ -189,9 +205,7 @@ class Discovery:
             runner_up = ranked[1] if len(ranked) > 1 else None
             iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                                   explain(best, search, runner_up))
-            if (self.fitter.pairs and not found and len(ranked) >= 2
-                    and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
-                    and residual_tests(series, ranked[0].predicted, search.noise, viewed.output_names)["unexplained"]):
+            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed.output_names):
                 iteration.pairs = self.fitter.joint(
                     search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
                 chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence)

@@ -26,21 +26,29 @@ class OnsetFitter:
         pairs of effects jointly (values and both onsets).
     pair_pool : int
         Pairs are formed among this many best single effects (and the best with each other one).
+    workers : int
+        Processes that fit candidates and pairs side by side (forked,
+        :mod:`genthermal.diagnose.parallel`; same results as 1). Workers build their own models
+        and simulators, which a Discovery's memo then does not keep: use 1 to fit many records of
+        one model, the number of cores for one record.
     """
 
     pairs: bool = True
     pair_pool: int = PAIR_POOL
+    workers: int = 1
 
     def __post_init__(self):
         if int(self.pair_pool) != self.pair_pool or self.pair_pool < 2:
             raise InputError("pair_pool", self.pair_pool, "must be an integer >= 2")
+        if int(self.workers) != self.workers or self.workers < 1:
+            raise InputError("workers", self.workers, "must be an integer >= 1")
 
     def singles(self, search: EffectSearch) -> list[Candidate]:
         """Every candidate the search's model can take, fitted with its onset; best first."""
         names = search.candidates()
-        return search.rank(names) if names else []
+        return search.rank(names, self.workers) if names else []
 
     def joint(self, search: EffectSearch, singles: list[Candidate],
               progress: Callable[[int, int, str], None] | None = None) -> list:
         """Pairs of ``singles`` fitted jointly (:class:`~genthermal.diagnose.joint.PairSearch`); best first."""
-        return PairSearch(search).rank(singles, self.pair_pool, progress=progress)
+        return PairSearch(search).rank(singles, self.pair_pool, progress=progress, workers=self.workers)

@@ -38,6 +38,7 @@ import numpy as np
 from ..errors import InputError
 from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
+from .parallel import map_in_workers
 from .trajectory import ParametricSimulator
 
 #: Single effects (best ΔBIC first) whose pairs are fitted.
@@ -229,22 +230,31 @@ class PairSearch:
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
-    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
+    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
+             workers: int = 1) -> list[JointCandidate]:
         """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
         each other one on the decimated series,
         polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
         there at their coarse values; best ΔBIC first.
 
-        ``progress(done, total, label)`` is called after each pair when given."""
+        ``progress(done, total, label)`` is called after each pair when given. With ``workers`` > 1
+        the pairs are fitted in forked processes (:mod:`genthermal.diagnose.parallel`); the result
+        is the same."""
         ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
         pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:]]
-        coarse = []
-        for done, (first, second) in enumerate(pairs, start=1):
-            coarse.append(((first.effect, second.effect), *self._coarse_fit(first, second)))
-            if progress:
-                progress(done, len(pairs), f"{first.effect} + {second.effect}")
+
+        def fit_pair(pair):
+            first, second = pair
+            onsets, z, rss = self._coarse_fit(first, second)
+            names = (first.effect, second.effect)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return names, onsets, z, rss, scored
+
+        coarse = map_in_workers(fit_pair, pairs, workers, progress and (
+            lambda done, total, pair: progress(done, total, f"{pair[0].effect} + {pair[1].effect}")))
         coarse.sort(key=lambda item: item[3])
-        ranked = [self._finish(pair, onsets, z, rank < POLISHED_PAIRS)
-                  for rank, (pair, onsets, z, _) in enumerate(coarse)]
+        ranked = [scored if rank >= POLISHED_PAIRS and scored is not None else
+                  self._finish(names, onsets, z, rank < POLISHED_PAIRS)
+                  for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
         return sorted(ranked, key=lambda c: c.delta_bic)

@@ -25,7 +25,8 @@ s_w`, with no new parameter:
 Under balanced load the three phase nodes see the same equations and start equal, so they stay
 equal and equal to the single node: the variant then reproduces the model exactly (tested). The
 variant is a *view* for fitting: effects are applied to the single-node model first (their roles
-name the single node), then the view is taken (:class:`PhaseResolved`).
+name the single node), then the view is taken
+(:class:`~genthermal.diagnose.sensor_view.SensorView`).
 """
 
 from __future__ import annotations
@@ -113,15 +114,6 @@ def phase_resolved(model: ThermalModel) -> ThermalModel:
     roles = {k: v for k, v in model.spec.roles.items() if k != "slot_winding"}
     return model.with_network(split, sensors=sensors, roles=roles,
                               variant=f"{model.spec.variant}, phase-resolved winding")
-
-
-@dataclasses.dataclass(frozen=True)
-class PhaseResolved:
-    """The view :func:`phase_resolved` as a value: a discovery applies it to each model it fits
-    (after the effects) when the record's phase readings differ (:func:`phases_differ`)."""
-
-    def __call__(self, model: ThermalModel) -> ThermalModel:
-        return phase_resolved(model)
 
 
 #: A record's phase spread must exceed this many standard errors to count as real.

@@ -31,6 +31,7 @@ from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, initial_coefficients
 from .criterion import BIC
+from .parallel import map_in_workers
 from .trajectory import ParametricSimulator, Scaling, parameter_scaling
 
 COARSE_ONSETS = 12
@@ -460,6 +461,8 @@ class EffectSearch:
         candidate's and the found effects' values and the initial state together by Gauss-Newton
         with the exact Jacobian."""
         effect = self.effect(candidate.effect)
+        if candidate.effect not in self._full:  # searched in a worker process
+            self._full[candidate.effect] = self._structure(candidate.effect, self.series)
         full = self._full[candidate.effect]
         factor = int(round(self.coarse.dt_s / self.series.dt_s))
         z = [s.decision(candidate.values[p.name]) for s, p in zip(full.problem.scalings, effect.parameters)]
@@ -501,9 +504,11 @@ class EffectSearch:
                               found_onsets)
         return candidate
 
-    def rank(self, effects: Sequence[str] | None = None) -> list[Candidate]:
-        """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC."""
+    def rank(self, effects: Sequence[str] | None = None, workers: int = 1) -> list[Candidate]:
+        """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC; with
+        ``workers`` > 1 the candidates are searched in forked processes
+        (:mod:`genthermal.diagnose.parallel`), with the same result."""
         names = self.candidates() if effects is None else list(effects)
-        ranked = sorted((self.search(n) for n in names), key=lambda c: c.delta_bic)
+        ranked = sorted(map_in_workers(self.search, names, workers), key=lambda c: c.delta_bic)
         ranked[:POLISHED_CANDIDATES] = [self.polish(c) for c in ranked[:POLISHED_CANDIDATES]]
         return sorted(ranked, key=lambda c: c.delta_bic)
