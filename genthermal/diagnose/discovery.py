@@ -195,7 +195,7 @@ class Discovery:
         found: list[FoundEffect] = []
         iterations: list[Iteration] = []
         while True:
-            search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view)
+            search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view).fit_found()
             ranked = self.fitter.singles(search)
             for candidate in ranked:
                 candidate.significant = is_significant(candidate, search.noise, evidence)

@@ -122,6 +122,7 @@ class PairSearch:
     """
 
     def __init__(self, search: EffectSearch):
+        search._require_fitted()
         if search.found:
             raise InputError("search.found", [f.effect for f in search.found],
                              "a pair search starts from the model without found effects")

@@ -320,6 +320,9 @@ def _refine_onsets(structure: _Structure, onsets, positions, z, x0_coefficients)
 class EffectSearch:
     """Fit catalogue effects to one measured series, given the effects already found.
 
+    Building one fits nothing; :meth:`fit_found` refits the found effects and scores the model
+    with them, then :meth:`rank` fits the candidates.
+
     Parameters
     ----------
     model : ThermalModel
@@ -354,10 +357,20 @@ class EffectSearch:
         self.coarse = decimated(series, GRID_DT_S)
         self.noise = noise_std(series.outputs)
         self._found_names = [n for f in self.found for n in f.values]
+        self.n_valid = int(np.isfinite(series.outputs).sum())
+        self._full: dict[str, _Structure] = {}
+        self._fitted = False
+
+    def fit_found(self) -> "EffectSearch":
+        """Refit the found effects (onsets by coordinate descent, then values and the initial state
+        together) and score the model with them: ``rss_before``, ``predicted_before``,
+        ``found_values``; returns self. The constructor fits nothing; every search method needs
+        this first."""
+        series = self.series
         base = self.neutral_model()
         groups = [(list(f.values), {n: n for n in f.values}) for f in self.found]
         simulator = self.simulator(None, series, self._found_names, groups)
-        self.x0_coefficients = initial_coefficients(self.viewed(model), series)
+        self.x0_coefficients = initial_coefficients(self.viewed(self.model), series)
         scalings = [parameter_scaling(base, n, start=v) for f in self.found for n, v in f.values.items()]
         onsets, z = _refine_onsets(_Structure(simulator, series, scalings), [f.onset_index for f in self.found],
                                    range(len(self.found)), np.zeros(len(scalings)), self.x0_coefficients)
@@ -368,10 +381,14 @@ class EffectSearch:
         z, self.rss_before = problem.gauss_newton(np.concatenate([z, [0.0, 0.0]]), self.x0_coefficients, indicator)
         theta = problem.theta(z)
         self.predicted_before = simulator.outputs(theta, problem.initial(z, self.x0_coefficients), indicator)
-        self.n_valid = int(np.isfinite(series.outputs).sum())
         values = iter(theta)
         self.found_values = {f.effect: {n: float(next(values)) for n in f.values} for f in self.found}
-        self._full: dict[str, _Structure] = {}
+        self._fitted = True
+        return self
+
+    def _require_fitted(self) -> None:
+        if not self._fitted:
+            raise InputError("EffectSearch", "not fitted", "call fit_found() before searching")
 
     def effect(self, name: str) -> Effect:
         """The effect called ``name`` in this search's catalogue."""
@@ -440,6 +457,7 @@ class EffectSearch:
 
     def search(self, effect_name: str) -> Candidate:
         """Fit ``effect_name`` and its onset on the coarse grid; score it on the full series."""
+        self._require_fitted()
         effect = self.effect(effect_name)
         coarse = self._structure(effect_name, self.coarse)
         z_start = [s.decision(p.typical if p.typical is not None else p.neutral)
@@ -508,6 +526,7 @@ class EffectSearch:
         """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC; with
         ``workers`` > 1 the candidates are searched in forked processes
         (:mod:`genthermal.diagnose.parallel`), with the same result."""
+        self._require_fitted()
         names = self.candidates() if effects is None else list(effects)
         ranked = sorted(map_in_workers(self.search, names, workers), key=lambda c: c.delta_bic)
         ranked[:POLISHED_CANDIDATES] = [self.polish(c) for c in ranked[:POLISHED_CANDIDATES]]
