@@ -42,7 +42,8 @@ def two_effect_case(plant_model):
 def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effect_case, discovery):
     """A blockage fitted from the start absorbs the stray loss's warming (it also lowers the internal
     convection); the joint search starts its onset descent from each effect's onset alone with the
-    other present from the start, and finds both onsets."""
+    other present from the start, and finds both onsets. On the lumped winding a shorted turn from
+    the start fits as well as the stray loss; the three phase sensors, equal here, rule it out."""
     result = discovery.fit(plant_model, two_effect_case.data)
     found = {f.effect: f.onset_s for f in result.found}
     assert set(found) == {i.effect for i in TWO_EFFECTS}, result.verdict
@@ -137,7 +138,10 @@ def test_look_alike_diagnosis_designs_a_test_that_separates_them(plant_model, di
     shorted turn."""
     case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=12, plant=plant_model)
-    look_alikes = discovery.with_settings(candidates=["phase_short_circuit", "end_winding_stray_loss"])
+    # the three phase sensors of this record read one plant node: trusted as phase sensors they would
+    # be evidence against a shorted turn (see tests/test_phase_winding.py), so the winding is kept lumped
+    look_alikes = discovery.with_settings(candidates=["phase_short_circuit", "end_winding_stray_loss"],
+                                          phases="lumped")
     result = look_alikes.fit(plant_model, case.data)
     experiment = result.experiment
     assert experiment is not None and set(experiment.candidates) == {"phase_short_circuit", "end_winding_stray_loss"}

@@ -12,6 +12,8 @@
   heat flows and conductance changes, for physics no catalogue names;
 * :func:`~genthermal.diagnose.experiment.separating_experiment` — a short rig test that tells two
   look-alike explanations apart;
+* :func:`~genthermal.diagnose.phase_winding.phase_resolved` — one winding node per phase, fitted
+  to the phase sensors when they differ (:class:`~genthermal.diagnose.sensor_view.SensorView`);
 * :func:`~genthermal.diagnose.hidden.make_hidden_effect_case` — test data with a known hidden effect;
 * :func:`~genthermal.diagnose.report.run_discovery_demo` — compare → diagnose → add → error falls.
 """
@@ -22,13 +24,15 @@ from .compare import Comparison, compare
 from .criterion import AIC, BIC
 from .discover import Diagnosis, diagnose
 from .discovery import Discovery
-from .fitter import OnsetFitter
 from .experiment import SeparatingExperiment, separating_experiment
+from .fitter import OnsetFitter
 from .hidden import HiddenEffectCase, Injection, make_hidden_effect_case
 from .open_search import describe_term, effect_code, heat_flow_library, open_search
+from .phase_winding import phase_resolved
+from .sensor_view import SensorView
 from .report import run_discovery_demo, write_compare_report, write_diagnosis_report
 
-__all__ = ["AIC", "BIC", "CalibrationResult", "Catalogue", "Comparison", "Diagnosis", "Discovery", "OnsetFitter", "HiddenEffectCase", "Injection", "SeparatingExperiment",
-           "calibrate", "compare", "describe_term", "diagnose", "effect_code", "heat_flow_library",
-           "make_hidden_effect_case", "open_search", "run_discovery_demo", "separating_experiment",
+__all__ = ["AIC", "BIC", "CalibrationResult", "Catalogue", "Comparison", "Diagnosis", "Discovery", "HiddenEffectCase",
+           "Injection", "OnsetFitter", "SensorView", "SeparatingExperiment", "calibrate", "compare", "describe_term", "diagnose", "effect_code", "heat_flow_library",
+           "make_hidden_effect_case", "open_search", "phase_resolved", "run_discovery_demo", "separating_experiment",
            "write_compare_report", "write_diagnosis_report"]

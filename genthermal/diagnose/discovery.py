@@ -36,6 +36,7 @@ from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosi
                        choose_pair, explain, explain_pair, is_significant, rival, series_for)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
+from .phase_winding import PHASE_SENSORS
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
@@ -123,14 +124,13 @@ class Discovery:
         other._memo = self._memo
         return other
 
-    def _view(self, model: ThermalModel, data) -> SensorView | None:
-        """The sensors of the record to fit (:func:`~genthermal.diagnose.sensor_view.view_for`),
-        None when they are the model's own."""
-        if isinstance(data, MeasuredSeries):
+    def _view(self, model: ThermalModel, measured) -> SensorView | None:
+        """The sensors of the record ``measured`` (MeasurementData or MeasuredSeries) to fit
+        (:func:`~genthermal.diagnose.sensor_view.view_for`), None when they are the model's own."""
+        if isinstance(measured, MeasuredSeries):
             if self.phases == "resolved" or self.outlet:
                 raise InputError("data", "MeasuredSeries", "give the record itself to fit phase or outlet sensors")
             return None
-        measured = as_measurements(data)
         view = view_for(model, measured.frame, float(np.median(np.diff(measured.time_s))), self.phases, self.outlet)
         return view if view.changes_model else None
 
@@ -146,6 +146,31 @@ class Discovery:
             return False
         return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
                 or residual_tests(search.series, ranked[0].predicted, search.noise, output_names)["unexplained"])
+
+    def _can_resolve_phases(self, model: ThermalModel, measured, view) -> bool:
+        """True when ``phases="auto"`` kept the winding lumped but the record has the three phase
+        sensors and the model a slot winding to split."""
+        return (self.phases == "auto" and not (view and view.phases) and not isinstance(measured, MeasuredSeries)
+                and "slot_winding" in model.spec.roles and all(c in measured.frame for c in PHASE_SENSORS))
+
+    def _phase_tie_break(self, model: ThermalModel, measured, dt_s, first: Iteration, other) -> Diagnosis | None:
+        """Two explanations fit the lumped winding about equally well: refit their effects with one
+        winding node per phase sensor (a loss in one phase heats that phase, one in every phase
+        does not spread them). Returns that diagnosis when it has a verdict and no look-alike
+        left, else None."""
+        chosen = first.added_pair or first.added
+        names = list(dict.fromkeys([*_explanations(chosen), *_explanations(other)]))
+        self._report(f"look-alikes {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))}: "
+                     "refitting them with one winding node per phase sensor")
+        resolved = self.with_settings(candidates=self.candidates.only(names), phases="resolved", iterate=False)
+        diagnosis = resolved.fit(model, measured, dt_s=dt_s)
+        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0]) is not None:
+            return None
+        diagnosis.iterations[0].explanation += (
+            f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
+            f"explained the data about equally well (RMSE {chosen.rmse_after:.3f} and {other.rmse_after:.3f} K); "
+            "the phase sensors tell them apart.")
+        return diagnosis
 
     def _report(self, text: str) -> None:
         if self.progress:
@@ -175,7 +200,8 @@ class Discovery:
 
         if not isinstance(model, ThermalModel):
             raise InputError("model", type(model).__name__, "expected a ThermalModel")
-        view = self._view(model, data)
+        measured = data if isinstance(data, MeasuredSeries) else as_measurements(data)
+        view = self._view(model, measured)
         calibration = None
         if baseline is not None:
             names = [n for n in self.baseline_parameters if n in model.parameters]
@@ -186,7 +212,7 @@ class Discovery:
         if view is not None and ("view", model, view) not in memo:
             memo[("view", model, view)] = view(model)
         viewed = model if view is None else memo[("view", model, view)]
-        series = series_for(viewed, data, dt_s)
+        series = series_for(viewed, measured, dt_s)
         if view is not None:
             self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
                          + (" (the phase readings differ: one winding node per phase)" if view.phases else ""))
@@ -231,6 +257,10 @@ class Discovery:
         residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names)
         self._report(residual["summary"])
         experiment, other = None, rival(iterations[0])
+        if other is not None and self._can_resolve_phases(model, measured, view):
+            separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other)
+            if separated is not None:
+                return separated
         if other is not None and self.design_experiment:
             chosen = iterations[0].added_pair or iterations[0].added
             experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)

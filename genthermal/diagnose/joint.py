@@ -6,15 +6,22 @@ an end-winding loss present from the start warms the winding too), and the secon
 undo it. Here every pair of the best single effects is fitted as one model:
 
 1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
-   effect with each of the others (pruning: an effect that explains little alone belongs to the
-   answer mostly next to the effect that dominates the record, as a slow insulation change under a
-   strong excitation-dependent iron loss does);
+   effect with each of the next ones up to rank :data:`PARTNER_RANKS` (pruning: an effect that
+   explains little alone belongs to the answer mostly next to the effect that dominates the
+   record, as a slow insulation change under a strong excitation-dependent iron loss does; the
+   bound keeps a library of twenty terms at a dozen pairs);
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
    effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
    neighbour: the grid only has to find the basin);
-3. from the best grid point, coordinate descent: each onset by golden section between its grid
-   neighbours with the values refitted, twice;
+3. coordinate descent over the two onsets, each searched over the whole record (grid, then golden
+   section) with both effects' values refitted, then within one grid step until neither moves;
+   started from the :data:`_DESCENTS` best of: the best grid point, both onsets where each effect
+   was fitted alone, and each of those with the other effect present from the start. The onset
+   landscape of a pair has valleys: fitted alone, a blockage from 80 min takes an onset that lets
+   it absorb a stray loss present from the start, and from there, descent over one onset at a
+   time cannot reach the truth; starting from "this onset, the other effect from the start"
+   does;
 4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
    the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
    stay on the decimated grid, a resolution of one minute); the others are scored on the full
@@ -43,6 +50,8 @@ from .trajectory import ParametricSimulator
 
 #: Single effects (best ΔBIC first) whose pairs are fitted.
 PAIR_POOL = 4
+#: The best single effect is also paired with each effect ranked below the pool up to this rank.
+PARTNER_RANKS = 8
 #: Onsets per effect in the coarse grid of a pair.
 PAIR_GRID = 5
 #: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
@@ -234,7 +243,7 @@ class PairSearch:
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
              workers: int = 1) -> list[JointCandidate]:
         """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
-        each other one on the decimated series,
+        each next one up to rank :data:`PARTNER_RANKS` on the decimated series,
         polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
         there at their coarse values; best ΔBIC first.
 
@@ -243,7 +252,7 @@ class PairSearch:
         is the same."""
         ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
-        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:]]
+        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:max(pool, PARTNER_RANKS)]]
 
         def fit_pair(pair):
             first, second = pair
