@@ -9,7 +9,9 @@ Three runs, each from a cold start (models and simulators built inside the timin
 * ``open``: the open search over the generic heat-flow library on a record with an excitation
   iron loss from 1.4 h;
 * ``lookalike``: a shorted turn from 50 min under balanced load (it looks like end-winding stray
-  loss): the separating test designed and the separation it predicts;
+  loss) with the winding lumped (``phases="lumped"``: the record's three phase sensors read one
+  plant node, and trusted as phase sensors they would rule the shorted turn out): the separating
+  test designed and the separation it predicts;
 * ``full``: the whole issue-12 diagnosis of the two-effect record of ``pair``: the catalogue with
   jointly fitted pairs, then the open search over the generic library with its pairs, one
   :class:`~genthermal.diagnose.discovery.Discovery` (what the catalogue search built is reused).
@@ -73,7 +75,8 @@ def main() -> int:
             print(f"  [{time.perf_counter() - started:5.1f} s wall, {_cpu_seconds() - cpu_started:5.1f} s cpu] "
                   f"{line[:110]}", file=sys.stderr, flush=True)
 
-        discovery = Discovery(fitter=OnsetFitter(workers=args.workers), progress=progress)
+        discovery = Discovery(fitter=OnsetFitter(workers=args.workers), progress=progress,
+                              phases="lumped" if name == "lookalike" else "auto")
         results = {}
         for search in searches:
             searched = discovery if search == "catalogue" else discovery.with_settings(

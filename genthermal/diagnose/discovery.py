@@ -215,7 +215,7 @@ class Discovery:
         series = series_for(viewed, measured, dt_s)
         if view is not None:
             self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
-                         + (" (the phase readings differ: one winding node per phase)" if view.phases else ""))
+                         + (" (one winding node per phase)" if view.phases else ""))
         catalogue = self.candidates
         evidence = self.criterion.evidence_limit
         found: list[FoundEffect] = []
