@@ -8,12 +8,13 @@ import pytest
 
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
-from genthermal.diagnose.phase_winding import PHASE_SENSORS, phase_resolved, phases_differ
+from genthermal.diagnose.phase_winding import phase_resolved, phase_sensor, phases_differ
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
 from genthermal.simulate import simulate
 
 DT_S = 60.0
+PHASE_SENSORS = ("T_winding_u", "T_winding_v", "T_winding_w")
 
 
 @pytest.fixture(scope="module")
@@ -50,9 +51,12 @@ def test_a_shorted_turn_heats_its_own_phase(plant_model):
 
 
 def test_a_model_without_a_slot_winding_is_refused_by_name(plant_model):
-    spec = dataclasses.replace(plant_model.spec, roles={})
+    assert phase_sensor(plant_model).columns == PHASE_SENSORS
+    interface = dataclasses.replace(plant_model.spec.interface, roles={})
+    without_roles = plant_model.with_network(plant_model.network, interface=interface)
+    assert phase_sensor(without_roles) is None
     with pytest.raises(InputError, match="slot_winding"):
-        phase_resolved(plant_model.with_network(plant_model.network, roles=spec.roles))
+        phase_resolved(without_roles)
     with pytest.raises(InputError, match="phases"):
         Discovery(phases="per-phase")
 
@@ -63,7 +67,7 @@ def test_shorted_turn_under_nearly_balanced_load_is_told_from_end_winding_stray_
     case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=12, plant=plant_model,
                                    phase_resolved=True, unbalance=0.05)
-    assert phases_differ(case.data, DT_S)
+    assert phases_differ(case.data, DT_S, PHASE_SENSORS)
     look_alikes = Discovery(["phase_short_circuit", "end_winding_stray_loss"], design_experiment=False)
     resolved_fit = look_alikes.fit(plant_model, case.data)
     assert resolved_fit.output_names == [*PHASE_SENSORS, "T_iron", "T_outlet"]
@@ -82,4 +86,4 @@ def test_balanced_records_stay_lumped(plant_model):
     case = make_hidden_effect_case([Injection("end_winding_stray_loss", {"R_stray": 0.2}, 3000.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=14, plant=plant_model,
                                    phase_resolved=True)
-    assert not phases_differ(case.data, DT_S)
+    assert not phases_differ(case.data, DT_S, PHASE_SENSORS)

@@ -52,6 +52,7 @@ import numpy as np
 
 from ..effects import CATALOGUE, Effect
 from ..errors import InputError
+from ..machines.interface import Role
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
 from .experiment import SeparatingExperiment
@@ -103,7 +104,7 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
 
 def series_for(model: ThermalModel, data, dt_s: float | None = None) -> MeasuredSeries:
     """Measurements of ``data`` on a uniform grid for ``model``'s outputs."""
-    return measured_series(data, dt_s, model.output_names)
+    return measured_series(data, dt_s, model.output_names, model.spec.interface)
 
 
 @dataclasses.dataclass
@@ -295,10 +296,14 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     biases = ", ".join(f"{'hot' if b > 0 else 'cold'} by {abs(b):.2f} K in {n}" for n, b in
                        zip(outputs, np.nanmean(residual[:, after], axis=1)))
     inputs = series.inputs
-    regressors = {"I^2": np.mean([inputs[p].to_numpy() ** 2 for p in ("I_u", "I_v", "I_w")], axis=0),
-                  "winding temperature": series.outputs[0], "I_exc": inputs["I_exc"].to_numpy(),
-                  "inlet temperature": inputs["T_inlet"].to_numpy(),
-                  "dθ/dt": winding_rate_K_per_min(series.time_s, series.outputs[0])}
+    interface = search.model.spec.interface
+    regressors = {"I^2": np.mean([inputs[p].to_numpy() ** 2 for p in interface.load_currents], axis=0),
+                  "winding temperature": series.outputs[0]}
+    if interface.has_role(Role.EXCITATION_CURRENT):
+        excitation = interface.role(Role.EXCITATION_CURRENT)
+        regressors[excitation] = inputs[excitation].to_numpy()
+    regressors["inlet temperature"] = inputs[interface.coolant_input].to_numpy()
+    regressors["dθ/dt"] = winding_rate_K_per_min(series.time_s, series.outputs[0])
     links = []
     for name, e in zip(outputs, residual):
         scores = {r: correlation(e[after], v[after]) for r, v in regressors.items()}

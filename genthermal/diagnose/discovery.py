@@ -36,7 +36,7 @@ from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosi
                        choose_pair, explain, explain_pair, is_significant, rival, series_for)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
-from .phase_winding import PHASE_SENSORS
+from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
@@ -135,7 +135,7 @@ class Discovery:
         return view if view.changes_model else None
 
     @staticmethod
-    def _worth_pairs(ranked, search: EffectSearch, output_names) -> bool:
+    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel) -> bool:
         """Fit pairs when the best single effect leaves more than noise: above
         :data:`~genthermal.diagnose.discover.NOISE_FLOOR_FACTOR` σ, and either called unexplained by
         the residual tests or above their structure level
@@ -145,13 +145,15 @@ class Discovery:
         if len(ranked) < 2 or ranked[0].rmse_after <= NOISE_FLOOR_FACTOR * search.noise:
             return False
         return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
-                or residual_tests(search.series, ranked[0].predicted, search.noise, output_names)["unexplained"])
+                or residual_tests(search.series, ranked[0].predicted, search.noise, viewed.output_names,
+                                  viewed.spec.interface)["unexplained"])
 
     def _can_resolve_phases(self, model: ThermalModel, measured, view) -> bool:
         """True when ``phases="auto"`` kept the winding lumped but the record has the three phase
         sensors and the model a slot winding to split."""
+        reader = phase_sensor(model)
         return (self.phases == "auto" and not (view and view.phases) and not isinstance(measured, MeasuredSeries)
-                and "slot_winding" in model.spec.roles and all(c in measured.frame for c in PHASE_SENSORS))
+                and reader is not None and all(c in measured.frame for c in reader.columns))
 
     def _phase_tie_break(self, model: ThermalModel, measured, dt_s, first: Iteration, other) -> Diagnosis | None:
         """Two explanations fit the lumped winding about equally well: refit their effects with one
@@ -200,7 +202,7 @@ class Discovery:
 
         if not isinstance(model, ThermalModel):
             raise InputError("model", type(model).__name__, "expected a ThermalModel")
-        measured = data if isinstance(data, MeasuredSeries) else as_measurements(data)
+        measured = data if isinstance(data, MeasuredSeries) else as_measurements(data, model.spec.interface)
         view = self._view(model, measured)
         calibration = None
         if baseline is not None:
@@ -231,7 +233,7 @@ class Discovery:
             runner_up = ranked[1] if len(ranked) > 1 else None
             iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                                   explain(best, search, runner_up))
-            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed.output_names):
+            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
                 iteration.pairs = self.fitter.joint(
                     search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
                 chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence)
@@ -254,7 +256,8 @@ class Discovery:
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)
-        residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names)
+        residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names,
+                                  viewed.spec.interface)
         self._report(residual["summary"])
         experiment, other = None, rival(iterations[0])
         if other is not None and self._can_resolve_phases(model, measured, view):

@@ -140,7 +140,8 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
     (:func:`genthermal.diagnose.phase_winding.phase_resolved`, taken after the effects) and each
     ``T_winding_<phase>`` column reads its own phase node."""
     dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
-    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=noise_var)
+    # the outlet PT100 is a channel of the iron PT100s kind: it shares their variance
+    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=(*noise_var, noise_var[-1]))
     if not injections and not phase_resolved:
         return record
     view = split_by_phase if phase_resolved else (lambda model: model)
@@ -152,11 +153,13 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
     healthy = simulate(plant, inputs)  # what the record was synthesized from
     faulty = simulate(view(plant), inputs, switches=switches)
     changed = record.copy()
-    for column in [c for c in record.columns if c.startswith("T_winding_")]:
-        changed[column] += faulty[column if column in faulty else "T_winding"] - healthy["T_winding"]
-    for column in ("T_iron", "T_outlet"):
-        if column in record and column in faulty:
-            changed[column] += faulty[column] - healthy[column]
+    interface = plant.spec.interface
+    sensors = [*interface.sensors, *([interface.outlet_sensor] if interface.outlet_sensor else [])]
+    for sensor in sensors:
+        for column in sensor.columns:
+            output = column if column in faulty else sensor.output  # a phase-resolved plant reads each phase
+            if column in record and output in faulty and sensor.output in healthy:
+                changed[column] += faulty[output] - healthy[sensor.output]
     return changed
 
 
@@ -206,7 +209,7 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
     inputs = load_mission(mission).to_inputs(dt_s)
     if unbalance:
         elapsed = inputs["time_s"] - inputs["time_s"].iloc[0]
-        inputs["I_u"] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
+        inputs[plant.spec.interface.generator.phase_inputs[0]] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
     duration = float(inputs["time_s"].iloc[-1] - inputs["time_s"].iloc[0])
     injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng) for e in effects]
     for injection in injections:

@@ -19,8 +19,9 @@ s_w`, with no new parameter:
   which is exact for a loss that is a sum of per-phase terms plus a constant (copper loss
   :math:`R(\theta)\sum_p I_p^2`, a shorted turn :math:`R_{short}I_u^2` — all of it into phase u —,
   a constant or excitation-driven loss, shared equally);
-* the sensors reading :math:`s` become ``T_winding_u``, ``T_winding_v``, ``T_winding_w`` on the
-  phase nodes.
+* the sensor reading :math:`s` through one column per phase (the Genco's winding, from its three
+  PT100s) becomes one sensor per column (``T_winding_u``, ``T_winding_v``, ``T_winding_w``) on
+  the phase nodes.
 
 Under balanced load the three phase nodes see the same equations and start equal, so they stay
 equal and equal to the single node: the variant then reproduces the model exactly (tested). The
@@ -37,22 +38,30 @@ import numpy as np
 import sympy
 
 from ..errors import InputError
-from ..losses import PHASE_CURRENTS, input_symbol
+from ..losses import input_symbol
+from ..machines.interface import Role, Sensor
 from ..model import ThermalModel
 from ..network import HeatSource, Link, Node
 
-PHASES = ("u", "v", "w")
-#: The per-phase winding sensors of the rig CSV schema (:mod:`genthermal.measurements`).
-PHASE_SENSORS = tuple(f"T_winding_{phase}" for phase in PHASES)
 
-
-def _split_power(power: sympy.Expr, theta: sympy.Symbol, theta_phase: sympy.Symbol, phase: int) -> sympy.Expr:
-    """The share of ``power`` that phase ``phase`` (0, 1, 2) carries (module docstring)."""
-    currents = [input_symbol(p) for p in PHASE_CURRENTS]
+def _split_power(power: sympy.Expr, theta: sympy.Symbol, theta_phase: sympy.Symbol, currents, phase: int) -> sympy.Expr:
+    """The share of ``power`` that phase ``phase`` (an index of ``currents``) carries (module docstring)."""
     alone = {c: 0 for k, c in enumerate(currents) if k != phase}
     at_rest = {c: 0 for c in currents}
     local = power.subs(theta, theta_phase)
     return local.subs(alone) - sympy.Rational(2, 3) * local.subs(at_rest)
+
+
+def phase_sensor(model: ThermalModel) -> Sensor | None:
+    """The sensor that reads the slot winding through one CSV column per phase (the Genco's
+    ``T_winding`` from ``T_winding_u/v/w``), or None when the model has none."""
+    interface = model.spec.interface
+    slot = interface.roles.get(Role.SLOT_WINDING)
+    phases = interface.roles.get(Role.PHASE_CURRENTS, ())
+    for sensor in interface.sensors:
+        if slot is not None and sensor.node == slot and len(sensor.columns) == len(phases) == 3:
+            return sensor
+    return None
 
 
 def phase_resolved(model: ThermalModel) -> ThermalModel:
@@ -61,27 +70,31 @@ def phase_resolved(model: ThermalModel) -> ThermalModel:
     Parameters
     ----------
     model : ThermalModel
-        A model whose spec names a capacitive ``slot_winding`` node read by a sensor.
+        A model whose interface names a capacitive slot winding (``Role.SLOT_WINDING``), the three
+        phase currents (``Role.PHASE_CURRENTS``) and a sensor reading the slot winding through one
+        column per phase.
 
     Returns
     -------
     ThermalModel
-        Same parameters; outputs ``T_winding_u, T_winding_v, T_winding_w`` and the model's other
-        sensors; variant ``"<variant>, phase-resolved winding"``.
+        Same parameters; the winding sensor replaced by one sensor per phase column (output = the
+        column's name, e.g. ``T_winding_u``), in phase order; variant
+        ``"<variant>, phase-resolved winding"``.
     """
-    slot = model.spec.roles.get("slot_winding")
-    if slot is None:
-        raise InputError("model.spec.roles", sorted(model.spec.roles), "no 'slot_winding' node to split by phase")
+    interface = model.spec.interface
+    reader = phase_sensor(model)
+    if reader is None:
+        raise InputError("model.spec.interface", model.name, "needs a slot_winding node, three phase_currents and a "
+                         "sensor reading the slot winding with one column per phase to split the winding by phase")
+    slot = interface.roles[Role.SLOT_WINDING]
+    currents = [input_symbol(name) for name in interface.roles[Role.PHASE_CURRENTS]]
     network = model.network
     node = network.node(slot)
     if node.kind != "capacitive":
         raise InputError(f"node {slot}.kind", node.kind, "the slot winding must be capacitive to split by phase")
     if any(slot in (s.upstream, s.downstream) for s in network.air_streams):
         raise InputError("slot_winding", slot, "an air stream passes through it; cannot split it by phase")
-    readers = [name for name, sensed in model.spec.sensors.items() if sensed == slot]
-    if not readers:
-        raise InputError("model.spec.sensors", model.spec.sensors, f"no sensor reads the slot winding {slot}")
-    names = [f"{slot}_{phase}" for phase in PHASES]
+    names = [f"{slot}_{column}" for column in reader.columns]
     theta = network.temperature_symbol(slot)
     theta_phases = [sympy.Symbol(f"theta_{name}", real=True) for name in names]
     theta_mean = sum(theta_phases) / 3
@@ -103,17 +116,20 @@ def phase_resolved(model: ThermalModel) -> ThermalModel:
             sources.append(dataclasses.replace(source, power=source.power.subs(theta, theta_mean)))
             continue
         for k, name in enumerate(names):
-            sources.append(HeatSource(name, _split_power(source.power, theta, theta_phases[k], k), source.label))
+            sources.append(HeatSource(name, _split_power(source.power, theta, theta_phases[k], currents, k),
+                                      source.label))
     split = network.replace(nodes=tuple(nodes), links=tuple(links), heat_sources=tuple(sources))
-    sensors = {}
-    for name, sensed in model.spec.sensors.items():
-        if name == readers[0]:
-            sensors.update(zip(PHASE_SENSORS, names))
-        elif sensed != slot:
-            sensors[name] = sensed
-    roles = {k: v for k, v in model.spec.roles.items() if k != "slot_winding"}
-    return model.with_network(split, sensors=sensors, roles=roles,
-                              variant=f"{model.spec.variant}, phase-resolved winding")
+    sensors = []
+    for sensor in interface.sensors:
+        if sensor is reader:
+            sensors += [Sensor(column, name, (column,), sensor.noise_variance_K2, sensor.limit_C,
+                               f"{sensor.description} (phase column {column})")
+                        for column, name in zip(sensor.columns, names)]
+        elif sensor.node != slot:
+            sensors.append(sensor)
+    roles = {role: value for role, value in interface.roles.items() if role is not Role.SLOT_WINDING}
+    resolved = dataclasses.replace(interface, sensors=tuple(sensors), roles=roles)
+    return model.with_network(split, interface=resolved, variant=f"{model.spec.variant}, phase-resolved winding")
 
 
 #: A record's phase spread must exceed this many standard errors to count as real.
@@ -122,7 +138,7 @@ PHASE_SPREAD_SIGMAS = 6.0
 PHASE_SPREAD_WINDOW_S = 600.0
 
 
-def phases_differ(frame, dt_s: float) -> bool:
+def phases_differ(frame, dt_s: float, columns) -> bool:
     r"""True when a record's three winding sensors disagree by more than their noise explains.
 
     For each phase :math:`x`, the spread :math:`s_x = T_x - (T_y + T_z)/2` is averaged over
@@ -136,15 +152,17 @@ def phases_differ(frame, dt_s: float) -> bool:
     Parameters
     ----------
     frame : pandas.DataFrame
-        The record, with ``T_winding_u/v/w`` (°C); without them the answer is False.
+        The record (°C); without the three ``columns`` the answer is False.
     dt_s : float
         Its sample period, s.
+    columns : sequence of str
+        The three phase columns of the winding sensor (:func:`phase_sensor`).
     """
     from .search import noise_std
 
-    if not all(column in frame for column in PHASE_SENSORS):
+    if len(columns) != 3 or not all(column in frame for column in columns):
         return False
-    readings = frame[list(PHASE_SENSORS)].to_numpy(dtype=float)
+    readings = frame[list(columns)].to_numpy(dtype=float)
     window = max(int(round(PHASE_SPREAD_WINDOW_S / dt_s)), 1)
     for x in range(3):
         spread = readings[:, x] - readings[:, [y for y in range(3) if y != x]].mean(axis=1)

@@ -9,7 +9,8 @@ outputs are the sensors to fit:
 
 * ``phases``: the slot winding split into one node per phase, outputs ``T_winding_u/v/w``
   (:func:`genthermal.diagnose.phase_winding.phase_resolved`);
-* ``outlet``: the cooling-air outlet node (``spec.outlet_node``) read as ``T_outlet``.
+* ``outlet``: the coolant outlet sensor of the machine (``interface.outlet_sensor``; the Genco's
+  cooling-air outlet PT100, ``T_outlet``) as one more output.
 
 :func:`view_for` chooses the view from what the record holds.
 """
@@ -22,17 +23,17 @@ import numpy as np
 
 from ..errors import InputError
 from ..model import ThermalModel
-from .phase_winding import phase_resolved, phases_differ
-
-OUTLET_SENSOR = "T_outlet"
+from .phase_winding import phase_resolved, phase_sensor, phases_differ
 
 
 def with_outlet_sensor(model: ThermalModel) -> ThermalModel:
-    """``model`` with one more output, ``T_outlet``, on its cooling-air outlet node."""
-    node = model.spec.outlet_node
-    if node is None:
-        raise InputError("model.spec.outlet_node", None, f"{model.name} has no cooling-air outlet node to read")
-    return model.with_network(model.network, sensors={**model.spec.sensors, OUTLET_SENSOR: node})
+    """``model`` with its coolant outlet sensor (``interface.outlet_sensor``, the Genco's
+    ``T_outlet``) as one more output."""
+    interface = model.spec.interface
+    if interface.outlet_sensor is None:
+        raise InputError("interface.outlet_sensor", None, f"{model.name} has no coolant outlet sensor to read")
+    fitted = dataclasses.replace(interface, sensors=(*interface.sensors, interface.outlet_sensor), outlet_sensor=None)
+    return model.with_network(model.network, interface=fitted)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,9 +82,11 @@ def view_for(model: ThermalModel, frame, dt_s: float, phases: str = "auto", outl
     """
     if phases not in ("auto", "resolved", "lumped"):
         raise InputError("phases", phases, "must be one of auto, resolved, lumped")
-    resolve = phases == "resolved" or (phases == "auto" and "slot_winding" in model.spec.roles
-                                       and phases_differ(frame, dt_s))
+    reader = phase_sensor(model)
+    resolve = phases == "resolved" or (phases == "auto" and reader is not None
+                                       and phases_differ(frame, dt_s, reader.columns))
+    outlet_sensor = model.spec.interface.outlet_sensor
     if outlet is None:
-        outlet = (model.spec.outlet_node is not None and OUTLET_SENSOR in frame
-                  and bool(np.isfinite(frame[OUTLET_SENSOR].to_numpy(dtype=float)).any()))
+        outlet = outlet_sensor is not None and all(
+            c in frame and bool(np.isfinite(frame[c].to_numpy(dtype=float)).any()) for c in outlet_sensor.columns)
     return SensorView(bool(resolve), bool(outlet))
