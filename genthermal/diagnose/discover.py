@@ -192,6 +192,13 @@ class Diagnosis:
     residual: dict = dataclasses.field(default_factory=dict)
     catalogue: Mapping[str, Effect] = dataclasses.field(default_factory=lambda: CATALOGUE)
     experiment: SeparatingExperiment | None = None
+    sensor_screen: object = None
+
+    @property
+    def sensor_faults(self) -> list:
+        """The sensor faults claimed (:class:`~genthermal.diagnose.sensor_faults.SensorHypothesis`);
+        the physical verdict is about the record with them corrected."""
+        return list(self.sensor_screen.found) if self.sensor_screen is not None else []
 
     @property
     def verdict(self) -> str:
@@ -224,6 +231,7 @@ class Diagnosis:
             "rmse_final": self.iterations[-1].rmse_after,
             "unexplained": self.unexplained, "residual": self.residual,
             "experiment": self.experiment.to_dict() if self.experiment else None,
+            "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
@@ -322,7 +330,8 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
              iterate: bool = False, dt_s: float | None = None, effects: Sequence[str] | None = None,
              max_iterations: int = 4, cache: dict | None = None, pairs: bool = True,
              catalogue: Mapping[str, Effect] = CATALOGUE,
-             progress: Callable[[str], None] | None = None, design_experiment: bool = True) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, design_experiment: bool = True,
+             sensor_faults: bool = True) -> Diagnosis:
     """Find the catalogue effect(s) ``model`` lacks to explain ``data``.
 
     Parameters
@@ -357,6 +366,9 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     design_experiment : bool
         When another explanation fits about as well as the verdict, design the rig test that
         separates them (:func:`genthermal.diagnose.experiment.separating_experiment`).
+    sensor_faults : bool
+        Weigh sensor faults against the physical effects (:mod:`genthermal.diagnose.sensor_screen`):
+        the verdict is then about the machine on the record with the faulty sensors corrected.
 
     Returns
     -------
@@ -369,6 +381,12 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
             raise InputError("effects", name, f"not in the catalogue: {', '.join(catalogue)}")
     report = progress or (lambda text: None)
     series = series_for(model, data, dt_s)
+    screen = None
+    if sensor_faults:
+        from .sensor_screen import SensorScreen
+
+        screen = SensorScreen(data, series, model.output_names)
+        series = screen.corrected_series()
     calibration = None
     if baseline is not None:
         names = [n for n in baseline_parameters if n in model.parameters]
@@ -388,6 +406,10 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
                + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
         best = ranked[0] if ranked and ranked[0].significant else None
         runner_up = ranked[1] if len(ranked) > 1 else None
+        if screen is not None and not screen.model_round_done and screen.against_model(search, ranked, search.noise):
+            report(f"sensor fault: {screen.found[-1].fault.describe()}; the round runs again on the corrected record")
+            series = screen.corrected_series()
+            continue
         iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                               explain(best, search, runner_up))
         if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
@@ -424,4 +446,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         if iterations[0].added_pair:
             iterations[0].explanation += (f" Caution: {' + '.join(other.effects)} explains the data almost as well "
                                           f"(RMSE {other.rmse_after:.3f} K): these data cannot tell them apart.")
-    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment)
+    if screen is not None and screen.found:
+        iterations[0].explanation = f"{screen.text(' + '.join(iterations[0].added_effects) or 'none')} " \
+            + iterations[0].explanation
+    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment, screen)

@@ -1,0 +1,129 @@
+"""The sensor-fault side of a diagnosis: screen the record, compete with the physical effects, correct.
+
+Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``):
+
+1. before any model: a sensor that disagrees with the other sensors of its output
+   (:func:`~genthermal.diagnose.sensor_faults.screen_redundant`) and a sensor whose noise grew
+   (:func:`~genthermal.diagnose.sensor_faults.screen_noise`) are claimed and corrected; the search
+   runs on the corrected record;
+2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
+   over all model outputs, is claimed when it passes the four tests and beats the best physical
+   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`; the round is then run
+   again on the record with that sensor corrected, so what the machine does is still judged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .compare import MeasuredSeries, as_measurements
+from .sensor_faults import (OUTPUT_SENSORS, PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
+                            screen_against_model, screen_noise, screen_redundant)
+
+
+def record_readings(data, series: MeasuredSeries, output_names) -> dict:
+    """Every sensor column of ``data`` on the grid of ``series`` (linear interpolation over the
+    finite samples; NaN outside them). A :class:`MeasuredSeries` gives its outputs as sensors."""
+    if isinstance(data, MeasuredSeries):
+        return {name: np.array(row, dtype=float) for name, row in zip(output_names, data.outputs)}
+    measurements = as_measurements(data)
+    time_s = measurements.time_s
+    readings = {}
+    for output in output_names:
+        for name in OUTPUT_SENSORS.get(output, (output,)):
+            if name not in measurements.frame:
+                continue
+            values = measurements.frame[name].to_numpy(dtype=float)
+            ok = np.isfinite(values)
+            if ok.sum() < 2:
+                continue
+            on_grid = np.interp(series.time_s, time_s[ok], values[ok], left=np.nan, right=np.nan)
+            exact = np.searchsorted(time_s, series.time_s).clip(0, time_s.size - 1)
+            matched = np.isclose(time_s[exact], series.time_s)
+            on_grid[matched & ~np.isfinite(values[exact])] = np.nan
+            readings[name] = on_grid
+    return readings
+
+
+class SensorScreen:
+    """Sensor faults of one record (module docstring).
+
+    Parameters
+    ----------
+    data : MeasurementData, pandas.DataFrame, path or MeasuredSeries
+        The record as given to diagnose.
+    series : MeasuredSeries
+        Its model outputs on the diagnosis grid.
+    output_names : sequence of str
+
+    Attributes
+    ----------
+    found : list of SensorHypothesis
+        Sensor faults claimed so far.
+    alternative : SensorHypothesis or None
+        The best single-sensor fault tried against the model, claimed or not.
+    """
+
+    def __init__(self, data, series: MeasuredSeries, output_names):
+        self.output_names = list(output_names)
+        self.series = series
+        self.elapsed_s = series.time_s - series.time_s[0]
+        self.readings = record_readings(data, series, output_names)
+        self.found: list[SensorHypothesis] = []
+        self.alternative: SensorHypothesis | None = None
+        self.model_round_done = False
+        self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, output_names)
+        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, output_names)
+        self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
+
+    def corrected_series(self) -> MeasuredSeries:
+        """The series with the claimed sensor faults removed from its outputs."""
+        if not self.found:
+            return self.series
+        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names)
+        return dataclasses.replace(self.series, outputs=outputs)
+
+    def against_model(self, search, ranked, noise: float) -> SensorHypothesis | None:
+        """Claim the best single-sensor fault if it beats the physical effects (module docstring).
+
+        Parameters
+        ----------
+        search : EffectSearch
+            The first round's search (its ``predicted_before`` is the model fitted to the record).
+        ranked : list of Candidate
+            The physical effects of that round, best first.
+        noise : float
+            Estimated sensor noise, K.
+        """
+        from .discover import passes_tests
+
+        self.model_round_done = True
+        exclude = {h.fault.sensor for h in self.found}
+        candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
+                                         self.elapsed_s, self.output_names, exclude)
+        self.alternative = candidate
+        if candidate is None:
+            return None
+        best_physical = ranked[0] if ranked else None
+        if best_physical is not None:
+            candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
+        beats = best_physical is None or candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
+        if not (beats and passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)):
+            return None
+        self.found.append(candidate)
+        return candidate
+
+    def text(self, machine_verdict: str) -> str:
+        """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""
+        if not self.found:
+            return ""
+        faults = "; ".join(h.fault.describe() for h in self.found)
+        machine = ("the machine is healthy" if machine_verdict == "none"
+                   else f"on the corrected record the machine shows {machine_verdict}")
+        return f"Sensor fault: {faults}; {machine}."
+
+    def to_list(self) -> list:
+        """JSON list of the claimed sensor faults."""
+        return [h.to_dict() for h in self.found]
