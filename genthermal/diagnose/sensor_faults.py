@@ -63,6 +63,8 @@ MIN_NOISE_FACTOR = 2.0
 HEAT_TIME_CONSTANTS_S = (300.0, 900.0, 2700.0)
 #: Model outputs and the record sensors they are read from (mean over the sensors).
 OUTPUT_SENSORS = {"T_winding": WINDING_SENSORS, "T_iron": ("T_iron",), "T_outlet": ("T_outlet",)}
+#: Shapes fitted, simplest first: a later kind must beat an earlier one of the same sensor by
+#: :data:`PREFERENCE_BIC` (a gain error on a steady temperature looks like a bias).
 SHAPE_KINDS = ("bias", "drift", "stuck", "gain")
 
 
@@ -308,7 +310,7 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
                 value, onset, before, after, signal = fit_shape(kind, disagreement, others, elapsed_s, baseline)
                 n = int(np.isfinite(disagreement).sum())
                 delta = _bic(after, before, n, 2)
-                if best is None or delta < best[0]:
+                if best is None or delta < best[0] - (PREFERENCE_BIC if best[1] == name else 0):
                     best = (delta, name, kind, value, onset, before, after, signal, noise, disagreement,
                             others, baseline, n)
         delta, name, kind, value, onset, before, after, signal, noise, disagreement, others, baseline, n = best
@@ -343,7 +345,7 @@ def screen_noise(readings: dict, elapsed_s: np.ndarray, output_names) -> list:
 
 
 def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: dict, elapsed_s: np.ndarray,
-                         output_names, exclude=()) -> SensorHypothesis | None:
+                         output_names, exclude=(), outputs=None, onsets=None) -> SensorHypothesis | None:
     """The best sensor fault of a single-sensor output, scored on the RSS over all outputs.
 
     Parameters
@@ -356,6 +358,10 @@ def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: 
     output_names : sequence of str
     exclude : collection of str
         Sensors already explained.
+    outputs : collection of str, optional
+        Only faults of the sensors of these outputs (a detector already says which sensor moved).
+    onsets : array_like, optional
+        Onset sample indices to try (default: the whole record).
     """
     residual = measured - predicted
     valid = np.isfinite(residual)
@@ -364,13 +370,14 @@ def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: 
     groups, best = sensor_groups(readings, output_names), None
     for i, output in enumerate(output_names):
         sensors = groups.get(output, [])
-        if len(sensors) != 1 or sensors[0] in exclude:
+        if len(sensors) != 1 or sensors[0] in exclude or (outputs is not None and output not in outputs):
             continue
         for kind in SHAPE_KINDS:
-            value, onset, before, after, signal = fit_shape(kind, residual[i], predicted[i], elapsed_s)
+            value, onset, before, after, signal = fit_shape(kind, residual[i], predicted[i], elapsed_s, onsets=onsets)
             rss_after = rss_before - before + after
             delta = _bic(rss_after, rss_before, n, 2)
-            if best is None or delta < best.delta_bic:
+            if best is None or delta < best.delta_bic - (PREFERENCE_BIC if best.evidence == "model" and
+                                                         best.fault.sensor in output_columns(readings, output) else 0):
                 columns = output_columns(readings, output)
                 sensor = columns[0] if len(columns) == 1 else output
                 best = SensorHypothesis(SensorFault(sensor, kind, float(value), float(elapsed_s[onset])), onset,

@@ -8,8 +8,10 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    runs on the corrected record;
 2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
    over all model outputs, is claimed when it passes the four tests and beats the best physical
-   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`; the round is then run
-   again on the record with that sensor corrected, so what the machine does is still judged.
+   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`, or when, fitted on top of
+   the best physical effect (the record may hold a machine effect or a model error as well), it
+   still passes the four tests against that effect alone; the round is then run again on the
+   record with that sensor corrected, so what the machine does is still judged.
 """
 
 from __future__ import annotations
@@ -85,7 +87,7 @@ class SensorScreen:
         outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names)
         return dataclasses.replace(self.series, outputs=outputs)
 
-    def against_model(self, search, ranked, noise: float) -> SensorHypothesis | None:
+    def against_model(self, search, ranked, noise: float, outputs=None, onsets=None) -> SensorHypothesis | None:
         """Claim the best single-sensor fault if it beats the physical effects (module docstring).
 
         Parameters
@@ -96,21 +98,35 @@ class SensorScreen:
             The physical effects of that round, best first.
         noise : float
             Estimated sensor noise, K.
+        outputs, onsets : optional
+            Restrict the faults tried to the sensors of these outputs and to these onset samples
+            (:func:`~genthermal.diagnose.sensor_faults.screen_against_model`).
         """
         from .discover import passes_tests
 
         self.model_round_done = True
         exclude = {h.fault.sensor for h in self.found}
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
-                                         self.elapsed_s, self.output_names, exclude)
+                                         self.elapsed_s, self.output_names, exclude, outputs, onsets)
         self.alternative = candidate
         if candidate is None:
             return None
         best_physical = ranked[0] if ranked else None
-        if best_physical is not None:
+        alone = passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)
+        if best_physical is None:
+            claimed = alone
+        else:
             candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
-        beats = best_physical is None or candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
-        if not (beats and passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)):
+            claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
+            if not claimed:  # the record may hold a machine effect (or model error) and a sensor fault
+                on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
+                                              self.elapsed_s, self.output_names, exclude, outputs, onsets)
+                if on_top is not None and on_top.fault.sensor == candidate.fault.sensor and passes_tests(
+                        on_top.rmse_before, on_top.rmse_after, on_top.delta_bic, noise):
+                    on_top.alternative = (f"on top of {best_physical.effect}: RMSE {on_top.rmse_before:.3f} → "
+                                          f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
+                    candidate, claimed = on_top, True
+        if not claimed:
             return None
         self.found.append(candidate)
         return candidate

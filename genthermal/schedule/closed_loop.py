@@ -38,6 +38,7 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, generator_inputs, mission_segments,
                    predict, remaining_after)
 from .power_system import PowerSystem
+from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Default back-off margin below θmax, K.
@@ -79,6 +80,8 @@ class ManagerSettings:
         thesis linear filter on the design model).
     detection : DetectionSettings
         Fault detection and identification in flight.
+    sensor_watch : SensorWatchSettings
+        Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
     """
@@ -93,6 +96,7 @@ class ManagerSettings:
     tell_fault: bool = False
     filter: str = "ekf"
     detection: DetectionSettings = DetectionSettings()
+    sensor_watch: SensorWatchSettings = SensorWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
@@ -130,6 +134,8 @@ class FlightResult:
     monitor : FaultMonitor or None
         Alarms, identifications and recalibrations of the flight (closed loop).
     settings : ManagerSettings or None
+    sensor_watch : SensorWatch or None
+        Sensor faults injected, claimed and masked (closed loop).
     """
 
     system: PowerSystem
@@ -146,6 +152,7 @@ class FlightResult:
     schedule_table: object = None
     monitor: object = None
     settings: object = None
+    sensor_watch: object = None
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
@@ -351,13 +358,18 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
+    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names)
+    injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
+    watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
     recorder = _Recorder(system)
     measured, t = None, 0.0
     while segments:
         if measured is not None:
+            before = [(e.z.copy(), None if e.P is None else e.P.copy()) for e in estimators]
             for g, estimator in enumerate(estimators):
                 estimator.update(measured[g])
             if not settings.tell_fault:
+                watch.cycle(t, estimators, measured, before, monitor)  # sensor faults first: never seen as heat
                 monitor.cycle(t, estimators)
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
@@ -382,9 +394,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
+        sample_times = t + dt * np.arange(1, n + 1)
+        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
         monitor.record(t, applied.currents_A, sensed)
         measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    return recorder.result(scheduler, True, monitor=monitor, settings=settings)
+    result = recorder.result(scheduler, True, monitor=monitor, settings=settings)
+    result.sensor_watch = watch
+    return result
