@@ -370,7 +370,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 estimator.update(measured[g])
             if not settings.tell_fault:
                 watch.cycle(t, estimators, measured, before, monitor)  # sensor faults first: never seen as heat
+                believed = list(monitor.beliefs)
                 monitor.cycle(t, estimators)
+                watch.review(t, believed, estimators, monitor)  # a new belief may be a sensor's doing
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
             if settings.tell_fault:
