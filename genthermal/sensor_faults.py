@@ -118,7 +118,7 @@ class SensorFault:
         when = f"from {self.onset_s / 3600:.2f} h" if self.onset_s > 0 else "from the start"
         what = {"bias": f"reads {abs(self.value):.2f} K {'high' if self.value > 0 else 'low'}",
                 "drift": f"drifts by {self.value:+.2f} K/h",
-                "stuck": f"is stuck at {self.value:.2f} °C",
+                "stuck": f"is stuck at {self.value:.2f} °C" if self.value != 0.0 else "is stuck at its reading",
                 "gain": f"reads {100 * abs(self.value):.1f} % {'high' if self.value > 0 else 'low'} (gain error)",
                 "noise": f"is {self.value:.1f}× noisier than its usual noise"}[self.kind]
         return f"the {self.sensor} sensor {what} {when}"

@@ -6,7 +6,7 @@ import pytest
 from genthermal.diagnose import diagnose
 from genthermal.diagnose.compare import measured_series
 from genthermal.diagnose.hidden import make_hidden_effect_case
-from genthermal.diagnose.sensor_faults import fit_noise_increase, fit_shape, screen_redundant
+from genthermal.diagnose.sensor_faults import fit_noise_increase, fit_shape, screen_redundant, sensor_columns
 from genthermal.diagnose.sensor_screen import record_readings
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
@@ -79,14 +79,19 @@ def test_noise_increase_found_with_its_onset_and_factor():
     assert fit_noise_increase(0.1 * rng.standard_normal(elapsed.size), elapsed)[0] < 1.5
 
 
+def _phase_screen(data, model):
+    interface = model.spec.interface
+    series = measured_series(data, None, model.output_names, interface)
+    readings = record_readings(data, series, interface)
+    return screen_redundant(readings, series.inputs, series.time_s - series.time_s[0], series.dt_s,
+                            sensor_columns(interface), interface.generator.phase_inputs)
+
+
 @pytest.mark.parametrize("sensor", ["T_winding_u", "T_winding_v", "T_winding_w"])
 @pytest.mark.parametrize("kind, value", [("bias", 1.5), ("drift", -1.0), ("stuck", 0.0)])
 def test_a_phase_sensor_fault_is_named_by_the_redundancy_alone(healthy_record, plant_model, sensor, kind, value):
     data = inject_sensor_faults(healthy_record, [SensorFault(sensor, kind, value, 1.4 * HOUR)])
-    series = measured_series(data, None, plant_model.output_names)
-    readings = record_readings(data, series, plant_model.output_names)
-    found = screen_redundant(readings, series.inputs, series.time_s - series.time_s[0], series.dt_s,
-                             plant_model.output_names)
+    found = _phase_screen(data, plant_model)
     assert [(h.fault.sensor, h.fault.kind) for h in found] == [(sensor, kind)]
     assert abs(found[0].fault.onset_s - 1.4 * HOUR) < 120.0
 
@@ -94,10 +99,7 @@ def test_a_phase_sensor_fault_is_named_by_the_redundancy_alone(healthy_record, p
 def test_no_phase_fault_is_claimed_on_healthy_or_heated_windings(healthy_record, plant_model):
     heated = make_hidden_effect_case("end_winding_stray_loss", seed=4).data
     for data in (healthy_record, heated):
-        series = measured_series(data, None, plant_model.output_names)
-        readings = record_readings(data, series, plant_model.output_names)
-        assert screen_redundant(readings, series.inputs, series.time_s - series.time_s[0], series.dt_s,
-                                plant_model.output_names) == []
+        assert _phase_screen(data, plant_model) == []
 
 
 def test_the_issue_case_iron_drift_is_a_sensor_fault_and_the_machine_is_healthy(healthy_record, plant_model,

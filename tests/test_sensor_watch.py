@@ -16,6 +16,7 @@ from genthermal.schedule.report import flight_summary
 from genthermal.schedule.sensor_watch import SensorFaultInjector, SensorWatchSettings, parse_sensor_faults
 
 NAMES = ("gen1", "gen2")
+OUTPUTS = ("T_winding", "T_iron")
 #: The Fig. 7.7 mission flown to 88 °C: the healthy flight peaks near 85 °C, so a winding sensor
 #: reading 6 K high would make the manager shed load for nothing.
 LIMIT_C = 88.0
@@ -33,14 +34,14 @@ WINDING_BIAS = {"generator": 1, "sensor": "T_winding", "kind": "bias", "onset_mi
 ])
 def test_bad_sensor_fault_entries_name_the_field(entry, field):
     with pytest.raises(InputError) as error:
-        parse_sensor_faults([entry], NAMES)
+        parse_sensor_faults([entry], NAMES, OUTPUTS)
     assert field in str(error.value)
 
 
 def test_injector_holds_a_stuck_reading_across_cycles_and_biases_only_its_sensor():
     faults = parse_sensor_faults([{"generator": "gen2", "sensor": "T_iron", "kind": "stuck", "onset_min": 1},
                                   {"generator": 1, "sensor": "T_winding", "kind": "bias", "onset_min": 0, "value": 2}],
-                                 NAMES)
+                                 NAMES, OUTPUTS)
     injector = SensorFaultInjector(faults, [0.1, 0.1])
     sensed = np.arange(2 * 2 * 6, dtype=float).reshape(2, 2, 6)
     first = injector.apply(np.arange(6) * 20.0, sensed)

@@ -390,7 +390,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     if sensor_faults:
         from .sensor_screen import SensorScreen
 
-        screen = SensorScreen(data, series, model.output_names)
+        screen = SensorScreen(data, series, model.spec.interface)
         series = screen.corrected_series()
     calibration = None
     if baseline is not None:

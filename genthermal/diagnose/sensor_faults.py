@@ -26,6 +26,9 @@ Which signal, which evidence (structured residuals)
   :func:`~genthermal.diagnose.discover.passes_tests` on :math:`d_c` and explains :math:`d_c` better
   (by :data:`PREFERENCE_BIC`) than a local heat flow: the phase's own first-order response to
   :math:`I^2` from an onset (time constants :data:`HEAT_TIME_CONSTANTS_S`). This needs no model.
+The outputs and their record columns come from the machine's sensor schema
+(:attr:`~genthermal.machines.interface.MachineInterface.sensors`).
+
 * **Single sensors** (the iron PT100; the winding in flight, where one value is logged): the
   reference is the model residual :math:`y_c - \hat y_c` of the model fitted to the whole record
   (initial state and earlier effects refitted, :class:`~genthermal.diagnose.search.EffectSearch`).
@@ -44,8 +47,6 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..losses import PHASE_CURRENTS
-from ..measurements import WINDING_SENSORS
 from ..sensor_faults import SensorFault
 from .search import noise_std
 
@@ -61,8 +62,6 @@ MIN_NOISE_FACTOR = 2.0
 #: Time constants of the local heat-flow alternative of a phase sensor, s (the fastest winding
 #: mode of the thesis model is 6.5 min; the slowest about an hour).
 HEAT_TIME_CONSTANTS_S = (300.0, 900.0, 2700.0)
-#: Model outputs and the record sensors they are read from (mean over the sensors).
-OUTPUT_SENSORS = {"T_winding": WINDING_SENSORS, "T_iron": ("T_iron",), "T_outlet": ("T_outlet",)}
 #: Shapes fitted, simplest first: a later kind must beat an earlier one of the same sensor by
 #: :data:`PREFERENCE_BIC` (a gain error on a steady temperature looks like a bias).
 SHAPE_KINDS = ("bias", "drift", "stuck", "gain")
@@ -91,6 +90,8 @@ class SensorHypothesis:
     columns : tuple of str
         Record columns the reading comes from (several when one value is logged in the three
         phase columns); default the sensor's own.
+    output : str
+        Model output the sensor is read for.
     """
 
     fault: SensorFault
@@ -102,6 +103,7 @@ class SensorHypothesis:
     signal: np.ndarray
     alternative: str = ""
     columns: tuple = ()
+    output: str = ""
 
     def __post_init__(self):
         self.columns = tuple(self.columns) or (self.fault.sensor,)
@@ -253,25 +255,32 @@ def _lowpass(signal: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
     return out
 
 
-def sensor_groups(readings: Mapping[str, np.ndarray], output_names: Sequence[str]) -> dict:
+def sensor_columns(interface) -> dict:
+    """Model output → the record columns it is read from (the machine's sensor schema)."""
+    return {sensor.output: tuple(sensor.columns) for sensor in interface.sensors}
+
+
+def sensor_groups(readings: Mapping[str, np.ndarray], columns: Mapping[str, Sequence[str]]) -> dict:
     """Output → the distinct sensors read for it (sensors identical to another are one sensor: a
-    record that logs one winding value in the three phase columns has one winding sensor)."""
+    record that logs one winding value in the three phase columns has one winding sensor).
+    ``columns``: :func:`sensor_columns`."""
     groups = {}
-    for output in output_names:
+    for output in columns:
         distinct = []
-        for name in output_columns(readings, output):
+        for name in output_columns(readings, output, columns):
             if not any(np.array_equal(readings[name], readings[other], equal_nan=True) for other in distinct):
                 distinct.append(name)
         groups[output] = distinct
     return groups
 
 
-def output_columns(readings: Mapping[str, np.ndarray], output: str) -> list:
+def output_columns(readings: Mapping[str, np.ndarray], output: str, columns: Mapping[str, Sequence[str]]) -> list:
     """The record columns of ``readings`` that ``output`` is read from."""
-    return [s for s in OUTPUT_SENSORS.get(output, (output,)) if s in readings]
+    return [s for s in columns.get(output, (output,)) if s in readings]
 
 
-def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float, output_names) -> list:
+def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float, columns: Mapping,
+                     phase_inputs: Sequence[str] = ()) -> list:
     """Sensor faults visible as one sensor disagreeing with the others of its output (module
     docstring), at most one per output (two sensors left cannot tell which is wrong).
 
@@ -283,7 +292,11 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
         The series inputs (phase currents, A).
     elapsed_s : numpy.ndarray
     dt_s : float
-    output_names : sequence of str
+    columns : mapping
+        :func:`sensor_columns`.
+    phase_inputs : sequence of str
+        Per-phase current inputs, in the order of a redundant output's columns (a phase's own
+        extra :math:`I^2` is in the baseline); empty: the baseline is the offset alone.
 
     Returns
     -------
@@ -292,8 +305,10 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
     from .discover import passes_tests
 
     found = []
-    groups = sensor_groups(readings, output_names)
-    mean_square = np.mean([inputs[p].to_numpy(float) ** 2 for p in PHASE_CURRENTS], axis=0)
+    groups = sensor_groups(readings, columns)
+    currents = [p for p in phase_inputs if p in inputs]
+    mean_square = np.mean([inputs[p].to_numpy(float) ** 2 for p in currents], axis=0) if currents else \
+        np.zeros(elapsed_s.size)
     heat = {tau: _lowpass(mean_square, dt_s, tau) for tau in HEAT_TIME_CONSTANTS_S}
     for output, names in groups.items():
         if len(names) < 3:
@@ -302,7 +317,8 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
         for name in names:
             others = np.nanmean([readings[o] for o in names if o != name], axis=0)
             disagreement = readings[name] - others
-            phase = PHASE_CURRENTS[WINDING_SENSORS.index(name)] if name in WINDING_SENSORS else None
+            position = list(columns[output]).index(name)
+            phase = currents[position] if len(currents) == len(columns[output]) else None
             own = (inputs[phase].to_numpy(float) ** 2 - mean_square) if phase else np.zeros_like(mean_square)
             baseline = np.column_stack([np.ones_like(own), _lowpass(own, dt_s, HEAT_TIME_CONSTANTS_S[1])])
             noise = noise_std(disagreement[None, :])
@@ -326,26 +342,29 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
             continue
         fault = SensorFault(name, kind, float(value if kind != "stuck" else value), float(elapsed_s[onset]))
         found.append(SensorHypothesis(fault, int(onset), rmse_before, rmse_after, delta, "redundancy", signal,
-                                      f"local heat flow (τ = {heat_tau / 60:.0f} min) ΔBIC {heat_bic:.0f}"))
+                                      f"local heat flow (τ = {heat_tau / 60:.0f} min) ΔBIC {heat_bic:.0f}",
+                                      output=output))
     return found
 
 
-def screen_noise(readings: dict, elapsed_s: np.ndarray, output_names) -> list:
-    """Sensors whose noise grew by at least :data:`MIN_NOISE_FACTOR` from an onset."""
+def screen_noise(readings: dict, elapsed_s: np.ndarray, columns: Mapping) -> list:
+    """Sensors whose noise grew by at least :data:`MIN_NOISE_FACTOR` from an onset (``columns``:
+    :func:`sensor_columns`)."""
     found = []
-    groups = sensor_groups(readings, output_names)
-    for output in output_names:
+    groups = sensor_groups(readings, columns)
+    for output in columns:
         for name in groups[output]:
             factor, onset, delta = fit_noise_increase(readings[name], elapsed_s)
             if factor >= MIN_NOISE_FACTOR and delta < -PREFERENCE_BIC:
                 fault = SensorFault(name, "noise", float(factor), float(elapsed_s[onset]))
-                found.append(SensorHypothesis(fault, onset, float("nan"), float("nan"), delta, "noise",
-                                              np.zeros(elapsed_s.size), ""))
+                found.append(SensorHypothesis(fault, onset, float("nan"), float("nan"), delta,
+                                              "redundancy" if len(groups[output]) > 1 else "noise",
+                                              np.zeros(elapsed_s.size), "", output=output))
     return found
 
 
 def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: dict, elapsed_s: np.ndarray,
-                         output_names, exclude=(), outputs=None, onsets=None) -> SensorHypothesis | None:
+                         output_names, columns: Mapping, exclude=(), outputs=None, onsets=None) -> SensorHypothesis | None:
     """The best sensor fault of a single-sensor output, scored on the RSS over all outputs.
 
     Parameters
@@ -356,6 +375,8 @@ def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: 
         Sensor column → reading, °C (which outputs have a single sensor: :func:`sensor_groups`).
     elapsed_s : numpy.ndarray
     output_names : sequence of str
+    columns : mapping
+        :func:`sensor_columns`.
     exclude : collection of str
         Sensors already explained.
     outputs : collection of str, optional
@@ -367,7 +388,7 @@ def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: 
     valid = np.isfinite(residual)
     n = int(valid.sum())
     rss_before = float(np.nansum(residual ** 2))
-    groups, best = sensor_groups(readings, output_names), None
+    groups, best = sensor_groups(readings, columns), None
     for i, output in enumerate(output_names):
         sensors = groups.get(output, [])
         if len(sensors) != 1 or sensors[0] in exclude or (outputs is not None and output not in outputs):
@@ -376,13 +397,12 @@ def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: 
             value, onset, before, after, signal = fit_shape(kind, residual[i], predicted[i], elapsed_s, onsets=onsets)
             rss_after = rss_before - before + after
             delta = _bic(rss_after, rss_before, n, 2)
-            if best is None or delta < best.delta_bic - (PREFERENCE_BIC if best.evidence == "model" and
-                                                         best.fault.sensor in output_columns(readings, output) else 0):
-                columns = output_columns(readings, output)
-                sensor = columns[0] if len(columns) == 1 else output
+            if best is None or delta < best.delta_bic - (PREFERENCE_BIC if best.output == output else 0):
+                present = output_columns(readings, output, columns)
+                sensor = present[0] if len(present) == 1 else output
                 best = SensorHypothesis(SensorFault(sensor, kind, float(value), float(elapsed_s[onset])), onset,
                                         math.sqrt(rss_before / n), math.sqrt(rss_after / n), delta, "model", signal,
-                                        columns=tuple(columns))
+                                        columns=tuple(present), output=output)
     return best
 
 
@@ -391,8 +411,7 @@ def corrected_readings(readings: dict, hypotheses: Sequence[SensorHypothesis]) -
     (NaN) from the onset when it is stuck or noisy and its output has other sensors."""
     corrected = {name: np.array(values, dtype=float) for name, values in readings.items()}
     for hypothesis in hypotheses:
-        redundant = hypothesis.evidence == "redundancy" or (hypothesis.evidence == "noise"
-                                                             and hypothesis.fault.sensor in WINDING_SENSORS)
+        redundant = hypothesis.evidence == "redundancy"
         for name in (c for c in hypothesis.columns if c in corrected):
             if hypothesis.fault.kind in ("stuck", "noise") and redundant:
                 corrected[name][hypothesis.onset_index:] = np.nan
@@ -401,11 +420,11 @@ def corrected_readings(readings: dict, hypotheses: Sequence[SensorHypothesis]) -
     return corrected
 
 
-def outputs_from(readings: dict, output_names) -> np.ndarray:
+def outputs_from(readings: dict, output_names, columns: Mapping) -> np.ndarray:
     """Model outputs from sensor readings: the mean of each output's sensors (NaN-aware)."""
     rows = []
     for output in output_names:
-        names = [s for s in OUTPUT_SENSORS.get(output, (output,)) if s in readings]
+        names = output_columns(readings, output, columns)
         stacked = np.array([readings[s] for s in names])
         with np.errstate(all="ignore"):
             count = np.isfinite(stacked).sum(axis=0)

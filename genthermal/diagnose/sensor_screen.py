@@ -20,21 +20,23 @@ import dataclasses
 
 import numpy as np
 
+from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
-from .sensor_faults import (OUTPUT_SENSORS, PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
-                            screen_against_model, screen_noise, screen_redundant)
+from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
+                            screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
 
-def record_readings(data, series: MeasuredSeries, output_names) -> dict:
-    """Every sensor column of ``data`` on the grid of ``series`` (linear interpolation over the
-    finite samples; NaN outside them). A :class:`MeasuredSeries` gives its outputs as sensors."""
+def record_readings(data, series: MeasuredSeries, interface) -> dict:
+    """Every sensor column of ``data`` (schema of the machine ``interface``) on the grid of
+    ``series`` (linear interpolation over the finite samples; NaN outside them). A
+    :class:`MeasuredSeries` gives its outputs as sensors."""
     if isinstance(data, MeasuredSeries):
-        return {name: np.array(row, dtype=float) for name, row in zip(output_names, data.outputs)}
-    measurements = as_measurements(data)
+        return {name: np.array(row, dtype=float) for name, row in zip(interface.output_names, data.outputs)}
+    measurements = as_measurements(data, interface)
     time_s = measurements.time_s
     readings = {}
-    for output in output_names:
-        for name in OUTPUT_SENSORS.get(output, (output,)):
+    for output, columns in sensor_columns(interface).items():
+        for name in columns:
             if name not in measurements.frame:
                 continue
             values = measurements.frame[name].to_numpy(dtype=float)
@@ -58,7 +60,8 @@ class SensorScreen:
         The record as given to diagnose.
     series : MeasuredSeries
         Its model outputs on the diagnosis grid.
-    output_names : sequence of str
+    interface : MachineInterface
+        The machine's interface (sensor schema, phase currents).
 
     Attributes
     ----------
@@ -68,23 +71,25 @@ class SensorScreen:
         The best single-sensor fault tried against the model, claimed or not.
     """
 
-    def __init__(self, data, series: MeasuredSeries, output_names):
-        self.output_names = list(output_names)
+    def __init__(self, data, series: MeasuredSeries, interface):
+        self.output_names = list(interface.output_names)
+        self.columns = sensor_columns(interface)
         self.series = series
         self.elapsed_s = series.time_s - series.time_s[0]
-        self.readings = record_readings(data, series, output_names)
+        self.readings = record_readings(data, series, interface)
         self.found: list[SensorHypothesis] = []
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
-        self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, output_names)
-        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, output_names)
+        phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
+        self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
+        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, self.columns)
         self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
 
     def corrected_series(self) -> MeasuredSeries:
         """The series with the claimed sensor faults removed from its outputs."""
         if not self.found:
             return self.series
-        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names)
+        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names, self.columns)
         return dataclasses.replace(self.series, outputs=outputs)
 
     def against_model(self, search, ranked, noise: float, outputs=None, onsets=None) -> SensorHypothesis | None:
@@ -107,7 +112,8 @@ class SensorScreen:
         self.model_round_done = True
         exclude = {h.fault.sensor for h in self.found}
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
-                                         self.elapsed_s, self.output_names, exclude, outputs, onsets)
+                                         self.elapsed_s, self.output_names, self.columns, exclude,
+                                         outputs, onsets)
         self.alternative = candidate
         if candidate is None:
             return None
@@ -120,7 +126,8 @@ class SensorScreen:
             claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
             if not claimed:  # the record may hold a machine effect (or model error) and a sensor fault
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
-                                              self.elapsed_s, self.output_names, exclude, outputs, onsets)
+                                              self.elapsed_s, self.output_names, self.columns, exclude,
+                                              outputs, onsets)
                 if on_top is not None and on_top.fault.sensor == candidate.fault.sensor and passes_tests(
                         on_top.rmse_before, on_top.rmse_after, on_top.delta_bic, noise):
                     on_top.alternative = (f"on top of {best_physical.effect}: RMSE {on_top.rmse_before:.3f} → "

@@ -358,7 +358,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
-    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names)
+    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
+                                        system.planning_model.output_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
     recorder = _Recorder(system)

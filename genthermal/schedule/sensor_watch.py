@@ -7,7 +7,8 @@ Scenario key (top level of a mission YAML)::
       - {generator: gen2, sensor: T_winding, kind: bias, onset_min: 60, value: 4}  # K
       - {generator: 1, sensor: T_winding, kind: stuck, onset_min: 60}             # holds its reading
 
-``sensor`` is a flown output (``T_winding``, ``T_iron``); ``kind`` and ``value`` as
+``sensor`` is an output of the flown machine's sensor schema (``T_winding``, ``T_iron`` for the
+thesis generator); ``kind`` and ``value`` as
 :class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
 is held). The faulty readings go to the filter and to the manager's record, as on a real aircraft.
 
@@ -50,8 +51,6 @@ from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
 from .monitor import Cusum
 
 SCENARIO_KEY = "sensor_faults"
-#: Flown outputs (row of the measurement vector).
-FLOWN_SENSORS = ("T_winding", "T_iron")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,15 +101,20 @@ class FlightSensorFault:
 
     generator: int
     fault: SensorFault
-
-    @property
-    def row(self) -> int:
-        """Row of the faulty sensor in the measurement vector."""
-        return FLOWN_SENSORS.index(self.fault.sensor)
+    row: int
 
 
-def parse_sensor_faults(entries, names) -> tuple[FlightSensorFault, ...]:
-    """The ``sensor_faults`` scenario key (module docstring); InputError names the bad field."""
+def parse_sensor_faults(entries, names, outputs) -> tuple[FlightSensorFault, ...]:
+    """The ``sensor_faults`` scenario key (module docstring); InputError names the bad field.
+
+    Parameters
+    ----------
+    entries : list or None
+    names : sequence of str
+        Generator names.
+    outputs : sequence of str
+        The flown model's outputs (the measurement vector's rows).
+    """
     if entries is None:
         return ()
     if not isinstance(entries, list):
@@ -130,8 +134,8 @@ def parse_sensor_faults(entries, names) -> tuple[FlightSensorFault, ...]:
             raise InputError(f"{path}.generator", generator,
                              f"must be a generator number 1..{len(names)} or a name among {', '.join(names)}")
         sensor = entry.get("sensor")
-        if sensor not in FLOWN_SENSORS:
-            raise InputError(f"{path}.sensor", sensor, f"must be one of {', '.join(FLOWN_SENSORS)}")
+        if sensor not in outputs:
+            raise InputError(f"{path}.sensor", sensor, f"must be one of {', '.join(outputs)}")
         kind = entry.get("kind")
         if kind not in SENSOR_FAULT_KINDS:
             raise InputError(f"{path}.kind", kind, f"must be one of {', '.join(SENSOR_FAULT_KINDS)}")
@@ -146,13 +150,9 @@ def parse_sensor_faults(entries, names) -> tuple[FlightSensorFault, ...]:
         value = checked_number(entry.get("value", 0.0), f"{path}.value", f"a number ({SENSOR_FAULT_KINDS[kind]})")
         if kind == "noise" and not value >= 1.0:
             raise InputError(f"{path}.value", entry["value"], "is the factor on the noise standard deviation: >= 1")
-        faults.append(FlightSensorFault(index, SensorFault(sensor, kind, float(value), 60.0 * float(onset))))
+        faults.append(FlightSensorFault(index, SensorFault(sensor, kind, float(value), 60.0 * float(onset)),
+                                        list(outputs).index(sensor)))
     return tuple(faults)
-
-
-def _flown(sensor: str) -> str:
-    """The flown output a record column belongs to (``T_winding_u`` → ``T_winding``)."""
-    return "T_winding" if sensor.startswith("T_winding") else sensor
 
 
 class SensorFaultInjector:
@@ -213,8 +213,11 @@ class SensorWatch:
     def __init__(self, system, settings: SensorWatchSettings, detection, injected=()):
         self.system, self.settings, self.detection = system, settings, detection
         self.injected = tuple(injected)
+        interface = system.planning_model.spec.interface
+        self.outputs = tuple(interface.output_names)
+        self._output_of = {column: s.output for s in interface.sensors for column in s.columns}
         n = system.n_generators
-        self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in FLOWN_SENSORS]
+        self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
                       for _ in range(n)]
         self.corrections: dict[tuple[int, int], SensorFault] = {}
         self.claims, self.checks = [], []
@@ -254,21 +257,21 @@ class SensorWatch:
         """
         if not self.settings.enabled:
             return []
-        z = np.array([[e.innovation[r] / e.innovation_std[r] for r in range(len(FLOWN_SENSORS))] for e in estimators])
+        z = np.array([[e.innovation[r] / e.innovation_std[r] for r in range(len(self.outputs))] for e in estimators])
         claimed, known = [], set(self.corrections)
         for g in range(len(estimators)):
             alarmed = []
-            for r in range(len(FLOWN_SENSORS)):
+            for r in range(len(self.outputs)):
                 others = np.delete(z[:, r], g)
                 others = others[np.isfinite(others)]
                 d = z[g, r] - (float(np.median(others)) if others.size else 0.0)
                 if self.tests[g][r].update(d):
-                    alarmed.append(FLOWN_SENSORS[r])
+                    alarmed.append(self.outputs[r])
             if g in self.suspects:  # alarmed a cycle ago: the record now holds a cycle after the change
-                if self._check(g, t_s, [FLOWN_SENSORS[self.suspects.pop(g)]], monitor):
+                if self._check(g, t_s, [self.outputs[self.suspects.pop(g)]], monitor):
                     claimed.append(g)
             elif len(alarmed) == 1 and self._may_check(g, t_s):
-                self.suspects[g] = FLOWN_SENSORS.index(alarmed[0])
+                self.suspects[g] = self.outputs.index(alarmed[0])
         for g in range(len(estimators)):
             new = set(self.corrections) - known
             if g not in claimed and g not in self.suspects:
@@ -313,7 +316,7 @@ class SensorWatch:
                 continue
             beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
             monitor.beliefs[g] = before  # the record is checked on the machine as believed before
-            if self._check(g, t_s, list(FLOWN_SENSORS), monitor, delay_s=0.0):
+            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0):
                 undone.append(g)
                 estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
             else:
@@ -345,26 +348,26 @@ class SensorWatch:
             model = calibrate(model, before, [p for p in self.detection.calibrate_parameters if p in model.parameters],
                               self.settings.identify_dt_s).model  # the model as this unit was before the change
         series = series_for(model, record, self.settings.identify_dt_s)
-        screen = SensorScreen(record, series, model.output_names)
+        screen = SensorScreen(record, series, model.spec.interface)
         search = EffectSearch(model, series)
         names = [n for n in search.candidates() if n in self.detection.fault_effects]
         ranked = search.rank(names) if names else []
         onsets = np.flatnonzero((series.time_s >= alarm_s - self.settings.lookback_s)
                                 & (series.time_s <= alarm_s + self.settings.identify_dt_s))
         onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
-        masked = {FLOWN_SENSORS[r] for (h, r) in self.corrections if h == g}
+        masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
         outputs = [a for a in alarmed if a not in masked]
         found = screen.against_model(search, ranked, search.noise, outputs, onsets) if outputs and onsets.size else None
-        noisy = [h for h in screen.found if h.evidence == "noise" and _flown(h.fault.sensor) in outputs]
+        noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
         new = [found] if found is not None else noisy[:1]
         start_s = float(series.time_s[0])
         self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": bool(new),
                             "best_machine_fault": ranked[0].effect if ranked else None,
                             "solve_s": time.perf_counter() - started})
         for hypothesis in new:
-            fault = dataclasses.replace(hypothesis.fault, sensor=_flown(hypothesis.fault.sensor),
+            fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
                                         onset_s=start_s + hypothesis.fault.onset_s)
-            self.corrections[(g, FLOWN_SENSORS.index(fault.sensor))] = fault
+            self.corrections[(g, self.outputs.index(fault.sensor))] = fault
             self._undo_beliefs_since(g, fault.onset_s, monitor)
             self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                 "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
