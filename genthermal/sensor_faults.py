@@ -75,7 +75,8 @@ class SensorFault:
         """Unit of :attr:`value`."""
         return SENSOR_FAULT_KINDS[self.kind]
 
-    def reading(self, elapsed_s, true_C, noise_std_K: float = 0.0, rng: np.random.Generator | None = None) -> np.ndarray:
+    def reading(self, elapsed_s, true_C, noise_std_K: float = 0.0,
+                rng: np.random.Generator | None = None) -> np.ndarray:
         """What the faulty sensor reports.
 
         Parameters

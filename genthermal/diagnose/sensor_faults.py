@@ -166,7 +166,10 @@ def fit_shape(kind: str, reference, truth, elapsed_s, baseline=None, onsets=None
     n = reference.size
     ok = np.isfinite(reference) & np.isfinite(truth)
     base = np.zeros((n, 0)) if baseline is None else np.asarray(baseline, float).reshape(n, -1)
-    _, rss_before = _least_squares(reference[ok], base[ok]) if base.shape[1] else (None, float(reference[ok] @ reference[ok]))
+    if base.shape[1]:
+        _, rss_before = _least_squares(reference[ok], base[ok])
+    else:
+        rss_before = float(reference[ok] @ reference[ok])
 
     def rss_at(onset):
         column = _shape_column(kind, onset, elapsed_s, truth)
@@ -340,7 +343,7 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
         heat_bic, heat_tau = min(alternatives)
         if heat_bic <= delta + PREFERENCE_BIC:
             continue
-        fault = SensorFault(name, kind, float(value if kind != "stuck" else value), float(elapsed_s[onset]))
+        fault = SensorFault(name, kind, float(value), float(elapsed_s[onset]))
         found.append(SensorHypothesis(fault, int(onset), rmse_before, rmse_after, delta, "redundancy", signal,
                                       f"local heat flow (τ = {heat_tau / 60:.0f} min) ΔBIC {heat_bic:.0f}",
                                       output=output))
@@ -364,7 +367,8 @@ def screen_noise(readings: dict, elapsed_s: np.ndarray, columns: Mapping) -> lis
 
 
 def screen_against_model(measured: np.ndarray, predicted: np.ndarray, readings: dict, elapsed_s: np.ndarray,
-                         output_names, columns: Mapping, exclude=(), outputs=None, onsets=None) -> SensorHypothesis | None:
+                         output_names, columns: Mapping, exclude=(), outputs=None,
+                         onsets=None) -> SensorHypothesis | None:
     """The best sensor fault of a single-sensor output, scored on the RSS over all outputs.
 
     Parameters

@@ -23,19 +23,20 @@ criterion: a machine fault moves both sensors as the model couples them, a senso
 a way no heat flow can. Only a claimed sensor fault is acted on here; machine faults stay with the
 fault monitor.
 
-**Acting on it.** From the fitted onset on, the faulty sensor is masked: the filter updates with
-the other sensor only and the sensor is NaN in the manager's record. Masking, not subtracting the
-fitted fault: on a flight record calibrated for a few parameters, a fitted bias is off by some tenths
-of a kelvin (the model's remaining error), and a corrected reading that far off makes the fault
-monitor's differential test, whose threshold is 0.2 K, alarm on the *other* units. The claim's own
-cycle is redone: the filter goes back to its prediction and updates without the sensor; that cycle's innovation is withheld from every test and the fault monitor's
-CUSUM of that generator restarts, so the fault monitor never sees the faulty reading as heat. When the fault monitor
-changes a unit's believed machine first (its test alarmed before this one), the unit's record is
-checked for a fault of either sensor at once; a claim undoes the new belief, and any claim drops
-the effects identified on that unit after the fault's fitted onset. The believed machine,
-hence the load plan, is not changed by a sensor fault. The price: with the
-winding sensor of a unit masked, the fault monitor's differential winding test has no reading of
-that unit (with two units, no test at all) for the rest of the flight.
+**Acting on it.** From the fitted onset on, the faulty sensor is masked: the filter updates with the
+other sensor only and the sensor is NaN in the manager's record. Masking, not subtracting the fitted
+fault: on a flight record calibrated for a few parameters, a fitted bias is off by some tenths of a
+kelvin (the model's remaining error), and a corrected reading that far off makes the fault monitor's
+differential test, whose threshold is 0.2 K, alarm on the *other* units. The claim's own cycle is
+redone: the filter goes back to its prediction and updates without the sensor; that cycle's
+innovation is withheld from every test and the fault monitor's CUSUM of that generator restarts, so
+the fault monitor never sees the faulty reading as heat. When the fault monitor changes a unit's
+believed machine first (its test alarmed before this one), the unit's record is checked for a fault
+of either sensor at once; a claim undoes the new belief, and any claim drops the effects identified
+on that unit after the fault's fitted onset. The believed machine, hence the load plan, is not
+changed by a sensor fault. The price: with the winding sensor of a unit masked, the fault monitor's
+differential winding test has no reading of that unit (with two units, no test at all) for the rest
+of the flight.
 """
 
 from __future__ import annotations
@@ -344,7 +345,8 @@ class SensorWatch:
         model = monitor.flown_model(g)
         alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
         before = record[record["time_s"] < alarm_s - self.settings.lookback_s]
-        if before["time_s"].size and before["time_s"].iloc[-1] - before["time_s"].iloc[0] >= self.settings.min_calibration_s:
+        span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
+        if span_s >= self.settings.min_calibration_s:
             model = calibrate(model, before, [p for p in self.detection.calibrate_parameters if p in model.parameters],
                               self.settings.identify_dt_s).model  # the model as this unit was before the change
         series = series_for(model, record, self.settings.identify_dt_s)
