@@ -8,9 +8,9 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    runs on the corrected record;
 2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
    over all model outputs, is claimed when it passes the four tests and beats the best physical
-   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`, or when, fitted on top of
-   the best physical effect (the record may hold a machine effect or a model error as well), it
-   still passes the four tests against that effect alone; the round is then run again on the
+   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
+   detector names the sensor and the time, also when fitted on top of the best physical effect
+   it still passes the four tests against that effect alone); the round is then run again on the
    record with that sensor corrected, so what the machine does is still judged.
 """
 
@@ -92,7 +92,8 @@ class SensorScreen:
         outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names, self.columns)
         return dataclasses.replace(self.series, outputs=outputs)
 
-    def against_model(self, search, ranked, noise: float, outputs=None, onsets=None) -> SensorHypothesis | None:
+    def against_model(self, search, ranked, noise: float, outputs=None, onsets=None,
+                      on_top: bool = False) -> SensorHypothesis | None:
         """Claim the best single-sensor fault if it beats the physical effects (module docstring).
 
         Parameters
@@ -106,6 +107,11 @@ class SensorScreen:
         outputs, onsets : optional
             Restrict the faults tried to the sensors of these outputs and to these onset samples
             (:func:`~genthermal.diagnose.sensor_faults.screen_against_model`).
+        on_top : bool
+            Also claim a fault that, fitted on top of the best physical effect, passes the four
+            tests against that effect alone. Only where a detector has already said which sensor
+            moved and when (in flight): on a record searched blind, a second physical effect that
+            moves one sensor most (an iron loss after a blockage) passes it too.
         """
         from .discover import passes_tests
 
@@ -124,7 +130,7 @@ class SensorScreen:
         else:
             candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
             claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
-            if not claimed:  # the record may hold a machine effect (or model error) and a sensor fault
+            if not claimed and on_top:  # the record may hold a machine effect (or model error) and a sensor fault
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
                                               self.elapsed_s, self.output_names, self.columns, exclude,
                                               outputs, onsets)
