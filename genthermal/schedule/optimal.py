@@ -128,9 +128,7 @@ class _Transcription:
                 n_y = generator.Cy.shape[0]
                 if current is None:  # rest substep of free length h = r_k / M
                     h_s = 60.0 * w[self.r_index(k)] / settings.rest_substeps
-                    decay = ca.exp(ca.DM(generator.eigenvalues) * h_s)
-                    modes = decay * (ca.DM(generator.V_inv) @ (previous - xss))
-                    nonlinear.append(w[x] - xss - ca.DM(generator.V) @ modes)
+                    nonlinear.append(w[x] - xss - generator.decay.apply(previous - xss, h_s))
                     linear.add([(x, generator.Cy)] + peak(n_y), [-np.inf] * n_y,
                                (0.0 if minimax else problem.limit_C) - y_rest)
                     continue
@@ -143,6 +141,9 @@ class _Transcription:
                                (0.0 if minimax else problem.limit_C) - Q_f)
         for k in range(n_seg):
             linear.add([([self.d_index(g, k) for g in range(n_gen)], np.ones((1, n_gen)))], [0.0], [0.0])
+        if np.isfinite(problem.rest_budget_s):  # the flight's rest budget: total rest, minutes
+            linear.add([([self.r_index(k) for k in range(n_seg)], np.ones((1, n_seg)))], [-np.inf],
+                       [problem.rest_budget_s / 60.0])
         self.nonlinear = ca.vertcat(*nonlinear)
         A = sparse_dm(linear.matrix(self.n_w))
         lb, ub = linear.bounds()
@@ -160,7 +161,9 @@ class _Transcription:
         bounds = [problem.displacement_bounds(k) for k in range(n_seg)]
         self.lbw = np.concatenate([np.repeat([b[0] for b in bounds], n_gen), np.zeros(n_seg),
                                    np.full(n_gen * nx * self.n_nodes, -100.0), [-100.0] * int(minimax)])
-        self.ubw = np.concatenate([np.repeat([b[1] for b in bounds], n_gen), np.full(n_seg, problem.max_rest_s / 60.0),
+        longest_rest = np.full(n_seg, problem.max_rest_s / 60.0)
+        longest_rest[0] = max(problem.max_rest_s - problem.rest_taken_s, 0.0) / 60.0  # a rest under way counts
+        self.ubw = np.concatenate([np.repeat([b[1] for b in bounds], n_gen), longest_rest,
                                    np.full(n_gen * nx * self.n_nodes, 500.0), [500.0] * int(minimax)])
 
     def d_index(self, g: int, k: int) -> int:
