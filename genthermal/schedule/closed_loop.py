@@ -46,6 +46,7 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evaluate, generator_inputs,
                    mission_segments, predict, remaining_after)
 from .power_system import PowerSystem
+from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .shed import shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
@@ -98,6 +99,8 @@ class ManagerSettings:
         thesis linear filter on the design model).
     detection : DetectionSettings
         Fault detection and identification in flight.
+    sensor_watch : SensorWatchSettings
+        Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
     """
@@ -113,6 +116,7 @@ class ManagerSettings:
     tell_fault: bool = False
     filter: str = "ekf"
     detection: DetectionSettings = DetectionSettings()
+    sensor_watch: SensorWatchSettings = SensorWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
@@ -168,6 +172,8 @@ class FlightResult:
         One when the manager starts shedding load and one per generator switched off: ``time_s``,
         ``shedding`` (names), ``switched_off`` (names switched off then),
         ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
+    sensor_watch : SensorWatch or None
+        Sensor faults injected, claimed and masked (closed loop).
     """
 
     system: PowerSystem
@@ -187,6 +193,7 @@ class FlightResult:
     cycles: int = 0
     rest_budget_s: float = np.inf
     shed_events: list = dataclasses.field(default_factory=list)
+    sensor_watch: object = None
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
@@ -476,16 +483,24 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
+    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
+                                        system.planning_model.output_names)
+    injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
+    watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
     measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
     while segments:
         cycles += 1
         if measured is not None:
+            before = [(e.z.copy(), None if e.P is None else e.P.copy()) for e in estimators]
             for g, estimator in enumerate(estimators):
                 estimator.update(measured[g])
             if not settings.tell_fault:
+                watch.cycle(t, estimators, measured, before, monitor)  # sensor faults first: never seen as heat
+                believed = list(monitor.beliefs)
                 monitor.cycle(t, estimators)
+                watch.review(t, believed, estimators, monitor)  # a new belief may be a sensor's doing
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
             if settings.tell_fault:
@@ -512,6 +527,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
+        sample_times = t + dt * np.arange(1, n + 1)
+        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
         monitor.record(t, applied.currents_A, sensed)
         measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
@@ -520,4 +537,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    return recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles, rest_budget_s=budget)
+    result = recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles,
+                             rest_budget_s=budget)
+    result.sensor_watch = watch
+    return result

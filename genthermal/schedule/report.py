@@ -78,6 +78,8 @@ def flight_summary(result: FlightResult) -> dict:
     }
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
+    if getattr(result, "sensor_watch", None) is not None:
+        summary["sensor_faults"] = result.sensor_watch.to_dict(names)
     return summary
 
 
