@@ -73,6 +73,10 @@ class ManagerSettings:
         Hand the manager every fault's effect and parameters from the first cycle after its onset
         (the comparison case); default False: the manager detects and identifies faults itself
         (:mod:`genthermal.schedule.monitor`).
+    replan : bool
+        Re-plan when the prediction crosses the planning limit (default); False flies the nominal
+        schedule whatever is predicted, which isolates the filter and the fault detector from the
+        scheduler (detection benchmarks).
     filter : str
         Filter in the loop, a key of :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`: ``"ekf"``
         (default, the extended Kalman filter on the flown nonlinear model) or ``"kf"`` (the
@@ -91,6 +95,7 @@ class ManagerSettings:
     replan_tolerance_K: float = 0.05
     seed: int = 0
     tell_fault: bool = False
+    replan: bool = True
     filter: str = "ekf"
     detection: DetectionSettings = DetectionSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
@@ -350,6 +355,12 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     filter_cache: dict = {}
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
+    # the fault detector reads an extended Kalman filter's disturbance states: with the linear
+    # filter in the loop it gets parallel extended Kalman filters of its own
+    detector_cache: dict = {}
+    detectors = estimators if settings.filter == "ekf" or settings.tell_fault else [
+        StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
+                       detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
     recorder = _Recorder(system)
     measured, t = None, 0.0
@@ -357,8 +368,10 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         if measured is not None:
             for g, estimator in enumerate(estimators):
                 estimator.update(measured[g])
+                if detectors is not estimators:
+                    detectors[g].update(measured[g])
             if not settings.tell_fault:
-                monitor.cycle(t, estimators)
+                monitor.cycle(t, estimators, detectors)
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
             if settings.tell_fault:
@@ -366,9 +379,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                               lambda g=g: believed_model(system.planning_model, beliefs[g]))
             else:
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
+                if detectors is not estimators:
+                    detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [e.generator for e in estimators])
-        if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+        if settings.replan and predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule)
             schedule = result.schedule.rounded(dt)
@@ -381,6 +396,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+            if detectors is not estimators:
+                detectors[g].predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         monitor.record(t, applied.currents_A, sensed)
         measured = sensed[:, :, -1]
