@@ -26,6 +26,13 @@ reproducible. JSON keys:
 ``detect_delay_s``               median and max of (first such alarm − onset) over the detected flights, s
 ``identified_correct``           faulty flights whose first identification names the true effect
                                  (and, for a blockage, k_flow within ±``--k-flow-tolerance``)
+``identified_correct_or_equivalent``  or lists it among the equivalent explanations (ΔBIC within 2:
+                                 a shorted turn and an end-winding stray loss, both ∝ I² in the
+                                 winding, are not told apart by the two sensors)
+``last_identified_correct``      faulty flights whose last identification (the model flown at the end)
+                                 names the true effect
+``healthy_peak_statistic``       per node, the highest detector statistic r on the healthy flights
+``healthy_peak_sum_over_threshold``  per node, the highest CUSUM sum / threshold there (< 1: no alarm)
 ``per_type``                     the same per fault type
 ``flights``                      one record per faulty flight: truth, delay, first identification
 ``median_flight_s``              median wall-clock time of one flight, s
@@ -95,22 +102,37 @@ def fly_case(document: dict, k_flow_tolerance: float, scheduler: str = "none") -
     system = PowerSystem.from_mission(Mission.from_dict(document))
     started = time.perf_counter()
     settings = ManagerSettings(replan=scheduler != "none")
-    summary = flight_summary(fly(system, "engineer" if scheduler == "none" else scheduler, settings))
+    result = fly(system, "engineer" if scheduler == "none" else scheduler, settings)
+    summary = flight_summary(result)
+    detector = result.monitor.detector
     print(f"{document['name']}: {time.perf_counter() - started:.1f} s, delay {summary['detect_delay_s']}, "
           f"false alarms {summary['false_alarms']}", file=sys.stderr, flush=True)
     record = {"name": document["name"], "false_alarms": summary["false_alarms"],
-              "detect_delay_s": summary["detect_delay_s"], "flight_s": time.perf_counter() - started}
+              "detect_delay_s": summary["detect_delay_s"], "flight_s": time.perf_counter() - started,
+              "peak_statistic": dict(zip(result.monitor.node_roles, detector.peak_statistic.tolist())),
+              "peak_sum_over_threshold": dict(zip(result.monitor.node_roles,
+                                                  (detector.peak_sum / detector.threshold).tolist()))}
     if not system.faults:
         return record
     fault = system.faults[0]
     name = system.generator_names[fault.generator]
     first = next((i for i in summary["identified"] if i["generator"] == name and i["effect"]), None)
-    correct = first is not None and first["effect"] == fault.effect
-    if correct and fault.effect == "coolant_flow_reduction":
-        correct = abs(first["parameters"]["k_flow"] - fault.values["k_flow"]) <= k_flow_tolerance
+    last = next((i for i in reversed(summary["identified"]) if i["generator"] == name and i["effect"]), None)
+
+    def judged(found):
+        """(names the true effect, names it or lists it as equivalent)."""
+        if found is None:
+            return False, False
+        if fault.effect == "coolant_flow_reduction" and found["effect"] == fault.effect:
+            right = abs(found["parameters"]["k_flow"] - fault.values["k_flow"]) <= k_flow_tolerance
+            return right, right
+        return found["effect"] == fault.effect, fault.effect in [found["effect"], *found["confidence"]["equivalent"]]
+    correct, equivalent = judged(first)
+    record.update(last_identification=last, last_identified_correct=judged(last)[0])
     record.update(type=fault.effect, truth={"generator": name, "onset_s": fault.onset_s, **fault.values,
                                              "inlet_rise_C": fault.inlet_rise_C},
                   first_identification=first, identified_correct=bool(correct),
+                  identified_correct_or_equivalent=bool(equivalent),
                   identifications=len(summary["identified"]), breach_s=summary["breach_s"])
     return record
 
@@ -125,7 +147,9 @@ def summarise(healthy: list, faulty: list, scheduler: str, wall_s: float) -> dic
     for kind in sorted({r["type"] for r in faulty}):
         records = [r for r in faulty if r["type"] == kind]
         per_type[kind] = {"detect_delay_s": delays(records),
-                          "identified_correct": sum(r["identified_correct"] for r in records)}
+                          "identified_correct": sum(r["identified_correct"] for r in records),
+                          "identified_correct_or_equivalent": sum(r["identified_correct_or_equivalent"]
+                                                                  for r in records)}
     overall = delays(faulty)
     return {"healthy_flights": len(healthy), "faulty_flights": len(faulty),
             "false_alarms": int(sum(r["false_alarms"] for r in healthy + faulty)),
@@ -133,6 +157,12 @@ def summarise(healthy: list, faulty: list, scheduler: str, wall_s: float) -> dic
             "detected": overall["detected"],
             "detect_delay_s": {"median": overall["median"], "max": overall["max"]},
             "identified_correct": int(sum(r["identified_correct"] for r in faulty)),
+            "identified_correct_or_equivalent": int(sum(r["identified_correct_or_equivalent"] for r in faulty)),
+            "last_identified_correct": int(sum(r["last_identified_correct"] for r in faulty)),
+            "healthy_peak_statistic": {role: max((r["peak_statistic"][role] for r in healthy), default=None)
+                                       for role in ("winding", "iron")},
+            "healthy_peak_sum_over_threshold": {role: max((r["peak_sum_over_threshold"][role] for r in healthy),
+                                                          default=None) for role in ("winding", "iron")},
             "per_type": per_type, "flights": faulty,
             "median_flight_s": float(np.median([r["flight_s"] for r in healthy + faulty])),
             "scheduler": scheduler, "wall_s": wall_s}

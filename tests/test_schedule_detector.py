@@ -80,6 +80,9 @@ def test_blockage_is_detected_within_ten_minutes_and_identified():
     summary = flight_summary(fly(system, "engineer", ManagerSettings(replan=False)))  # detection alone
     assert summary["false_alarms"] == 0
     assert summary["detect_delay_s"] is not None and summary["detect_delay_s"] <= 600.0, summary["detect_delay_s"]
-    first = summary["identified"][0]
+    found = [i for i in summary["identified"] if i["effect"]]
+    assert found, summary["identified"]
+    first = found[0]  # an alarm a few minutes after the onset may not hold enough record yet
     assert first["generator"] == "gen2" and first["effect"] == "coolant_flow_reduction", first
+    assert first["onset_s"] >= 60.0 * onset_min - 600.0 and first["detected_at_s"] <= 60.0 * onset_min + 1800.0
     assert abs(first["parameters"]["k_flow"] - 0.3) <= 0.1, first

@@ -122,6 +122,10 @@ class DisturbanceDetector:
         self.threshold = np.array([getattr(settings, f"{role}_threshold") for role in node_roles])
         self.sums = np.zeros((n_generators, len(node_roles)))
         self.last_statistic = np.full((n_generators, len(node_roles)), np.nan)
+        #: Highest statistic and highest sum per node seen in the flight (tested cycles only):
+        #: the margin of a healthy flight to its thresholds.
+        self.peak_statistic = np.full(len(node_roles), -np.inf)
+        self.peak_sum = np.zeros(len(node_roles))
 
     def statistics(self, extra, load_factors, believed_healthy) -> np.ndarray:
         """:math:`r_{gj}` (n_generators, n_nodes); NaN where g has no healthy generator to compare with.
@@ -157,6 +161,10 @@ class DisturbanceDetector:
         finite = np.isfinite(self.last_statistic)
         step = np.where(finite, self.last_statistic - self.drift, 0.0)
         self.sums = np.where(finite, np.maximum(0.0, self.sums + step), 0.0)
+        if finite.any():
+            self.peak_statistic = np.fmax(self.peak_statistic,
+                                          np.max(np.where(finite, self.last_statistic, -np.inf), axis=0))
+        self.peak_sum = np.maximum(self.peak_sum, self.sums.max(axis=0))
         alarms = [tuple(int(i) for i in pair) for pair in np.argwhere(self.sums > self.threshold)]
         for g, _ in alarms:
             self.sums[g] = 0.0
