@@ -55,8 +55,8 @@ def test_statistic_compares_with_the_healthy_median_and_the_cusum_is_one_sided()
 
 
 def test_small_statistics_do_not_accumulate_and_nothing_is_tested_while_settling():
-    detector = DisturbanceDetector(2, DetectorSettings(winding_drift=1.0, winding_threshold=1.5, settle_s=600.0),
-                                   ["winding", "iron"])
+    settings = DetectorSettings(winding_drift=1.0, winding_threshold=1.5, iron_drift=2.5, settle_s=600.0)
+    detector = DisturbanceDetector(2, settings, ["winding", "iron"])
     assert detector.update(300.0, np.array([[50.0, 50.0], [0.0, 0.0]])) == []  # settling
     assert all(detector.update(600.0 + k, np.array([[0.9, 2.4], [0.9, 2.4]])) == [] for k in range(50))
     assert detector.update(900.0, np.array([[2.0, 0.0], [0.0, 0.0]])) == []  # 1.0 <= 1.5
@@ -86,3 +86,14 @@ def test_blockage_is_detected_within_ten_minutes_and_identified():
     assert first["generator"] == "gen2" and first["effect"] == "coolant_flow_reduction", first
     assert first["onset_s"] >= 60.0 * onset_min - 600.0 and first["detected_at_s"] <= 60.0 * onset_min + 1800.0
     assert abs(first["parameters"]["k_flow"] - 0.3) <= 0.1, first
+
+
+def test_with_the_linear_filter_in_the_loop_the_detector_runs_on_its_own_extended_filters():
+    onset_min = 40.0
+    system = PowerSystem.from_mission(_mission([{"generator": 1, "kind": "effect", "effect": "excitation_iron_loss",
+                                                 "onset_min": onset_min, "values": {"k_exc": 120.0}}]))
+    result = fly(system, "engineer", ManagerSettings(replan=False, filter="kf"))
+    assert np.all(np.isfinite(result.monitor.detector.peak_statistic))
+    alarms = result.monitor.alarms
+    assert alarms and alarms[0]["generator"] == 0 and alarms[0]["node"] == "iron", alarms
+    assert 60.0 * onset_min < alarms[0]["time_s"] <= 60.0 * onset_min + 900.0

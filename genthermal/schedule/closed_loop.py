@@ -5,12 +5,14 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
    :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
-   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`);
+   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`); the fault monitor
+   (:mod:`genthermal.schedule.monitor`) tests the filters' disturbance heat flows and, on an
+   alarm, identifies the fault from the in-flight record;
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
-   temperature held (thesis 7.3.6) and the faults that have occurred so far (a fault is known at the
-   first cycle after its onset);
-3. **re-plan** if a temperature above the planning limit :math:`\theta_{max} - \text{margin}` is
-   predicted, warm-started from the current plan;
+   temperature held (thesis 7.3.6) and the faults identified so far (with ``tell_fault``: the
+   scenario's faults, each known at the first cycle after its onset);
+3. **re-plan** (unless ``replan`` is off) if a temperature above the planning limit
+   :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
 The true plant is the nonlinear model with the faults from their onsets and parameters that differ
