@@ -48,6 +48,9 @@ def test_statistic_compares_with_the_healthy_median_and_the_cusum_is_one_sided()
     np.testing.assert_allclose(r[:, 0], [(30 - 11) / np.sqrt(8), (10 - 21) / np.sqrt(8), (12 - 20) / np.sqrt(8)])
     assert detector.update(600.0, r) == [(0, 0)]  # 6.7 − 1 > 1.5 at once; the cooler ones never alarm
     assert detector.sums[0, 0] == 0.0 and detector.sums[1, 0] == 0.0
+    # a generator that took load on from the others is not tested
+    r = detector.statistics(extra, [1.0, 0.6, 0.6], [True, True, True])
+    assert np.isnan(r[0, 0]) and np.isfinite(r[1:, 0]).all()
     # a generator believed faulty is no reference; with no reference left a generator is not tested
     two = DisturbanceDetector(2, DetectorSettings(settle_s=0.0), ["winding"])
     r = two.statistics(extra, [1.0, 1.0], [False, True])
