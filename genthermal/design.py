@@ -15,15 +15,15 @@ from .losses import CurrentSquaredFit, fit_current_squared, linearise_copper_sou
 from .model import ThermalModel
 from .parameters import Parameter
 
-#: Default linearisation range, A RMS: the lowest and highest currents of thesis Table 3.2
-#: (27.3 % and 100 % of 7 A).
-DEFAULT_CURRENT_RANGE_A = (0.273 * 7.0, 7.0)
+#: Default linearisation range as fractions of the machine's rated current: the lowest and highest
+#: currents of thesis Table 3.2 (27.3 % and 100 % of rated).
+DEFAULT_CURRENT_RANGE_FRACTION = (0.273, 1.0)
 #: Default winding temperature for the constant resistance, °C (assumed: near the temperatures
-#: where the management decisions are made, between normal operation and the 110 °C limit).
+#: where the management decisions are made, between normal operation and the thesis's winding limit).
 DEFAULT_THETA_REF_C = 90.0
 
 
-def linear_design_model(model: ThermalModel, current_range_A: tuple[float, float] = DEFAULT_CURRENT_RANGE_A,
+def linear_design_model(model: ThermalModel, current_range_A: tuple[float, float] | None = None,
                         theta_ref_C: float = DEFAULT_THETA_REF_C) -> ThermalModel:
     """Return the linear design model of ``model`` (thesis 5.2).
 
@@ -31,8 +31,9 @@ def linear_design_model(model: ThermalModel, current_range_A: tuple[float, float
     ----------
     model : ThermalModel
         The nonlinear simulation model.
-    current_range_A : (float, float)
-        Range over which :math:`I^2` is fitted by a line, A RMS.
+    current_range_A : (float, float), optional
+        Range over which :math:`I^2` is fitted by a line, A RMS; default
+        :data:`DEFAULT_CURRENT_RANGE_FRACTION` of the machine's rated current.
     theta_ref_C : float
         Winding temperature at which the resistance is frozen, °C.
 
@@ -43,6 +44,9 @@ def linear_design_model(model: ThermalModel, current_range_A: tuple[float, float
         ``theta_ref`` (assumed); ``spec.variant == "linear"``. The fit is in
         ``current_squared_fit(result)``.
     """
+    if current_range_A is None:
+        rated = model.spec.rated_current_A
+        current_range_A = tuple(fraction * rated for fraction in DEFAULT_CURRENT_RANGE_FRACTION)
     fit = fit_current_squared(*current_range_A)
     lo, hi = fit.current_range
     where = f"least squares of I^2 over [{lo:g}, {hi:g}] A (R^2 = {fit.r_squared:.4f}), thesis eq. 5.3"
@@ -54,7 +58,8 @@ def linear_design_model(model: ThermalModel, current_range_A: tuple[float, float
     )
     parameters = model.parameters.with_parameters(*extra)
     symbols = {p.name: p.symbol for p in extra}
-    sources = linearise_copper_sources(model.network.heat_sources, model.network, symbols["I2_slope"],
+    sources = linearise_copper_sources(model.network.heat_sources, model.network, model.spec.interface.load_currents,
+                                       symbols["I2_slope"],
                                        symbols["I2_intercept"], symbols["theta_ref"])
     return model.with_network(model.network.replace(heat_sources=sources), parameters, variant="linear")
 

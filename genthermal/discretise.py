@@ -144,8 +144,8 @@ def check_step_accuracy(model: ThermalModel, dt_s: float, tolerance_K: float = S
     """Check that ``model`` can be discretised at ``dt_s`` accurately enough for a filter.
 
     One step of ``dt_s`` is compared with two steps of ``dt_s / 2`` from the cold machine (every
-    node at 20 °C) at rated current (``model.spec.rated_current_A`` on every phase, the
-    mission's excitation law): the difference estimates the step's local error. The exact
+    node at 20 °C) at the machine's rating point (``model.spec.interface.rated_inputs``; the
+    thesis generator: rated current on every phase, the AVR's field current): the difference estimates the step's local error. The exact
     zero-order hold of an affine model has none; the exponential integrator of the nonlinear model
     differs by 1e-5 K at 10 s, 2e-3 K at 60 s, 0.16 K at 300 s (thesis generator).
 
@@ -159,12 +159,9 @@ def check_step_accuracy(model: ThermalModel, dt_s: float, tolerance_K: float = S
     InputError
         Naming ``dt_s`` when it is not a positive number or the difference exceeds ``tolerance_K``.
     """
-    from .exciter import exciter_current
-
     step = model.discretise(dt_s).step
     half = model.discretise(dt_s / 2.0).step
-    rated = model.spec.rated_current_A
-    u = model.input_vector(rated, rated, rated, exciter_current(rated, rated_current_A=rated), 20.0, 20.0)
+    u = model.input_vector(**model.spec.interface.rated_inputs)
     x = np.full(model.n_states, 20.0)
     difference = float(np.max(np.abs(np.asarray(step(x, u)) - np.asarray(half(half(x, u), u)))))
     if difference > tolerance_K:

@@ -2,7 +2,9 @@ r"""The effect catalogue: physical effects as small, named transformations of a 
 
 An :class:`Effect` takes a model's network (and the machine's ``roles``: which nodes are the end
 windings, which links are the winding insulation ...) and returns a modified network, with one or
-two new named parameters. Because the result is an ordinary :class:`~genthermal.model.ThermalModel`,
+two new named parameters. Each effect declares the :class:`~genthermal.machines.interface.Role`
+members it needs (``needs``) and applies to every machine that has them:
+:func:`applicable_effects` lists those of a model. Because the result is an ordinary :class:`~genthermal.model.ThermalModel`,
 every consumer (simulation, Kalman filter, scheduler, code generation, calibration) uses it as is.
 Each parameter has a *neutral* value at which the effect vanishes. Effects that start during a
 run (a blockage at 1.1 h) are applied from an onset time by :func:`genthermal.simulate.simulate`
@@ -12,13 +14,16 @@ A user-defined effect is a few lines::
 
     from genthermal.effects import Effect, EffectParameter, register_effect
     from genthermal.losses import input_symbol
+    from genthermal.machines import Role
     from genthermal.network import HeatSource
 
-    def rotor_loss(network, roles, k):
-        return network.with_heat_sources([HeatSource("rotor", k * input_symbol("I_exc") ** 2, "rotor")])
+    def winding_ac_loss(network, roles, k):
+        currents = sum(input_symbol(i) ** 2 for i in roles[Role.LOAD_CURRENTS])
+        return network.with_heat_sources([HeatSource(roles[Role.SLOT_WINDING], k * currents, "ac_loss")])
 
-    register_effect(Effect("rotor_copper_loss", "rotor field loss k I_exc^2", r"q_r = k I_{exc}^2",
-                           (EffectParameter("k_rotor", 0.0, "W/A^2", 0.0, 100.0),), rotor_loss))
+    register_effect(Effect("winding_ac_loss", "extra AC loss k I^2 in the slot winding", r"q = k I^2",
+                           (EffectParameter("k_ac", 0.0, "W/A^2", 0.0, 1.0),), winding_ac_loss,
+                           needs=(Role.SLOT_WINDING, Role.LOAD_CURRENTS)))
 """
 
 from __future__ import annotations
@@ -30,7 +35,8 @@ from typing import Callable
 import sympy
 
 from .errors import InputError
-from .losses import LossFloor, PHASE_CURRENTS, input_symbol, mass_shares
+from .losses import LossFloor, input_symbol, mass_shares
+from .machines.interface import Role
 from .network import HeatSource, Network
 from .parameters import Parameter
 
@@ -85,11 +91,15 @@ class Effect:
     signature : str
         The residual pattern the effect explains, for diagnosis reports.
     requires : callable or None
-        ``requires(model) -> str | None``: why the effect cannot apply to ``model`` (None if it can).
+        ``requires(model) -> str | None``: why the effect cannot apply to ``model`` (None if it
+        can), for conditions beyond the roles (a parameter of the design model).
     shape_parameters : tuple of EffectParameter
         Parameters that shape the effect but do not switch it on (the exponent of a power law).
         A diagnosis search holds them at their default (``neutral``); ``calibrate`` fits them when
         named. ``transform`` takes their symbols after those of ``parameters``.
+    needs : tuple of Role
+        Machine roles the transform reads (``roles[Role.IRON]`` ...): the effect applies to every
+        machine that has them and to no other.
     """
 
     name: str
@@ -100,6 +110,13 @@ class Effect:
     signature: str = ""
     requires: Callable | None = None
     shape_parameters: tuple[EffectParameter, ...] = ()
+    needs: tuple[Role, ...] = ()
+
+    def __post_init__(self):
+        bad = [role for role in self.needs if not isinstance(role, Role)]
+        if bad:
+            raise InputError(f"effect {self.name}.needs", bad[0], "must be genthermal.machines.Role members, "
+                             f"e.g. Role.IRON; known: {', '.join(r.name for r in Role)}")
 
     @property
     def all_parameters(self) -> tuple[EffectParameter, ...]:
@@ -113,6 +130,9 @@ class Effect:
         clash = [p.name for p in self.all_parameters if p.name in model.parameters]
         if clash:
             return f"parameter {clash[0]} already in the model"
+        missing = [role.value for role in self.needs if not model.spec.interface.has_role(role)]
+        if missing:
+            return f"the machine has no {', '.join(missing)} role"
         return self.requires(model) if self.requires else None
 
 
@@ -135,6 +155,13 @@ def get_effect(name: str) -> Effect:
         close = difflib.get_close_matches(name, list(CATALOGUE), n=2)
         hint = f"did you mean {', '.join(close)}? " if close else ""
         raise InputError("effect", name, f"unknown effect; {hint}known: {', '.join(CATALOGUE)}") from None
+
+
+def applicable_effects(model, catalogue=None) -> list[Effect]:
+    """The effects of ``catalogue`` (default :data:`CATALOGUE`) that can be added to ``model``: the
+    machine has every role they need and none is applied yet."""
+    catalogue = CATALOGUE if catalogue is None else catalogue
+    return [effect for effect in catalogue.values() if effect.unavailable_reason(model) is None]
 
 
 def apply_effect(model, effect, provenance: str = "assumed", source: str = "", **values):
@@ -197,8 +224,8 @@ def _copper_symbol(network: Network, name: str) -> sympy.Symbol:
     raise InputError("copper loss", name, "the model's copper loss does not use this parameter")
 
 
-def _current_squared():
-    return sum(input_symbol(p) ** 2 for p in PHASE_CURRENTS)
+def _current_squared(roles):
+    return sum(input_symbol(p) ** 2 for p in roles[Role.LOAD_CURRENTS])
 
 
 # --- the catalogue ---------------------------------------------------------------------------
@@ -212,7 +239,7 @@ def _resistance_temperature(network, roles, alpha):
 def _quadratic_copper(network, roles, weight):
     r"""Blend the linearised loss back to :math:`I^2`: :math:`(1-\lambda)P + \lambda P|_{aI_p \to I_p^2}`."""
     slope = _copper_symbol(network, "I2_slope")
-    squares = {input_symbol(p): input_symbol(p) ** 2 for p in PHASE_CURRENTS}
+    squares = {input_symbol(p): input_symbol(p) ** 2 for p in roles[Role.LOAD_CURRENTS]}
 
     def rewrite(source):
         line = source.power.replace(LossFloor, lambda value: value)  # the line through its floor
@@ -227,19 +254,21 @@ def _flow_reduction(network, roles, k_flow, n_flow):
     n = 0.8 turbulent, Dittus-Boelter; 0.5 laminar). At :math:`k = 1` the model is unchanged for any n."""
     symbols = {symbol.name: symbol for link in network.links for symbol in link.resistance.free_symbols}
     convection = {symbols[name]: symbols[name] * k_flow ** n_flow
-                  for name in roles.get("internal_convection", ()) if name in symbols}
+                  for name in roles.get(Role.INTERNAL_CONVECTION, ()) if name in symbols}
     return network.scale_air_streams(k_flow).substitute_in_links(convection)
 
 
 def _phase_short(network, roles, R_short):
-    return network.with_heat_sources([HeatSource(roles["slot_winding"], R_short * input_symbol("I_u") ** 2,
+    first_phase = roles[Role.PHASE_CURRENTS][0]
+    return network.with_heat_sources([HeatSource(roles[Role.SLOT_WINDING], R_short * input_symbol(first_phase) ** 2,
                                                  "phase_short_circuit")])
 
 
 def _excitation_iron(network, roles, k_exc):
-    shares = mass_shares(network, roles["iron"])
-    return network.with_heat_sources([HeatSource(n, shares[n] * k_exc * input_symbol("I_exc") ** 2,
-                                                 "excitation_iron_loss") for n in roles["iron"]])
+    shares = mass_shares(network, roles[Role.IRON])
+    excitation = input_symbol(roles[Role.EXCITATION_CURRENT])
+    return network.with_heat_sources([HeatSource(n, shares[n] * k_exc * excitation ** 2,
+                                                 "excitation_iron_loss") for n in roles[Role.IRON]])
 
 
 def _scale_links(role):
@@ -251,8 +280,8 @@ def _scale_links(role):
 
 
 def _end_winding_stray(network, roles, R_stray):
-    ends = roles["end_windings"]
-    return network.with_heat_sources([HeatSource(n, R_stray * _current_squared() / len(ends),
+    ends = roles[Role.END_WINDINGS]
+    return network.with_heat_sources([HeatSource(n, R_stray * _current_squared(roles) / len(ends),
                                                  "end_winding_stray_loss") for n in ends])
 
 
@@ -261,12 +290,12 @@ for _effect in (
            r"R = R_{ref}\,(1 + \alpha_R(\theta_w - \theta_{ref}))",
            (EffectParameter("alpha_R", 0.0, "1/K", 0.0, 0.02, 0.0039),), _resistance_temperature,
            "error grows with winding temperature at constant current: resistance rises with temperature",
-           _needs_symbol("theta_ref", "temperature-dependent resistance")),
+           _needs_symbol("theta_ref", "temperature-dependent resistance"), needs=(Role.LOAD_CURRENTS,)),
     Effect("quadratic_copper_loss", "copper loss follows I^2 instead of the linearised a I + b",
            r"P = (1-\lambda)\,R(aI + b) + \lambda\,R I^2",
            (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0),), _quadratic_copper,
            "error changes sign between low and high currents: the loss is quadratic in current",
-           _needs_symbol("I2_slope", "the quadratic copper loss")),
+           _needs_symbol("I2_slope", "the quadratic copper loss"), needs=(Role.LOAD_CURRENTS,)),
     Effect("coolant_flow_reduction",
            "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
            r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
@@ -274,26 +303,32 @@ for _effect in (
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
            # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
            # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
-           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),)),
+           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),),
+           needs=(Role.COOLANT_FLOW, Role.INTERNAL_CONVECTION)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",
            (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3),), _phase_short,
-           "winding runs hot after an onset, in proportion to I^2, iron follows: an extra winding loss"),
+           "winding runs hot after an onset, in proportion to I^2, iron follows: an extra winding loss",
+           needs=(Role.SLOT_WINDING, Role.PHASE_CURRENTS)),
     Effect("excitation_iron_loss", "iron loss grows with the excitation current squared",
            r"q_{iron} \mathrel{+}= k_{exc} I_{exc}^2",
            (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0),), _excitation_iron,
-           "iron error follows I_exc^2 more than I^2: iron loss depends on excitation"),
+           "iron error follows I_exc^2 more than I^2: iron loss depends on excitation",
+           needs=(Role.IRON, Role.EXCITATION_CURRENT)),
     Effect("winding_insulation_degradation", "winding-to-core conductance multiplied by a factor",
            r"G_{w,core} \to k_{ins}\,G_{w,core}",
-           (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5),), _scale_links("winding_insulation"),
-           "winding hotter and iron cooler than modelled, more so at high load: winding-to-core path changed"),
+           (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5),), _scale_links(Role.WINDING_INSULATION),
+           "winding hotter and iron cooler than modelled, more so at high load: winding-to-core path changed",
+           needs=(Role.WINDING_INSULATION,)),
     Effect("end_winding_stray_loss", "extra stray loss R_stray I^2 in the end windings",
            r"q_{ew} \mathrel{+}= R_{stray} \sum_p I_p^2",
            (EffectParameter("R_stray", 0.0, "ohm", 0.0, 5.0, 0.2),), _end_winding_stray,
-           "winding error proportional to I^2 from the start, iron barely affected: an extra end-winding loss"),
+           "winding error proportional to I^2 from the start, iron barely affected: an extra end-winding loss",
+           needs=(Role.END_WINDINGS, Role.LOAD_CURRENTS)),
     Effect("frame_cooling_change", "frame-to-ambient conductance multiplied by a factor",
            r"G_{f,amb} \to k_{frame}\,G_{f,amb}",
-           (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0),), _scale_links("frame_to_ambient"),
-           "slow error that follows ambient temperature and the frame: external cooling changed"),
+           (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0),), _scale_links(Role.FRAME_TO_AMBIENT),
+           "slow error that follows ambient temperature and the frame: external cooling changed",
+           needs=(Role.FRAME_TO_AMBIENT,)),
 ):
     register_effect(_effect)

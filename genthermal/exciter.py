@@ -91,9 +91,13 @@ def exciter_current(I_phase_A, power_factor: float = DEFAULT_POWER_FACTOR, rated
 
 
 def exciter_line(power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0,
-                 samples: int = 201) -> tuple[float, float]:
+                 samples: int = 201, law=None) -> tuple[float, float]:
     r"""Least-squares line :math:`I_{exc} \approx I_0 + g\,I` over 0 … rated current, for planners
     that need inputs affine in the phase current (as eq. 5.3 does for :math:`I^2`).
+
+    ``law(I, power_factor, rated_current_A)`` is the exciter law fitted (a machine's
+    :attr:`~genthermal.machines.interface.GeneratorRole.exciter_law`); default
+    :func:`exciter_current`.
 
     Returns
     -------
@@ -101,5 +105,6 @@ def exciter_line(power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: fl
         Intercept :math:`I_0` (A) and slope :math:`g` (A/A).
     """
     current = np.linspace(0.0, rated_current_A, samples)
-    slope, intercept = np.polyfit(current, exciter_current(current, power_factor, rated_current_A), 1)
+    law = exciter_current if law is None else law
+    slope, intercept = np.polyfit(current, law(current, power_factor, rated_current_A), 1)
     return float(intercept), float(slope)

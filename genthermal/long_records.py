@@ -24,7 +24,6 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .losses import INPUT_NAMES, PHASE_CURRENTS
 from .measurements import MeasurementData
 
 #: Most samples a record given to calibration or diagnosis keeps: the diagnosis's cost grows with the
@@ -34,8 +33,6 @@ MAX_FITTING_SAMPLES = 4_000
 #: Block lengths tried in order, s: 10 s is the thesis logging and filter step; the longest is the
 #: 5-minute management cycle, well below the 6.5-minute fastest slow mode of the thesis generator.
 FITTING_STEPS_S = (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)
-#: Columns averaged as RMS values (losses go with their square).
-RMS_COLUMNS = (*PHASE_CURRENTS, "I_exc")
 
 
 def fitting_step(data: MeasurementData) -> float | None:
@@ -71,25 +68,27 @@ def block_average(data: MeasurementData, step_s: float) -> MeasurementData:
     columns = {"time_s": time_s[0] + step_s * np.arange(n_blocks)}
     input_block = np.floor(elapsed / step_s + 1e-9).astype(np.int64)
     sensor_block = np.minimum(np.floor(elapsed / step_s + 0.5).astype(np.int64), n_blocks - 1)
+    inputs = data.interface.input_names
+    rms_columns = data.interface.rms_currents  # losses go with their square
     for name in data.frame.columns:
         if name == "time_s":
             continue
-        block = input_block if name in INPUT_NAMES else sensor_block
+        block = input_block if name in inputs else sensor_block
         values = data.frame[name].to_numpy(dtype=float)
         valid = np.isfinite(values)
-        squared = name in RMS_COLUMNS
+        squared = name in rms_columns
         sums = np.bincount(block, np.where(valid, values ** 2 if squared else values, 0.0), n_blocks)
         counts = np.bincount(block, valid, n_blocks)
         with np.errstate(invalid="ignore", divide="ignore"):
             mean = sums / counts
         mean = np.sqrt(mean) if squared else mean
-        if name in INPUT_NAMES:  # a block inside a gap (flagged on loading) holds the last input
+        if name in inputs:  # a block inside a gap (flagged on loading) holds the last input
             mean = pd.Series(mean).ffill().to_numpy()
         columns[name] = mean
     frame = pd.DataFrame(columns)
     missing = {name: int(frame[name].isna().sum()) for name in data.missing_counts}
     return MeasurementData(frame, f"{data.source} averaged over {step_s:g} s blocks", missing,
-                           list(data.flags), list(data.ignored_columns))
+                           list(data.flags), list(data.ignored_columns), data.interface)
 
 
 def decimate_for_fitting(data: MeasurementData) -> tuple[MeasurementData, str | None]:

@@ -23,11 +23,6 @@ import sympy
 from .errors import InputError
 from .network import HeatSource, Network
 
-#: Model inputs, in order: phase currents (A RMS), excitation current (A), inlet and ambient
-#: temperatures (°C).
-INPUT_NAMES = ("I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
-PHASE_CURRENTS = ("I_u", "I_v", "I_w")
-
 
 class LossFloor(sympy.Function):
     r""":math:`\max(v, 0)` of a linearised loss term that would otherwise go negative.
@@ -47,9 +42,10 @@ class LossFloor(sympy.Function):
 
 
 def input_symbol(name: str) -> sympy.Symbol:
-    """Return the sympy symbol of model input ``name`` (one of :data:`INPUT_NAMES`)."""
-    if name not in INPUT_NAMES:
-        raise InputError("input", name, f"unknown model input; known: {', '.join(INPUT_NAMES)}")
+    """Return the sympy symbol of model input ``name`` (an input of the machine's interface,
+    :attr:`genthermal.machines.interface.MachineInterface.inputs`)."""
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise InputError("input", name, "an input name must be an identifier (e.g. I_u, T_coolant)")
     return sympy.Symbol(name, real=True)
 
 
@@ -60,8 +56,8 @@ def mass_shares(network: Network, nodes: tuple[str, ...]) -> dict[str, sympy.Exp
     return {n: c / total for n, c in capacitances.items()}
 
 
-def copper_loss_sources(network: Network, winding_nodes: tuple[str, ...], R0: sympy.Symbol,
-                        alpha: sympy.Symbol) -> list[HeatSource]:
+def copper_loss_sources(network: Network, winding_nodes: tuple[str, ...], current_inputs: tuple[str, ...],
+                        R0: sympy.Symbol, alpha: sympy.Symbol) -> list[HeatSource]:
     """Temperature-dependent I²R heat sources in the winding divisions (thesis eqs. 4.40-4.41).
 
     Parameters
@@ -70,12 +66,14 @@ def copper_loss_sources(network: Network, winding_nodes: tuple[str, ...], R0: sy
         Supplies the winding capacitances (mass shares) and temperature symbols.
     winding_nodes : tuple of str
         Winding divisions that share the phase resistance.
+    current_inputs : tuple of str
+        The current inputs whose squares sum gives the loss per ohm (the three RMS phase currents).
     R0 : sympy.Symbol
         Phase resistance at 0 °C, Ω.
     alpha : sympy.Symbol
         Temperature coefficient of copper, 1/K.
     """
-    current_squared = sum(input_symbol(p) ** 2 for p in PHASE_CURRENTS)
+    current_squared = sum(input_symbol(p) ** 2 for p in current_inputs)
     shares = mass_shares(network, winding_nodes)
     return [HeatSource(node, shares[node] * current_squared * R0
                        * (1 + alpha * network.temperature_symbol(node)), "copper")
@@ -145,13 +143,13 @@ def fit_current_squared(current_min: float, current_max: float, samples: int = 2
                              (float(current_min), float(current_max)))
 
 
-def linearise_copper_sources(sources: tuple[HeatSource, ...], network: Network,
+def linearise_copper_sources(sources: tuple[HeatSource, ...], network: Network, current_inputs: tuple[str, ...],
                              slope: sympy.Symbol, intercept: sympy.Symbol,
                              theta_ref: sympy.Symbol) -> tuple[HeatSource, ...]:
     """Return ``sources`` with every copper loss made affine in the currents and independent of
     temperature: :math:`I_p^2 \\to \\max(a I_p + b, 0)`, :math:`\\theta_k \\to \\theta_{ref}`
     (thesis 5.2; the floor keeps the loss >= 0 below the line's zero, see :class:`LossFloor`)."""
-    substitutions = {input_symbol(p) ** 2: LossFloor(slope * input_symbol(p) + intercept) for p in PHASE_CURRENTS}
+    substitutions = {input_symbol(p) ** 2: LossFloor(slope * input_symbol(p) + intercept) for p in current_inputs}
     out = []
     for source in sources:
         if source.label == "copper":

@@ -1,6 +1,8 @@
 """Measured (or synthetic) rig data: one CSV schema, validated once, resampled onto a uniform grid.
 
-Schema (thesis 3.3: the Genco RF201A rig logged by LabVIEW to CSV with a time stamp per sample)
+The schema is the machine's (:class:`~genthermal.machines.interface.MachineInterface`): ``time_s``,
+its inputs, the CSV columns of its sensors, and its optional outlet column. The default machine's
+(thesis 3.3: the Genco RF201A rig logged by LabVIEW to CSV with a time stamp per sample) is
 
 ================  =====  ==========================================================
 column            unit   meaning
@@ -50,14 +52,24 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .losses import INPUT_NAMES, PHASE_CURRENTS
+from .machines import MACHINES, DEFAULT_MACHINE
+from .machines.interface import InputKind, MachineInterface
 from .sizes import check_grid
 
-WINDING_SENSORS = ("T_winding_u", "T_winding_v", "T_winding_w")
-SENSOR_COLUMNS = (*WINDING_SENSORS, "T_iron")
-OPTIONAL_SENSOR_COLUMNS = ("T_outlet",)
-REQUIRED_COLUMNS = ("time_s", *INPUT_NAMES, *SENSOR_COLUMNS)
-INPUT_TEMPERATURES = ("T_inlet", "T_ambient")
+#: Schema of the default machine (a machine's own: :func:`required_columns`).
+DEFAULT_INTERFACE = MACHINES[DEFAULT_MACHINE].interface
+#: The default machine's sensor columns of its first (limited) sensor: the winding PT100s.
+WINDING_SENSORS = DEFAULT_INTERFACE.sensors[0].columns
+SENSOR_COLUMNS = DEFAULT_INTERFACE.sensor_columns
+OPTIONAL_SENSOR_COLUMNS = DEFAULT_INTERFACE.optional_columns
+
+
+def required_columns(interface: MachineInterface) -> tuple:
+    """``time_s``, the inputs and the sensor columns of a machine's CSV schema."""
+    return ("time_s", *interface.input_names, *interface.sensor_columns)
+
+
+REQUIRED_COLUMNS = required_columns(DEFAULT_INTERFACE)
 #: Measuring range of the rig's PT100 channels, °C (thesis Table 3.4).
 PT100_RANGE_C = (-50.0, 300.0)
 #: A phase or field current above this multiple of the machine's rated phase current is refused (no
@@ -100,6 +112,8 @@ class MeasurementData:
         Human-readable warnings about the data (out-of-range sensor values, empty sensors).
     ignored_columns : list[str]
         Columns of the source that are not part of the schema.
+    interface : MachineInterface
+        The machine whose schema the data follow (default: the default machine's).
     """
 
     frame: pd.DataFrame
@@ -107,6 +121,7 @@ class MeasurementData:
     missing_counts: dict[str, int] = field(default_factory=dict)
     flags: list[str] = field(default_factory=list)
     ignored_columns: list[str] = field(default_factory=list)
+    interface: MachineInterface = DEFAULT_INTERFACE
 
     @property
     def time_s(self) -> np.ndarray:
@@ -115,31 +130,37 @@ class MeasurementData:
 
     @property
     def inputs(self) -> pd.DataFrame:
-        """The model inputs ``I_u, I_v, I_w, I_exc`` (A) and ``T_inlet, T_ambient`` (°C)."""
-        return self.frame[list(INPUT_NAMES)].copy()
+        """The model inputs of the machine (units in ``interface.inputs``)."""
+        return self.frame[list(self.interface.input_names)].copy()
+
+    def output(self, name: str) -> np.ndarray:
+        """Measured model output ``name``, °C: the mean of its sensor columns that measured at each
+        sample (NaN only where all are missing)."""
+        columns = list(self.interface.sensor(name).columns)
+        return self.frame[columns].mean(axis=1, skipna=True).to_numpy(dtype=float)
 
     @property
     def winding(self) -> np.ndarray:
-        """Stator winding temperature, °C: mean of the phase sensors that measured at each sample
-        (NaN only where all three are missing)."""
-        return self.frame[list(WINDING_SENSORS)].mean(axis=1, skipna=True).to_numpy(dtype=float)
+        """The first sensor's temperature (the winding, whose limit is protected), °C."""
+        return self.output(self.interface.output_names[0])
 
     @property
     def iron(self) -> np.ndarray:
-        """Stator iron temperature, °C (NaN where not measured)."""
-        return self.frame["T_iron"].to_numpy(dtype=float)
+        """The second sensor's temperature (the iron), °C (NaN where not measured)."""
+        return self.output(self.interface.output_names[1])
 
     @property
     def sensors(self) -> pd.DataFrame:
-        """The model outputs as measured: ``T_winding`` and ``T_iron``, °C."""
-        return pd.DataFrame({"T_winding": self.winding, "T_iron": self.iron})
+        """The model outputs as measured, one column per sensor output, °C."""
+        return pd.DataFrame({name: self.output(name) for name in self.interface.output_names})
 
     def to_csv(self, path) -> None:
         """Write the schema columns to ``path`` (empty cells for missing sensor samples)."""
         self.frame.to_csv(path, index=False)
 
 
-def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> MeasurementData:
+def load_measurements(path_or_buffer, rated_current_A: float | None = None,
+                      interface: MachineInterface | None = None) -> MeasurementData:
     """Read and validate a rig CSV file (schema and accepted formats in the module docstring).
 
     Parameters
@@ -148,7 +169,10 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> M
         The CSV file, header on the first line.
     rated_current_A : float, optional
         Rated RMS phase current of the machine the data come from (``model.spec.rated_current_A``);
-        default: that of the default built-in machine.
+        default: the interface's.
+    interface : MachineInterface, optional
+        Schema of the machine the data come from (``model.spec.interface``); default: the
+        default built-in machine's.
 
     Returns
     -------
@@ -173,7 +197,7 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> M
     header = text.lstrip().split("\n", 1)[0]
     if header.strip():
         names = [cell.strip().strip('"') for cell in header.split(delimiter)]
-        _require_columns(names, source)
+        _require_columns(names, source, interface or DEFAULT_INTERFACE)
         twice = sorted({name for name in names if names.count(name) > 1 and name})
         if twice:
             raise InputError("column", twice[0], f"appears more than once in the header of {source}")
@@ -187,13 +211,15 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None) -> M
     if delimiter != "," and _has_decimal_commas(raw):
         raw = raw.apply(lambda column: column.str.replace(",", ".", regex=False))
         notes.append(f"read as {_DELIMITER_NAMES[delimiter]}-separated with decimal commas")
-    return _validate(raw, source, from_file=True, rated_current_A=rated_current_A, notes=notes)
+    return _validate(raw, source, from_file=True, rated_current_A=rated_current_A, notes=notes,
+                     interface=interface)
 
 
 def dataframe_to_measurements(frame: pd.DataFrame, source: str = "<DataFrame>",
-                              rated_current_A: float | None = None) -> MeasurementData:
+                              rated_current_A: float | None = None,
+                              interface: MachineInterface | None = None) -> MeasurementData:
     """Validate an in-memory frame exactly as :func:`load_measurements` validates a file."""
-    return _validate(frame, source, from_file=False, rated_current_A=rated_current_A)
+    return _validate(frame, source, from_file=False, rated_current_A=rated_current_A, interface=interface)
 
 
 _DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
@@ -248,20 +274,22 @@ def _has_decimal_commas(raw: pd.DataFrame) -> bool:
 
 
 def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: float | None = None,
-              notes: list[str] | None = None) -> MeasurementData:
+              notes: list[str] | None = None, interface: MachineInterface | None = None) -> MeasurementData:
+    interface = interface or DEFAULT_INTERFACE
     raw = raw.reset_index(drop=True)
     raw.columns = [str(name).strip() for name in raw.columns]
-    _require_columns(raw.columns, source)
+    _require_columns(raw.columns, source, interface)
     if len(raw) == 0:
         raise InputError("file" if from_file else "frame", source, "no data rows below the header")
-    present_sensors = [*SENSOR_COLUMNS, *(c for c in OPTIONAL_SENSOR_COLUMNS if c in raw.columns)]
-    columns = ["time_s", *INPUT_NAMES, *present_sensors]
+    present_sensors = [*interface.sensor_columns, *(c for c in interface.optional_columns if c in raw.columns)]
+    columns = ["time_s", *interface.input_names, *present_sensors]
     frame = pd.DataFrame({name: _numeric_column(raw[name], name, from_file) for name in columns})
-    for name in ("time_s", *INPUT_NAMES):
-        _check_input_column(frame[name].to_numpy(), name, from_file)
+    for name in ("time_s", *interface.input_names):
+        _check_input_column(frame[name].to_numpy(), name, from_file, interface)
     _check_time_increasing(frame["time_s"].to_numpy(), from_file)
     _check_sample_period(frame["time_s"].to_numpy())
-    _check_units(frame, present_sensors, from_file, _rated_current(rated_current_A))
+    rated = float(rated_current_A) if rated_current_A is not None else interface.rated_current_A
+    _check_units(frame, present_sensors, from_file, rated, interface)
     flags = [f"{source}: {note}" for note in notes or []]
     flags.extend(_gap_flags(frame["time_s"].to_numpy(), from_file))
     for name in present_sensors:
@@ -271,21 +299,14 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: 
     ignored = [name for name in raw.columns if name not in columns]
     for flag in flags:
         warnings.warn(flag, DataWarning, stacklevel=3)
-    return MeasurementData(frame, source, missing_counts, flags, ignored)
+    return MeasurementData(frame, source, missing_counts, flags, ignored, interface)
 
 
-def _rated_current(rated_current_A: float | None) -> float:
-    if rated_current_A is not None:
-        return float(rated_current_A)
-    from .machines import MACHINES
-
-    return float(next(iter(MACHINES.values())).RATED_CURRENT_A)  # the default machine's
-
-
-def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A: float) -> None:
+def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A: float,
+                 interface: MachineInterface) -> None:
     """Temperatures in kelvin and currents far above the rating are errors with the likely fix."""
     limit = MAX_CURRENT_FACTOR * rated_current_A
-    for name in (*PHASE_CURRENTS, "I_exc"):
+    for name in interface.inputs_of_kind(InputKind.CURRENT):
         values = frame[name].to_numpy()
         above = np.flatnonzero(values > limit)
         if above.size:
@@ -295,7 +316,8 @@ def _check_units(frame: pd.DataFrame, sensors, from_file: bool, rated_current_A:
             raise InputError(f"column {name}, {_row_label(row, from_file)}", float(values[row]),
                              f"more than {MAX_CURRENT_FACTOR:g} x the rated {rated_current_A:g} A RMS of the "
                              f"machine ({above.size} sample(s)); the model is not valid there.{hint}")
-    for name, kind in [*((n, "input") for n in INPUT_TEMPERATURES), *((n, "sensor") for n in sensors)]:
+    temperatures = interface.inputs_of_kind(InputKind.TEMPERATURE)
+    for name, kind in [*((n, "input") for n in temperatures), *((n, "sensor") for n in sensors)]:
         values = frame[name].to_numpy()
         if np.isfinite(values).any() and np.nanmedian(values) > KELVIN_MEDIAN_C[kind]:
             raise InputError(f"column {name}", f"median {np.nanmedian(values):g}",
@@ -336,20 +358,21 @@ def _row_label(index: int, from_file: bool) -> str:
     return f"data row {index + 1} (line {index + 2} of the file)" if from_file else f"data row {index + 1}"
 
 
-def _require_columns(columns, source: str) -> None:
+def _require_columns(columns, source: str, interface: MachineInterface) -> None:
     present = list(columns)
-    for name in REQUIRED_COLUMNS:
+    required = required_columns(interface)
+    for name in required:
         if name in present:
             continue
         reason = f"required column missing in {source}"
-        close = difflib.get_close_matches(name, [c for c in present if c not in REQUIRED_COLUMNS], n=1)
+        close = difflib.get_close_matches(name, [c for c in present if c not in required], n=1)
         same_letters = [c for c in present if c.lower() == name.lower()]
         if same_letters:
             reason += f"; column names are case-sensitive: rename {same_letters[0]!r} to {name!r}"
         elif close:
             reason += f"; did you mean {close[0]!r}?"
         else:
-            reason += f"; the header must contain {', '.join(REQUIRED_COLUMNS)}"
+            reason += f"; the header must contain {', '.join(required)}"
         raise InputError("column", name, reason)
 
 
@@ -371,15 +394,17 @@ def _numeric_column(raw: pd.Series, name: str, from_file: bool) -> np.ndarray:
     return values
 
 
-def _check_input_column(values: np.ndarray, name: str, from_file: bool) -> None:
+def _check_input_column(values: np.ndarray, name: str, from_file: bool, interface: MachineInterface) -> None:
     """Inputs must be known and physical: no empty cell, no negative current, PT100 range."""
     empty = np.flatnonzero(np.isnan(values))
     if empty.size:
         raise InputError(f"column {name}, {_row_label(int(empty[0]), from_file)}", "",
                          "empty cell in an input column; only sensor columns may have missing samples")
-    if name in PHASE_CURRENTS or name == "I_exc":
+    if name in interface.rms_currents:
         bad, reason = np.flatnonzero(values < 0.0), "a current (A RMS) cannot be negative"
-    elif name in INPUT_TEMPERATURES:
+    elif name in interface.inputs_of_kind(InputKind.SPEED):
+        bad, reason = np.flatnonzero(values < 0.0), "a speed (rpm) cannot be negative"
+    elif name in interface.inputs_of_kind(InputKind.TEMPERATURE):
         low, high = PT100_RANGE_C
         bad = np.flatnonzero((values < low) | (values > high))
         reason = f"outside the PT100 range {low:g} to {high:g} °C of the rig; an input must be valid"
@@ -452,14 +477,14 @@ def resample(data: MeasurementData, dt_s: float) -> MeasurementData:
     grid = time_s[0] + dt_s * np.arange(int(np.floor(duration_s / dt_s + 1e-9)) + 1)
     held = np.searchsorted(time_s, grid + tolerance_s, side="right") - 1
     columns = {"time_s": grid}
-    columns.update({name: data.frame[name].to_numpy()[held] for name in INPUT_NAMES})
+    columns.update({name: data.frame[name].to_numpy()[held] for name in data.interface.input_names})
     sensors = [name for name in data.frame.columns if name not in columns]
     for name in sensors:
         columns[name] = _interpolate_valid(time_s, data.frame[name].to_numpy(), grid, dt_s + tolerance_s)
     frame = pd.DataFrame(columns)
     missing = {name: int(frame[name].isna().sum()) for name in sensors}
     return MeasurementData(frame, f"{data.source} resampled to {dt_s:g} s", missing,
-                           list(data.flags), list(data.ignored_columns))
+                           list(data.flags), list(data.ignored_columns), data.interface)
 
 
 def _interpolate_valid(time_s, values, grid, max_gap_s) -> np.ndarray:

@@ -9,7 +9,7 @@ Missions are stored as YAML under ``scenarios/`` at the top of the repository (i
 
     name: thesis_fig_3_2                 # required, text
     description: Example flight ...      # optional, text
-    rated_current_A: 7.0                 # optional, > 0, A RMS per phase (default 7)
+    rated_current_A: 7.0                 # optional, > 0, A RMS per phase (default: the default machine's)
     power_factor: 0.8                    # optional, (0, 1], lagging load power factor (default 0.8)
     T_inlet_C: 20.0                      # optional, -60..100 degC (default 20)
     T_ambient_C: 20.0                    # optional, -60..100 degC (default 20)
@@ -41,7 +41,9 @@ import yaml
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
 from .yaml_input import load_user_yaml
-from .exciter import DEFAULT_POWER_FACTOR, exciter_current
+from .exciter import DEFAULT_POWER_FACTOR
+from .machines import DEFAULT_MACHINE, MACHINES
+from .machines.interface import GeneratorRole
 from .resources import SCENARIO_DIR
 from .sizes import check_grid
 
@@ -53,8 +55,21 @@ __all__ = [
     "load_mission",
 ]
 
-#: Columns of :meth:`Mission.to_inputs`: s, A RMS (three phases), A (field), degC, degC.
-INPUT_COLUMNS = ("time_s", "I_u", "I_v", "I_w", "I_exc", "T_inlet", "T_ambient")
+#: The generator a mission drives when none is given: the default machine's generator role.
+DEFAULT_GENERATOR = MACHINES[DEFAULT_MACHINE].interface.generator
+#: Its rated RMS phase current, A: load percentages refer to it unless a mission says otherwise.
+DEFAULT_RATED_CURRENT_A = MACHINES[DEFAULT_MACHINE].interface.rated_current_A
+
+
+def input_columns(generator: GeneratorRole = DEFAULT_GENERATOR) -> tuple:
+    """Columns of :meth:`Mission.to_inputs` for ``generator``: time (s), the three phase currents
+    (A RMS), the field current (A), coolant and ambient temperature (degC)."""
+    return ("time_s", *generator.phase_inputs, generator.excitation_input, generator.coolant_input,
+            generator.ambient_input)
+
+
+#: Columns of :meth:`Mission.to_inputs` for the default generator.
+INPUT_COLUMNS = input_columns()
 #: Accepted range of inlet and ambient temperatures, degC.
 TEMPERATURE_RANGE_C = (-60.0, 100.0)
 #: Top-level keys kept unchecked in :attr:`Mission.extras`.
@@ -74,7 +89,7 @@ class Mission:
     actions : sequence of Action
         The actions in flight order (stored as a tuple); at least one.
     rated_current_A : float
-        Rated RMS phase current, A; load percentages refer to it (thesis generator: 7 A).
+        Rated RMS phase current, A; load percentages refer to it (default: the default machine's).
     power_factor : float
         Lagging power factor of the load, in (0, 1]; sets the exciter current
         (:func:`genthermal.exciter.exciter_current`). Default 0.8, the usual rating point.
@@ -90,7 +105,7 @@ class Mission:
 
     name: str
     actions: tuple[Action, ...]
-    rated_current_A: float = 7.0
+    rated_current_A: float = DEFAULT_RATED_CURRENT_A
     power_factor: float = DEFAULT_POWER_FACTOR
     T_inlet_C: float = 20.0
     T_ambient_C: float = 20.0
@@ -112,7 +127,7 @@ class Mission:
         rated = checked_number(self.rated_current_A, "rated_current_A", "a positive number of amperes")
         if rated <= 0:
             raise InputError("rated_current_A", self.rated_current_A,
-                             "must be a positive current, A (thesis generator: 7)")
+                             f"must be a positive current, A (default machine: {DEFAULT_RATED_CURRENT_A:g})")
         object.__setattr__(self, "rated_current_A", rated)
         power_factor = checked_number(self.power_factor, "power_factor", "a lagging power factor in (0, 1]")
         if not 0.0 < power_factor <= 1.0:
@@ -201,7 +216,7 @@ class Mission:
         percent, shares = self._load_at(t_s)
         return (percent / 100.0 * self.rated_current_A)[..., np.newaxis] * shares
 
-    def to_inputs(self, dt_s: float) -> pd.DataFrame:
+    def to_inputs(self, dt_s: float, generator: GeneratorRole = DEFAULT_GENERATOR) -> pd.DataFrame:
         """Sample the mission as model inputs with a zero-order hold.
 
         Samples lie at ``0, dt, 2 dt, ...`` up to the mission end (included when the duration is a
@@ -214,12 +229,16 @@ class Mission:
         dt_s : float
             Sample period, s (> 0); the grid may have at most
             :data:`genthermal.sizes.MAX_GRID_SAMPLES` samples.
+        generator : GeneratorRole
+            The machine's generator role (``model.spec.interface.generator``): its input names and
+            AVR exciter law; default the default machine's.
 
         Returns
         -------
         pandas.DataFrame
-            Float columns ``time_s`` (s), ``I_u, I_v, I_w`` (A RMS), ``I_exc`` (A, from
-            :func:`genthermal.exciter.exciter_current` of the mean phase current), ``T_inlet``, ``T_ambient`` (degC).
+            Float columns :func:`input_columns`: ``time_s`` (s), the three phase currents (A RMS),
+            the field current (A, the generator's exciter law of the mean phase current), the
+            coolant and ambient temperatures (degC).
         """
         step = checked_number(dt_s, "dt_s", "a positive number of seconds")
         if step <= 0:
@@ -227,16 +246,13 @@ class Mission:
         n_steps = check_grid(self.duration_s, step, f"mission {self.name} at dt_s", dt_s) - 1
         times = np.arange(n_steps + 1, dtype=float) * step
         currents = self.phase_currents(np.minimum(times, self.duration_s))
-        columns = {
-            "time_s": times,
-            "I_u": currents[:, 0],
-            "I_v": currents[:, 1],
-            "I_w": currents[:, 2],
-            "I_exc": exciter_current(currents.mean(axis=1), self.power_factor, self.rated_current_A),
-            "T_inlet": np.full(times.shape, self.T_inlet_C),
-            "T_ambient": np.full(times.shape, self.T_ambient_C),
-        }
-        return pd.DataFrame(columns, columns=list(INPUT_COLUMNS), dtype=float)
+        columns = {"time_s": times}
+        columns.update({name: currents[:, i] for i, name in enumerate(generator.phase_inputs)})
+        columns[generator.excitation_input] = generator.exciter_law(currents.mean(axis=1), self.power_factor,
+                                                                    self.rated_current_A)
+        columns[generator.coolant_input] = np.full(times.shape, self.T_inlet_C)
+        columns[generator.ambient_input] = np.full(times.shape, self.T_ambient_C)
+        return pd.DataFrame(columns, columns=list(input_columns(generator)), dtype=float)
 
     # --- plain data ----------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

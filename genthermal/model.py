@@ -19,15 +19,19 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 import sympy
 
 from .errors import InputError, ParameterError
-from .losses import INPUT_NAMES, LossFloor, input_symbol
+from .losses import LossFloor, input_symbol
 from .network import Network
 from .parameters import ParameterSet
+
+if TYPE_CHECKING:
+    from .machines.interface import MachineInterface
 
 #: A steady state this far below the coldest boundary temperature (K) is the non-physical root of a
 #: thermal runaway: the model has no heat sinks, and no loss cools a machine 50 K below its air.
@@ -68,37 +72,53 @@ class ModelSpec:
     ----------
     name : str
         Machine name (``"genco_rf201a"``).
-    sensors : dict
-        Output name → node name (``{"T_winding": "stator_winding"}``).
-    boundary_inputs : dict
-        Boundary node → input name (``{"coolant_inlet": "T_inlet"}``).
-    outlet_node : str or None
-        Air node leaving through the outlet, reported as ``T_outlet``.
-    rated_current_A : float
-        Rated RMS phase current.
+    interface : MachineInterface
+        The machine's inputs, sensors, ratings, limits and roles
+        (:class:`genthermal.machines.interface.MachineInterface`); consumers read them here.
     variant : str
         ``"nonlinear"`` (simulation model) or ``"linear"`` (design model).
-    roles : dict
-        What the machine's nodes and links are, for effects that must find them:
-        ``"end_windings"`` and ``"iron"`` (tuples of nodes), ``"winding_insulation"`` and
-        ``"frame_to_ambient"`` (tuples of (node, node) links).
     effects : tuple of str
         Names of the effects applied to this model, in order.
     onsets : tuple of (str, float)
         Effects that start during a record: (effect name, onset in s after the record's first
         sample). Before its onset such an effect is at its neutral values; see
         :func:`genthermal.onsets.onset_switches`, which :func:`genthermal.simulate.simulate` uses.
+    machine_source : str
+        How to build the machine again (a built-in or entry-point name, or the path of a machine
+        file): model files record it. Default: ``name``.
     """
 
     name: str
-    sensors: dict
-    boundary_inputs: dict
-    outlet_node: str | None = None
-    rated_current_A: float = 7.0
+    interface: "MachineInterface"
     variant: str = "nonlinear"
-    roles: dict = dataclasses.field(default_factory=dict)
     effects: tuple = ()
     onsets: tuple = ()
+    machine_source: str = ""
+
+    @property
+    def sensors(self) -> dict:
+        """Output name → node name."""
+        return self.interface.sensor_nodes
+
+    @property
+    def boundary_inputs(self) -> dict:
+        """Boundary node → input name."""
+        return dict(self.interface.boundary_inputs)
+
+    @property
+    def outlet_node(self) -> str | None:
+        """Coolant node reported as the outlet sensor's column, or None."""
+        return self.interface.outlet_node
+
+    @property
+    def rated_current_A(self) -> float:
+        """Rated RMS current of the load-current inputs, A."""
+        return float(self.interface.rated_current_A)
+
+    @property
+    def roles(self) -> dict:
+        """:class:`~genthermal.machines.interface.Role` → the machine's value for it."""
+        return self.interface.roles
 
     def structure(self) -> "ModelSpec":
         """The spec without its onsets: what the compiled functions depend on."""
@@ -153,7 +173,7 @@ class ThermalModel:
     Notes
     -----
     States :math:`x` are the capacitive node temperatures in °C (``state_names``); inputs
-    :math:`u` are ``INPUT_NAMES`` (A RMS, A, °C, °C); parameters :math:`p` are the values of
+    :math:`u` are ``input_names``, the machine's inputs (``spec.interface.inputs``, with units); parameters :math:`p` are the values of
     ``parameters`` in order (``parameter_names``). Building the model checks every resistance,
     capacitance and mass flow for physical values and the reduced system for stability.
     """
@@ -166,9 +186,9 @@ class ThermalModel:
         self.state_names = network.state_names
         self.massless_names = network.names("massless")
         self.boundary_names = network.names("boundary")
-        self.input_names = INPUT_NAMES
+        self.input_names = spec.interface.input_names
         self.parameter_names = list(parameters)
-        self.output_names = list(spec.sensors)
+        self.output_names = list(spec.interface.output_names)
         self._discrete: dict = {}
         # the symbolic model depends on network and parameter order only, not on the values:
         # a model that differs from another only in parameter values shares its CasADi functions
@@ -179,7 +199,7 @@ class ThermalModel:
         for output, node in spec.sensors.items():
             network.node(node)
         for node, name in spec.boundary_inputs.items():
-            if network.node(node).kind != "boundary" or name not in INPUT_NAMES:
+            if network.node(node).kind != "boundary" or name not in self.input_names:
                 raise InputError(f"boundary_inputs[{node!r}]", name, "must map a boundary node to an input")
         missing = set(self.boundary_names) - set(spec.boundary_inputs)
         if missing:
@@ -228,7 +248,7 @@ class ThermalModel:
                                      f"not physical (must be > 0); it depends on {', '.join(names)}")
 
     def _check_stable(self) -> None:
-        A = self.jacobian_x(np.zeros(self.n_states), np.zeros(len(INPUT_NAMES)))
+        A = self.jacobian_x(np.zeros(self.n_states), np.zeros(len(self.input_names)))
         worst = float(np.max(np.linalg.eigvals(A).real))
         if worst >= 0:
             raise ParameterError("network", worst, "the reduced system is not stable (largest eigenvalue "
@@ -249,13 +269,13 @@ class ThermalModel:
     def _build_symbolic(self, loss_floors: bool = True) -> dict:
         net = self.network
         x = ca.SX.sym("x", self.n_states)
-        u = ca.SX.sym("u", len(INPUT_NAMES))
+        u = ca.SX.sym("u", len(self.input_names))
         p = ca.SX.sym("p", len(self.parameter_names))
         internal = self.state_names + self.massless_names
         index = {name: i for i, name in enumerate(internal)}
         theta_internal = ca.SX.sym("theta", len(internal))  # placeholder for all internal temps
         symbols = [self.parameters[n].symbol for n in self.parameter_names]
-        symbols += [input_symbol(n) for n in INPUT_NAMES]
+        symbols += [input_symbol(n) for n in self.input_names]
         symbols += [net.temperature_symbol(n) for n in internal]
         values = [p[i] for i in range(p.numel())] + [u[i] for i in range(u.numel())]
         values += [theta_internal[i] for i in range(len(internal))]
@@ -273,7 +293,7 @@ class ThermalModel:
                 G[row][index[column]] = G[row].get(index[column], 0) + g
             else:
                 boundary_input = self.spec.boundary_inputs[column]
-                r[row] = r[row] + g * u[INPUT_NAMES.index(boundary_input)]
+                r[row] = r[row] + g * u[self.input_names.index(boundary_input)]
 
         for link, R in zip(net.links, link_R):
             for me, other in ((link.a, link.b), (link.b, link.a)):
@@ -384,7 +404,7 @@ class ThermalModel:
             thermal runaway, where the copper resistance :math:`R_0(1+\\alpha_{cu}\\theta)` vanishes.
         """
         u = np.asarray(u, dtype=float)
-        x = np.full(self.n_states, float(u[INPUT_NAMES.index("T_ambient")]))
+        x = np.full(self.n_states, float(u[self.input_names.index(self.spec.interface.ambient_input)]))
         for _ in range(50):
             step = np.linalg.solve(self.jacobian_x(x, u, p), self.rhs(x, u, p))
             x = x - step
@@ -393,7 +413,7 @@ class ThermalModel:
         raise InputError("u", u.tolist(), "no steady state found (Newton did not converge)")
 
     def _physical_steady_state(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
-        coldest = min(float(u[INPUT_NAMES.index(name)]) for name in ("T_inlet", "T_ambient"))
+        coldest = min(float(u[self.input_names.index(name)]) for name in self.spec.boundary_inputs.values())
         if x.min() < coldest - COLDEST_STEADY_STATE_BELOW_K:
             raise InputError("steady state", f"{x.min():.4g} °C", f"is far below the coolant and ambient "
                              f"({coldest:g} °C): at this load the losses grow with temperature faster than the "
@@ -446,9 +466,29 @@ class ThermalModel:
         return ThermalModel(network, parameters or self.parameters,
                             dataclasses.replace(self.spec, **spec_changes))
 
-    def input_vector(self, I_u=0.0, I_v=0.0, I_w=0.0, I_exc=0.0, T_inlet=20.0, T_ambient=20.0) -> np.ndarray:
-        """Build an input vector u in ``INPUT_NAMES`` order (A RMS, A, °C, °C)."""
-        return np.array([I_u, I_v, I_w, I_exc, T_inlet, T_ambient], dtype=float)
+    def input_vector(self, *values, **named) -> np.ndarray:
+        """Build an input vector u in ``input_names`` order.
+
+        Parameters
+        ----------
+        *values : float
+            Inputs in ``input_names`` order (units of ``spec.interface.inputs``).
+        **named : float
+            Inputs by name; an input given neither way takes its interface default (0 A, 20 °C).
+        """
+        if len(values) > len(self.input_names):
+            raise InputError("input_vector", values, f"{self.name} has {len(self.input_names)} inputs "
+                             f"({', '.join(self.input_names)})")
+        unknown = sorted(set(named) - set(self.input_names))
+        if unknown:
+            raise InputError(f"input {unknown[0]}", named[unknown[0]], f"not an input of {self.name} "
+                             f"({', '.join(self.input_names)})")
+        given = dict(zip(self.input_names, values))
+        twice = sorted(set(given) & set(named))
+        if twice:
+            raise InputError(f"input {twice[0]}", named[twice[0]], "given both by position and by name")
+        merged = {**self.spec.interface.default_input_values(), **given, **named}
+        return np.array([merged[name] for name in self.input_names], dtype=float)
 
     def with_effect(self, effect, **values) -> "ThermalModel":
         """Return this model with a catalogue effect added (see :mod:`genthermal.effects`).

@@ -13,8 +13,10 @@
         source: "diagnosis on flight_12.csv"
         onset_s: 3960             # optional: the effect starts 3960 s after a record's first sample
 
-:func:`load_model` also takes a built-in name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
-parameter set, ``genco_rf201a:chapter7`` (the calibration fitted to the thesis's chapter-7 outcomes,
+:func:`load_model` also takes a machine name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
+parameter set, ``genco_rf201a:chapter7``; a plug-in machine's name or the path of a ``.py`` machine
+file (:mod:`genthermal.machines.registry`), each optionally with ``:linear``. ``machine:`` in a
+model file takes the same names (the calibration fitted to the thesis's chapter-7 outcomes,
 :mod:`genthermal.machines.chapter7`; a model file inside the package).
 
 An effect with ``onset_s`` is loaded with its fitted values and the onset recorded on the model
@@ -35,7 +37,8 @@ from .design import linear_design_model
 from .effects import CATALOGUE, apply_effect
 from .errors import InputError
 from .yaml_input import load_user_yaml
-from .machines import MACHINES, build_model
+from .machines import MACHINES, build_model, known_machines
+from .machines.registry import is_machine_reference
 from .model import ThermalModel
 from .outputs import write_text
 from .parameters import PROVENANCES
@@ -60,17 +63,20 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
         ``parameters.h_end_air.value`` or ``effects[0].parameters``).
     """
     text = str(spec_or_path)
-    name, _, variant = text.partition(":")
+    head, sep, tail = text.rpartition(":")
+    name, variant = (head, tail) if sep and tail in (*VARIANTS, *PARAMETER_SETS) else (text, "")
     if name in MACHINES and variant in PARAMETER_SETS and not Path(text).is_file():
         from .machines.chapter7 import parameter_file
 
         return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
-    if name in MACHINES and not Path(text).is_file():
+    if variant not in PARAMETER_SETS and not (Path(text).is_file() and not name.endswith(".py")) \
+            and is_machine_reference(name):
         return _build(name, variant or "nonlinear", from_file=False)
     path = Path(text)
     if not path.is_file():
-        known = ", ".join(f"{m}, {m}:linear, " + ", ".join(f"{m}:{v}" for v in PARAMETER_SETS) for m in MACHINES)
-        raise InputError("model", text, f"neither a built-in model ({known}) nor a model file")
+        known = ", ".join(f"{m}, {m}:linear" for m in known_machines())
+        sets = ", ".join(f"{m}:{v}" for m in MACHINES for v in PARAMETER_SETS)
+        raise InputError("model", text, f"neither a machine ({known}, {sets}, or a .py machine file) nor a model file")
     try:
         document = load_user_yaml(path.read_text(encoding="utf-8"), str(path))
     except UnicodeDecodeError:
@@ -84,13 +90,15 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
 
 
 def _build(machine: str, variant: str, from_file: bool) -> ThermalModel:
-    if machine not in MACHINES:
-        raise InputError("machine" if from_file else "model", machine,
-                         f"unknown machine; built in: {', '.join(MACHINES)}")
     if variant not in VARIANTS:
         raise InputError("variant" if from_file else "model variant", variant,
                          f"must be one of {', '.join(VARIANTS)}")
-    model = build_model(machine)
+    try:
+        model = build_model(machine)
+    except InputError as error:
+        field = "machine" if from_file else "model"
+        raise InputError(field if error.field == "machine" else f"{field} {error.field}", error.value,
+                         error.reason) from None
     return linear_design_model(model) if variant == "linear" else model
 
 
@@ -183,7 +191,8 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
         carries (``spec.onsets``).
     """
     onsets = dict(model.spec.onsets) if onsets is None else onsets
-    defaults = build_model(model.spec.name).parameters
+    machine = model.spec.machine_source or model.spec.name
+    defaults = build_model(machine).parameters
     effect_parameters = {p.name: effect for effect in model.spec.effects for p in CATALOGUE[effect].all_parameters}
     parameters = {}
     for name in model.parameter_names:
@@ -204,7 +213,7 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
         if onsets and effect in onsets:
             entry["onset_s"] = float(onsets[effect])
         effects.append(entry)
-    return {"machine": model.spec.name, "variant": model.spec.variant, "parameters": parameters, "effects": effects}
+    return {"machine": machine, "variant": model.spec.variant, "parameters": parameters, "effects": effects}
 
 
 def save_model(model: ThermalModel, path: str | os.PathLike, onsets: dict | None = None) -> Path:

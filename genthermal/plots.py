@@ -8,10 +8,8 @@ matplotlib.use("Agg")  # files, not windows: the CLI and the tests run headless
 import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from .machines.interface import InputKind  # noqa: E402
 from .outputs import replacing  # noqa: E402
-
-LIMIT_C = 110.0
-
 
 def finish_figure(fig, path=None, close: bool = False):
     """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it.
@@ -28,37 +26,43 @@ def finish_figure(fig, path=None, close: bool = False):
     return fig
 
 
-def plot_simulation(result: pd.DataFrame, title: str = "", path=None, limit_C: float | None = LIMIT_C):
-    """Phase currents and node temperatures of a simulation result over time.
+def plot_simulation(result: pd.DataFrame, interface, title: str = "", path=None, limit_C: float | None = None):
+    """Load currents and node temperatures of a simulation result over time.
 
     Parameters
     ----------
     result : pandas.DataFrame
         Output of :func:`genthermal.simulate.simulate`.
+    interface : MachineInterface
+        The simulated machine's (``model.spec.interface``): which columns are currents, inputs,
+        sensors and limits.
     title : str
         Figure title.
     path : path-like, optional
         Where to save the PNG.
-    limit_C : float or None
-        Temperature limit drawn as a dashed line (thesis: 110 °C).
+    limit_C : float, optional
+        Temperature limit drawn as a dashed line; default the machine's sensor limits.
     """
     hours = result["time_s"] / 3600.0
     fig, (ax_i, ax_t) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True,
                                      gridspec_kw={"height_ratios": [1, 2.4]})
-    for phase in ("I_u", "I_v", "I_w"):
-        ax_i.plot(hours, result[phase], label=phase, lw=1.2)
-    ax_i.set_ylabel("phase current [A RMS]")
-    ax_i.legend(loc="lower right", ncol=3, fontsize=8)
+    currents = interface.inputs_of_kind(InputKind.CURRENT)
+    for name in currents:
+        ax_i.plot(hours, result[name], label=name, lw=1.2)
+    ax_i.set_ylabel("current [A]")
+    ax_i.legend(loc="lower right", ncol=len(currents), fontsize=8)
     ax_i.grid(alpha=0.3)
-    nodes = [c for c in result.columns if c.startswith("T_") and c not in
-             ("T_inlet", "T_ambient", "T_winding", "T_iron")]
+    not_nodes = {*interface.input_names, *interface.output_names}
+    sensor_columns = {f"T_{node}" for node in interface.sensor_nodes.values()}
+    nodes = [c for c in result.columns if c.startswith("T_") and c not in not_nodes]
     for column in nodes:
-        emphasis = column in ("T_stator_winding", "T_stator_iron")
+        emphasis = column in sensor_columns
         ax_t.plot(hours, result[column], lw=2.0 if emphasis else 1.0, alpha=1.0 if emphasis else 0.7,
                   label=column[2:].replace("_", " "))
-    ax_t.plot(hours, result["T_inlet"], "k:", lw=1, label="inlet")
-    if limit_C is not None:
-        ax_t.axhline(limit_C, color="red", ls="--", lw=1, label=f"limit {limit_C:g} °C")
+    ax_t.plot(hours, result[interface.coolant_input], "k:", lw=1, label="coolant")
+    limits = sorted(set(interface.limits_C.values())) if limit_C is None else [limit_C]
+    for limit in limits:
+        ax_t.axhline(limit, color="red", ls="--", lw=1, label=f"limit {limit:g} °C")
     ax_t.set_xlabel("time [h]")
     ax_t.set_ylabel("temperature [°C]")
     ax_t.legend(loc="upper left", fontsize=7, ncol=3)
@@ -68,16 +72,15 @@ def plot_simulation(result: pd.DataFrame, title: str = "", path=None, limit_C: f
     return finish_figure(fig, path)
 
 
-def plot_comparison(results: dict[str, pd.DataFrame], columns=("T_winding", "T_iron"), title: str = "",
-                    path=None):
+def plot_comparison(results: dict[str, pd.DataFrame], columns, title: str = "", path=None):
     """Overlay the sensor temperatures of several runs (e.g. nonlinear vs linear vs C).
 
     Parameters
     ----------
     results : dict
         Label → result frame with ``time_s`` and ``columns``.
-    columns : tuple of str
-        Columns to overlay, one panel each.
+    columns : sequence of str
+        Columns to overlay, one panel each (a model's ``output_names``).
     """
     fig, axes = plt.subplots(len(columns), 1, figsize=(9, 3.2 * len(columns)), sharex=True, squeeze=False)
     for ax, column in zip(axes[:, 0], columns):

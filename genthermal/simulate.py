@@ -1,9 +1,9 @@
 """Whole-horizon simulation of a ThermalModel on an input time series → pandas DataFrame.
 
-Input frames have the columns of :data:`genthermal.losses.INPUT_NAMES` plus ``time_s`` on a
+Input frames have the model's inputs (``model.input_names``) plus ``time_s`` on a
 uniform grid; the value at row k is held over ``[t_k, t_k + dt)`` (zero-order hold). The output has
 one row per input row: ``time_s``, the inputs, ``T_<state node>`` for every state, the sensor
-outputs (``T_winding``, ``T_iron``) and ``T_outlet`` when the machine has an outlet node, all °C.
+outputs (``model.output_names``) and the outlet sensor's column when the machine has one, all °C.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .losses import INPUT_NAMES
 from .model import ThermalModel
 
 
@@ -30,16 +29,18 @@ def uniform_step(time_s: np.ndarray, field: str = "time_s") -> float:
     return dt
 
 
-def input_matrix(inputs: pd.DataFrame) -> np.ndarray:
-    """Return the inputs as an array of shape (n_inputs, n_samples), checking columns and values."""
-    missing = [c for c in ("time_s", *INPUT_NAMES) if c not in inputs.columns]
+def input_matrix(inputs: pd.DataFrame, model: ThermalModel) -> np.ndarray:
+    """Return the inputs of ``model`` as an array of shape (n_inputs, n_samples), checking columns
+    and values."""
+    names = list(model.input_names)
+    missing = [c for c in ("time_s", *names) if c not in inputs.columns]
     if missing:
-        raise InputError("inputs", missing, f"missing columns; need time_s and {', '.join(INPUT_NAMES)}")
-    U = inputs[list(INPUT_NAMES)].to_numpy(dtype=float).T
+        raise InputError("inputs", missing, f"missing columns; {model.name} needs time_s and {', '.join(names)}")
+    U = inputs[names].to_numpy(dtype=float).T
     bad = np.argwhere(~np.isfinite(U))
     if bad.size:
         row, col = bad[0][1], bad[0][0]
-        raise InputError(f"inputs.{INPUT_NAMES[col]}[{row}]", U[col, row], "inputs must be finite numbers")
+        raise InputError(f"inputs.{names[col]}[{row}]", U[col, row], "inputs must be finite numbers")
     return U
 
 
@@ -47,7 +48,7 @@ def initial_state(model: ThermalModel, u0: np.ndarray, x0=None) -> np.ndarray:
     """The initial state: ``x0`` if given (a scalar fills every node), else every node at the
     ambient temperature of the first input sample (a cold machine)."""
     if x0 is None:
-        return np.full(model.n_states, float(u0[INPUT_NAMES.index("T_ambient")]))
+        return np.full(model.n_states, float(u0[model.input_names.index(model.spec.interface.ambient_input)]))
     x0 = np.broadcast_to(np.asarray(x0, dtype=float), (model.n_states,)).copy()
     if not np.all(np.isfinite(x0)):
         raise InputError("x0", x0.tolist(), "initial temperatures must be finite numbers in °C")
@@ -77,7 +78,7 @@ def simulate(model: ThermalModel, inputs: pd.DataFrame, x0=None, switches=None) 
         See the module docstring for the columns.
     """
     time_s = inputs["time_s"].to_numpy(dtype=float) if "time_s" in inputs else None
-    U = input_matrix(inputs)
+    U = input_matrix(inputs, model)
     dt = uniform_step(time_s)
     if model.spec.onsets:
         if switches:
@@ -136,10 +137,11 @@ def results_frame(model: ThermalModel, time_s: np.ndarray, U: np.ndarray, X: np.
     nodes = np.asarray(model.functions["nodes"].map(X.shape[1])(X, U, model.p0))
     order = model.node_order
     columns = {"time_s": time_s}
-    columns.update({name: U[i] for i, name in enumerate(INPUT_NAMES)})
+    columns.update({name: U[i] for i, name in enumerate(model.input_names)})
     columns.update({f"T_{name}": X[i] for i, name in enumerate(model.state_names)})
     for output, node in model.spec.sensors.items():
         columns[output] = nodes[order.index(node)]
-    if model.spec.outlet_node:
-        columns["T_outlet"] = nodes[order.index(model.spec.outlet_node)]
+    outlet = model.spec.interface.outlet_sensor
+    if outlet is not None:
+        columns[outlet.output] = nodes[order.index(outlet.node)]
     return pd.DataFrame(columns)

@@ -2,18 +2,17 @@ r"""Synthetic rig data: a model driven by a mission, read through noisy sensors.
 
 The *plant* (usually the nonlinear simulation model, possibly with changed parameters to stand for
 the real machine) is simulated with the true inputs. What the rig's logger would record is then
-written in the :mod:`genthermal.measurements` CSV schema:
+written in the machine's :mod:`genthermal.measurements` CSV schema
+(``model.spec.interface``):
 
-* ``T_winding_u``, ``T_winding_v``, ``T_winding_w``: the three stator-winding PT100s all read the
-  stator winding node, each with its own white Gaussian noise of variance
-  :math:`\sigma_w^2` (thesis eq. 6.10: 0.0082 K²);
-* ``T_iron`` (stator iron node) and ``T_outlet`` (outlet air): white Gaussian noise of variance
-  :math:`\sigma_i^2` (thesis eq. 6.10: 0.013 K², used for both PT100 channels);
-* ``I_u, I_v, I_w, I_exc``: the measured currents are
-  :math:`I_{meas} = I_{true}\,(1 + \epsilon)`, :math:`\epsilon \sim N(0, c^2)` (``current_noise``
-  :math:`c`, default 1 %), clipped at 0 A. The plant itself sees the true currents, so a model
-  driven by the recorded currents sees slightly wrong losses, as it would on the rig;
-* ``T_inlet``, ``T_ambient``: recorded without noise (they are boundary inputs, not states).
+* every CSV column of a sensor reads the sensor's node with its own white Gaussian noise of the
+  sensor's variance (the thesis generator: three stator-winding PT100s at 0.0082 K², the iron
+  and outlet PT100s at 0.013 K², thesis eq. 6.10);
+* current inputs are measured as :math:`I_{meas} = I_{true}\,(1 + \epsilon)`,
+  :math:`\epsilon \sim N(0, c^2)` (``current_noise`` :math:`c`, default 1 %), RMS currents
+  clipped at 0 A. The plant itself sees the true currents, so a model driven by the recorded
+  currents sees slightly wrong losses, as it would on the rig;
+* other inputs (temperatures, speed) are recorded without noise.
 """
 
 from __future__ import annotations
@@ -22,28 +21,28 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
-from .losses import INPUT_NAMES, PHASE_CURRENTS
-from .measurements import REQUIRED_COLUMNS, WINDING_SENSORS
+from .machines import DEFAULT_MACHINE, MACHINES
+from .machines.interface import InputKind
+from .measurements import required_columns
 from .mission import Mission
 from .model import ThermalModel
 from .simulate import simulate, uniform_step
 
-#: Sensor noise variances of thesis eq. 6.10, K²: (stator winding, stator iron).
-THESIS_NOISE_VARIANCE_K2 = (0.0082, 0.013)
+#: Sensor noise variances of the default machine, K² (thesis eq. 6.10: winding, iron).
+THESIS_NOISE_VARIANCE_K2 = MACHINES[DEFAULT_MACHINE].interface.noise_variances_K2
 #: Relative (1 sigma) noise of the measured currents.
 DEFAULT_CURRENT_NOISE = 0.01
-CURRENT_COLUMNS = (*PHASE_CURRENTS, "I_exc")
 
 
 def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed: int = 0,
-               noise_var=THESIS_NOISE_VARIANCE_K2, current_noise: float = DEFAULT_CURRENT_NOISE,
+               noise_var=None, current_noise: float = DEFAULT_CURRENT_NOISE,
                x0=None, switches=()) -> pd.DataFrame:
     r"""Simulate ``model`` on a mission and return what the rig's sensors would record.
 
     Parameters
     ----------
     model : ThermalModel
-        The plant (a model with ``T_winding`` and ``T_iron`` outputs).
+        The plant; its interface gives the sensors, their CSV columns and noise.
     mission_or_inputs : Mission or pandas.DataFrame
         A mission (sampled with :meth:`Mission.to_inputs` at ``dt_s``) or an input frame with
         ``time_s`` and the model inputs on a uniform grid (then its own step is used and ``dt_s``
@@ -52,9 +51,10 @@ def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed:
         Sample period, s.
     seed : int
         Seed of the random generator (:func:`numpy.random.default_rng`); same seed, same data.
-    noise_var : (float, float)
-        Variances :math:`(\sigma_w^2, \sigma_i^2)` in K² of each winding sensor and of the iron
-        (and outlet) sensor.
+    noise_var : sequence of float, optional
+        Noise variance of each sensor in K², in ``model.output_names`` order (the thesis
+        generator: winding, iron), optionally followed by the outlet sensor's; default the
+        variances of the machine's sensors.
     current_noise : float
         Relative standard deviation :math:`c` of the measured currents (0.01 = 1 %).
     x0 : array_like or float, optional
@@ -65,10 +65,12 @@ def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed:
     Returns
     -------
     pandas.DataFrame
-        Columns ``time_s, I_u, I_v, I_w, I_exc, T_inlet, T_ambient, T_winding_u, T_winding_v,
-        T_winding_w, T_iron, T_outlet`` (s, A, °C).
+        ``time_s``, the inputs, the sensor columns and the outlet column if the machine has one
+        (the thesis generator: ``time_s, I_u, I_v, I_w, I_exc, T_inlet, T_ambient, T_winding_u,
+        T_winding_v, T_winding_w, T_iron, T_outlet``; s, A, °C).
     """
-    winding_var, iron_var = _noise_variances(noise_var)
+    interface = model.spec.interface
+    variances = _noise_variances(noise_var, interface)
     if not (np.isfinite(current_noise) and current_noise >= 0):
         raise InputError("current_noise", current_noise, "must be a relative standard deviation >= 0")
     if isinstance(mission_or_inputs, Mission):
@@ -81,33 +83,41 @@ def synthesize(model: ThermalModel, mission_or_inputs, dt_s: float = 10.0, seed:
     else:
         raise InputError("mission_or_inputs", type(mission_or_inputs).__name__,
                          "expected a Mission or an input DataFrame")
-    for output in ("T_winding", "T_iron"):
-        if output not in model.output_names:
-            raise InputError("model", model.name, f"has no output {output}; outputs: {model.output_names}")
     truth = simulate(model, inputs, x0=x0, switches=switches)
     rng = np.random.default_rng(seed)
     n = len(truth)
     frame = pd.DataFrame({"time_s": truth["time_s"].to_numpy()})
-    for name in INPUT_NAMES:
-        values = truth[name].to_numpy()
-        if name in CURRENT_COLUMNS:
-            values = np.clip(values * (1.0 + current_noise * rng.standard_normal(n)), 0.0, None)
-        frame[name] = values
-    for sensor in WINDING_SENSORS:
-        frame[sensor] = truth["T_winding"].to_numpy() + np.sqrt(winding_var) * rng.standard_normal(n)
-    frame["T_iron"] = truth["T_iron"].to_numpy() + np.sqrt(iron_var) * rng.standard_normal(n)
-    if "T_outlet" in truth:
-        frame["T_outlet"] = truth["T_outlet"].to_numpy() + np.sqrt(iron_var) * rng.standard_normal(n)
-    return frame[[*REQUIRED_COLUMNS, *(["T_outlet"] if "T_outlet" in frame else [])]]
+    for spec in interface.inputs:
+        values = truth[spec.name].to_numpy()
+        if spec.kind is InputKind.CURRENT:
+            values = values * (1.0 + current_noise * rng.standard_normal(n))
+            values = values if spec.signed else np.clip(values, 0.0, None)
+        frame[spec.name] = values
+    sensors = [*interface.sensors, *([interface.outlet_sensor] if interface.outlet_sensor else [])]
+    for sensor, variance in zip(sensors, variances):
+        if sensor.output not in truth:
+            continue
+        for column in sensor.columns:
+            frame[column] = truth[sensor.output].to_numpy() + np.sqrt(variance) * rng.standard_normal(n)
+    optional = [c for c in interface.optional_columns if c in frame]
+    return frame[[*required_columns(interface), *optional]]
 
 
-def _noise_variances(noise_var) -> tuple[float, float]:
-    """Check and unpack ``(winding, iron)`` variances, K²."""
+def _noise_variances(noise_var, interface) -> tuple[float, ...]:
+    """Check the per-sensor variances (K²) and complete them with the interface's (outlet last)."""
+    defaults = [*interface.noise_variances_K2,
+                *([interface.outlet_sensor.noise_variance_K2] if interface.outlet_sensor else [])]
+    if noise_var is None:
+        return tuple(defaults)
     try:
-        winding_var, iron_var = (float(v) for v in noise_var)
+        given = [float(v) for v in noise_var]
     except (TypeError, ValueError):
-        raise InputError("noise_var", noise_var, "expected two variances (winding, iron) in K²") from None
-    for name, value in (("noise_var[0] (winding)", winding_var), ("noise_var[1] (iron)", iron_var)):
+        raise InputError("noise_var", noise_var, f"expected one variance in K² per sensor "
+                         f"({', '.join(interface.output_names)})") from None
+    if not len(interface.output_names) <= len(given) <= len(defaults):
+        raise InputError("noise_var", noise_var, f"expected one variance in K² per sensor "
+                         f"({', '.join(interface.output_names)}), optionally one more for the outlet")
+    for name, value in zip([*interface.output_names, "outlet"], given):
         if not (np.isfinite(value) and value >= 0):
-            raise InputError(name, value, "a variance must be a number >= 0 (K²)")
-    return winding_var, iron_var
+            raise InputError(f"noise_var ({name})", value, "a variance must be a number >= 0 (K²)")
+    return tuple(given + defaults[len(given):])

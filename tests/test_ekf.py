@@ -1,9 +1,12 @@
 """Extended Kalman filter with disturbance heat flows, against plants that are not its model."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from genthermal.errors import InputError
+from genthermal.machines import Sensor
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.prediction import prediction_study
 from genthermal.measurements import dataframe_to_measurements
@@ -75,7 +78,9 @@ def test_bad_inputs_name_the_field(plant_model, ekf):
         ekf.update(np.zeros(10), None, [20.0, 20.0])
     # a model of another machine: its sensors are not in the data
     other = ThermalModel(plant_model.network, plant_model.parameters,
-                         plant_model.spec.__class__(**{**plant_model.spec.__dict__, "sensors": {"T_winding": "stator_winding", "T_rotor": "rotor"}}))
+                         dataclasses.replace(plant_model.spec, interface=dataclasses.replace(
+                               plant_model.spec.interface, sensors=(plant_model.spec.interface.sensors[0],
+                                                                    Sensor("T_rotor", "rotor", ("T_rotor",), 0.01)))))
     data = dataframe_to_measurements(synthesize(plant_model, load_mission("step_rated").to_inputs(DT_S)), "s")
     with pytest.raises(InputError, match="T_rotor"):
         prediction_study(other, data, starts_min=(60,))

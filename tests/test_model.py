@@ -6,7 +6,10 @@ import sympy
 from scipy.integrate import solve_ivp
 
 from genthermal import elements as el
-from genthermal.losses import INPUT_NAMES, input_symbol
+from genthermal.losses import input_symbol
+from genthermal.machines.genco_rf201a import INTERFACE
+
+INPUT_NAMES = INTERFACE.input_names
 
 RATED = dict(I_u=7.0, I_v=7.0, I_w=7.0, I_exc=1.0, T_inlet=20.0, T_ambient=20.0)
 

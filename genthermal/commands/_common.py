@@ -1,10 +1,11 @@
 """Arguments and helpers shared by the sub-commands that build a model.
 
-Every command that uses a model names it the same way: ``--model NAME|FILE`` (a built-in machine,
-optionally with its variant, ``genco_rf201a`` or ``genco_rf201a:linear``, or a model file written
-by ``calibrate --out`` / ``diagnose --out``; :func:`genthermal.model_file.load_model`), and
-``--param NAME=VALUE`` overrides parameters on top of it (to make a mismatched plant for ``synth``
-or a what-if for ``simulate``; provenance ``assumed``).
+Every command that uses a model names it the same way: ``--model NAME|FILE`` (a built-in or
+plug-in machine, optionally with its variant, ``genco_rf201a`` or ``genco_rf201a:linear``, a
+``.py`` machine file, or a model file written by ``calibrate --out`` / ``diagnose --out``:
+:func:`genthermal.model_file.load_model`), and ``--param NAME=VALUE`` overrides parameters on top
+of it (to make a mismatched plant for ``synth`` or a what-if for ``simulate``; provenance
+``assumed``).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import argparse
 import math
 
 from ..errors import InputError
-from ..machines import MACHINES
+from ..machines import known_machines
 from ..model import ThermalModel
 from ..model_file import load_model
 
@@ -22,10 +23,10 @@ DEFAULT_MODEL = "genco_rf201a"
 
 def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model") -> None:
     """Add ``--model NAME|FILE`` and ``--param NAME=VALUE`` to ``parser``."""
-    builtin = ", ".join(f"{m}, {m}:linear" for m in MACHINES)
+    builtin = ", ".join(f"{m}, {m}:linear" for m in known_machines())
     parser.add_argument("--model", default=DEFAULT_MODEL, metavar="NAME|FILE",
-                        help=f"{what}: a built-in model ({builtin}) or a YAML model file written by "
-                        f"calibrate --out or diagnose --out (default {DEFAULT_MODEL})")
+                        help=f"{what}: a machine ({builtin}), a .py machine file, or a YAML model file "
+                        f"written by calibrate --out or diagnose --out (default {DEFAULT_MODEL})")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                         help="override a parameter of the model (SI units), e.g. --param h_end_air=15; repeatable")
 

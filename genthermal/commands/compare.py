@@ -22,12 +22,12 @@ def data_step(args) -> float | None:
 
 
 def fitting_data(path: str, model, args):
-    """Measurements of ``path`` checked against ``model``'s rating, block-averaged when long and no
-    ``--dt`` was given (:mod:`genthermal.long_records`; the note is printed)."""
+    """Measurements of ``path`` in ``model``'s CSV schema checked against its rating, block-averaged
+    when long and no ``--dt`` was given (:mod:`genthermal.long_records`; the note is printed)."""
     from ..long_records import decimate_for_fitting
     from ..measurements import load_measurements
 
-    data = load_measurements(path, rated_current_A=model.spec.rated_current_A)
+    data = load_measurements(path, rated_current_A=model.spec.rated_current_A, interface=model.spec.interface)
     if args.dt is not None:
         return data
     data, note = decimate_for_fitting(data)

@@ -77,8 +77,10 @@ def run(args) -> int:
         print(f"{args.flight}: onboard manager in C, {len(target.flags)} samples flown; decisions "
               f"{'equal to' if same else 'DIFFERENT from'} the Python reference, temperatures within {gap:.3g} K")
         plant, switches = system.plant_switches(0)
-        unmanaged = simulate(plant, system.mission.to_inputs(settings.dt_s).assign(
-            T_inlet=lambda frame: system.inlet_C(0, frame["time_s"])), switches=switches)["T_winding"].max()
+        generator = plant.spec.interface.generator
+        inputs = system.mission.to_inputs(settings.dt_s, generator)
+        inputs[generator.coolant_input] = system.inlet_C(0, inputs["time_s"])
+        unmanaged = simulate(plant, inputs, switches=switches)[generator.limited_sensor].max()
         peaks = ", ".join(f"{name} {peak:.2f} °C" for name, peak in zip(system.generator_names,
                                                                        target.plant_winding_C.max(axis=0)))
         print(f"  peak winding {peaks} (unmanaged {system.generator_names[0]}: {unmanaged:.1f} °C; limit "

@@ -24,6 +24,13 @@ def run(args) -> int:
     stages = net.reduction_stages()
     print(f"{model!r}\nnodes: {stages['all_nodes']} -> {stages['without_intermediate']} without intermediate "
           f"nodes -> {stages['states']} states")
+    interface = model.spec.interface
+    print(f"\ninputs: {', '.join(f'{i.name} [{i.unit}]' for i in interface.inputs)}; rated current "
+          f"{interface.rated_current_A:g} A")
+    print("sensors: " + "; ".join(f"{s.output} = node {s.node} (columns {', '.join(s.columns)}, noise "
+                                  f"{s.noise_variance_K2:g} K^2" + (f", limit {s.limit_C:g} °C)" if s.limit_C else ")")
+                                  for s in interface.sensors))
+    print(f"roles: {', '.join(role.value for role in interface.roles) or 'none'}")
     print("\nstates (capacitive nodes) and heat capacities [J/K]:")
     for name in model.state_names:
         print(f"  {name:22s} C = {show(net.node(name).capacitance)}")

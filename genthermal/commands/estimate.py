@@ -99,7 +99,7 @@ def run(args) -> int:
     if args.steady_state and args.filter != "kf":
         raise InputError("--steady-state", True, "only the linear filter has a steady-state gain; add --filter kf")
     model = model_from_args(args)
-    data = on_grid(load_measurements(args.data), dt)
+    data = on_grid(load_measurements(args.data, interface=model.spec.interface), dt)
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
     horizon_starts(len(data.time_s), dt, DEFAULT_HORIZONS_MIN, every)
     check_sensors(model, data, field=f"{args.data}: sensors")
@@ -143,10 +143,11 @@ def print_summary(report: dict, result) -> None:
           f"({mode} gain), R = diag({', '.join(f'{r:.4g}' for r in report['R_K2'])}) K²")
     print(f"samples without any measurement: {report['samples_without_measurement']}; missing per sensor: "
           + ", ".join(f"{k} {v}" for k, v in report["missing_counts"].items()))
-    print(f"\n{'RMS error [K]':26s}" + "".join(f"{name:>12s}" for name in names))
+    width = max(12, *(len(name) + 2 for name in names))  # columns fit the machine's sensor names
+    print(f"\n{'RMS error [K]':26s}" + "".join(f"{name:>{width}s}" for name in names))
     for label, key in (("filtered - measured", "filter_rmse"), ("one step ahead - measured", "one_step_rmse"),
                        ("open loop - measured", "open_loop_rmse")):
-        print(f"{label:26s}" + "".join(f"{report[key][name]:12.3f}" for name in names))
+        print(f"{label:26s}" + "".join(f"{report[key][name]:{width}.3f}" for name in names))
     print(f"\nprediction error by horizon [K] ({report['horizon_starts']} starts every "
           f"{report['horizon_every_min']:g} min): RMS (max) | open loop RMS")
     print(f"{'horizon [min]':26s}" + "".join(f"{name:>28s}" for name in names))
@@ -156,11 +157,11 @@ def print_summary(report: dict, result) -> None:
         print(f"{horizon:26s}" + "".join(f"{cell:>28s}" for cell in cells))
     print(f"\nperiod of increased accuracy [min] (margin {report['margin_K']:g} K, "
           f"{report['smoothing_min']:g}-min trailing mean; >= : record ended first)")
-    print(f"{'start [min]':26s}" + "".join(f"{name:>12s}" for name in names))
+    print(f"{'start [min]':26s}" + "".join(f"{name:>{width}s}" for name in names))
     censored = report["improved_minutes_censored"]
     for start, values in report["improved_minutes"].items():
         cells = [f"{'>=' if name in censored.get(start, []) else ''}{values[name]:.1f}" for name in names]
-        print(f"{start:26s}" + "".join(f"{cell:>12s}" for cell in cells))
+        print(f"{start:26s}" + "".join(f"{cell:>{width}s}" for cell in cells))
     sensor_nodes = set(result.model.spec.sensors.values())
     unmeasured = [(node, result.states[-1, j]) for j, node in enumerate(result.model.state_names)
                   if node not in sensor_nodes]

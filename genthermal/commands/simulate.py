@@ -39,6 +39,6 @@ def run(args) -> int:
     if args.plot:
         from ..plots import plot_simulation
 
-        plot_simulation(result, title=f"{mission.name} — {model.name}", path=args.plot)
+        plot_simulation(result, model.spec.interface, title=f"{mission.name} — {model.name}", path=args.plot)
         print(f"wrote {args.plot}")
     return 0

@@ -62,7 +62,8 @@ def run(args) -> int:
     mission = load_mission(args.scenario)
     plant = model_from_args(args, source="synthetic plant, set on the command line")
     inputs, switches, fault_text = apply_scenario_faults(plant, mission, dt, args.generator)
-    frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=noise, current_noise=current_noise,
+    winding, iron = noise  # the outlet PT100 shares the iron's variance (--noise-iron)
+    frame = synthesize(plant, inputs, dt_s=dt, seed=seed, noise_var=(winding, iron, iron), current_noise=current_noise,
                        switches=switches)
     out = write_csv(frame, args.out, float_format="%.5f")
     changed = "".join(f", {name}={value:g}" for name, value in overrides.items())
@@ -92,7 +93,7 @@ def apply_scenario_faults(plant, mission, dt_s: float, generator: int):
     if not 1 <= generator <= system.n_generators:
         raise InputError("--generator", generator, f"the scenario has generators 1..{system.n_generators}")
     index = generator - 1
-    inputs["T_inlet"] = system.inlet_C(index, inputs["time_s"].to_numpy())
+    inputs[plant.spec.interface.generator.coolant_input] = system.inlet_C(index, inputs["time_s"].to_numpy())
     faults = sorted((f for f in system.faults if f.generator == index), key=lambda f: f.onset_s)
     switches, model = [], plant
     for fault in faults:

@@ -254,7 +254,7 @@ def calibrate(model: ThermalModel, data, names: Sequence[str], dt_s: float | Non
     from .compare import compare, initial_coefficients, measured_series
 
     names = check_parameter_names(model, names)
-    series = measured_series(data, dt_s, model.output_names)
+    series = measured_series(data, dt_s, model.output_names, model.spec.interface)
     before = compare(model, series)
     simulator = ParametricSimulator(model, series.dt_s, series.input_matrix, names)
     scalings = [parameter_scaling(model, n) for n in names]

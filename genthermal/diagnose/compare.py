@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
-from ..losses import INPUT_NAMES, PHASE_CURRENTS
+from ..machines.interface import Role
 from ..measurements import MeasurementData, dataframe_to_measurements, load_measurements, resample
 from ..model import ThermalModel
 from ..simulate import simulate
@@ -45,9 +45,19 @@ LOAD_BANDS = ((40.0, "low load (< 40 %)"), (70.0, "medium load (40-70 %)"), (mat
 STEADY_RATE_K_PER_MIN = 0.05
 #: Window of the smoothed winding temperature derivative, s.
 RATE_WINDOW_S = 300.0
-#: Candidate regressors of the residual (column → label).
-REGRESSORS = {"I_squared": "mean I² [A²]", "theta_winding": "measured θ_w [°C]", "I_exc": "I_exc [A]",
-              "T_inlet": "T_inlet [°C]", "dtheta_dt": "dθ_w/dt [K/min]"}
+
+
+def regressors(interface) -> dict:
+    """Candidate regressors of the residual of a machine (column of the comparison frame → label):
+    the mean squared load current, the first sensor's temperature and its rate, the excitation
+    current when the machine has one, and the coolant temperature."""
+    columns = {"I_squared": "mean I² [A²]", "theta_winding": "measured θ_w [°C]"}
+    if interface.has_role(Role.EXCITATION_CURRENT):
+        excitation = interface.role(Role.EXCITATION_CURRENT)
+        columns[excitation] = f"{excitation} [A]"
+    columns[interface.coolant_input] = f"{interface.coolant_input} [°C]"
+    columns["dtheta_dt"] = "dθ_w/dt [K/min]"
+    return columns
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,7 +71,7 @@ class MeasuredSeries:
     dt_s : float
         Sample period, s.
     inputs : pandas.DataFrame
-        ``time_s`` and the model inputs (A, °C).
+        ``time_s`` and the model inputs in input-vector order (units of the machine's interface).
     outputs : numpy.ndarray
         Measured ``T_winding`` and ``T_iron``, shape (2, N), °C; NaN = missing.
     source : str
@@ -77,21 +87,23 @@ class MeasuredSeries:
     @property
     def input_matrix(self) -> np.ndarray:
         """Inputs as an array (n_inputs, N)."""
-        return self.inputs[list(INPUT_NAMES)].to_numpy(dtype=float).T
+        return self.inputs.drop(columns="time_s").to_numpy(dtype=float).T
 
 
-def as_measurements(data) -> MeasurementData:
-    """Accept a :class:`MeasurementData`, a DataFrame in the CSV schema or a CSV path."""
+def as_measurements(data, interface=None) -> MeasurementData:
+    """Accept a :class:`MeasurementData`, a DataFrame in the CSV schema or a CSV path; ``interface``
+    (a :class:`~genthermal.machines.interface.MachineInterface`) gives the schema, default the
+    default machine's."""
     if isinstance(data, MeasurementData):
         return data
     if isinstance(data, pd.DataFrame):
-        return dataframe_to_measurements(data)
+        return dataframe_to_measurements(data, interface=interface)
     if isinstance(data, (str, os.PathLike)):
-        return load_measurements(data)
+        return load_measurements(data, interface=interface)
     raise InputError("data", type(data).__name__, "expected a CSV path, a DataFrame or MeasurementData")
 
 
-def measured_series(data, dt_s: float | None = None, output_names=("T_winding", "T_iron")) -> MeasuredSeries:
+def measured_series(data, dt_s: float | None = None, output_names=None, interface=None) -> MeasuredSeries:
     """Measurements on a uniform grid.
 
     Parameters
@@ -100,15 +112,18 @@ def measured_series(data, dt_s: float | None = None, output_names=("T_winding", 
     dt_s : float, optional
         Resample to this period (s). Default: keep the data's grid when uniform, else resample to
         the median sample period.
-    output_names : sequence of str
-        Model outputs to read from the measured sensors.
+    output_names : sequence of str, optional
+        Model outputs to read from the measured sensors; default every sensor of the schema.
+    interface : MachineInterface, optional
+        Schema of frames and files (``model.spec.interface``); default the default machine's.
     """
     if isinstance(data, MeasuredSeries):
         if dt_s is not None and abs(dt_s - data.dt_s) > 1e-9 * data.dt_s:
             raise InputError("dt_s", dt_s, f"the series is already on a {data.dt_s:g} s grid; resample the "
                              "measurements instead")
         return data
-    data = as_measurements(data)
+    data = as_measurements(data, interface)
+    output_names = list(data.interface.output_names if output_names is None else output_names)
     steps = np.diff(data.time_s)
     if steps.size == 0:
         raise InputError("data", data.source, "need at least two samples")
@@ -122,7 +137,7 @@ def measured_series(data, dt_s: float | None = None, output_names=("T_winding", 
     outputs = sensors[list(output_names)].to_numpy(dtype=float).T
     complete = np.flatnonzero(np.isfinite(outputs).all(axis=0))
     if complete.size == 0:
-        raise InputError("data", data.source, "no sample with every sensor (winding and iron) measured")
+        raise InputError("data", data.source, f"no sample with every sensor ({', '.join(output_names)}) measured")
     if complete[0] > 0:  # start where the initial state can be matched to a full measurement
         data = dataclasses.replace(data, frame=data.frame.iloc[complete[0]:].reset_index(drop=True))
         outputs = outputs[:, complete[0]:]
@@ -140,7 +155,7 @@ def initial_coefficients(model: ThermalModel, series: MeasuredSeries, p=None) ->
         ``[a, c]`` with :math:`x_0 = c\\mathbf 1 + a(x_{ss}(u_0) - T_{inlet,0}\\mathbf 1)`.
     """
     u0 = series.input_matrix[:, 0]
-    t_ref = float(u0[INPUT_NAMES.index("T_inlet")])
+    t_ref = float(u0[model.input_names.index(model.spec.interface.coolant_input)])
     loaded = model.steady_state(u0, p) - t_ref
     y_uniform_0 = model.outputs(np.zeros(model.n_states), u0, p)
     y_per_kelvin = model.outputs(np.ones(model.n_states), u0, p) - y_uniform_0
@@ -157,7 +172,7 @@ def initial_state(model: ThermalModel, series: MeasuredSeries, coefficients=None
     """Initial state (°C) for ``(a, c)`` = ``coefficients`` (default: first-sample match)."""
     a, c = initial_coefficients(model, series) if coefficients is None else coefficients
     u0 = series.input_matrix[:, 0]
-    t_ref = float(u0[INPUT_NAMES.index("T_inlet")])
+    t_ref = float(u0[model.input_names.index(model.spec.interface.coolant_input)])
     return c + a * (model.steady_state(u0) - t_ref)
 
 
@@ -198,12 +213,14 @@ class Comparison:
     source : str
     frame : pandas.DataFrame
         ``time_s``, inputs, ``<sensor>_measured``, ``<sensor>_model``, ``<sensor>_residual``
-        (model − measured, K) and the regressors of :data:`REGRESSORS`.
+        (model − measured, K) and the regressors (``regressor_labels``).
     metrics : dict
         JSON-ready: ``overall`` per sensor, ``by_load_band``, ``by_temperature_band``,
         ``by_heating``, ``by_hour`` (band → sensor → metrics), ``trend_K_per_h`` per sensor,
         ``initial_state``.
     output_names : list of str
+    regressor_labels : dict
+        Column of ``frame`` → label of the candidate regressors (:func:`regressors`).
     """
 
     model_name: str
@@ -211,6 +228,7 @@ class Comparison:
     frame: pd.DataFrame
     metrics: dict
     output_names: list
+    regressor_labels: dict = dataclasses.field(default_factory=dict)
 
     def rmse(self) -> float:
         """Root-mean-square error over every valid sample of every sensor, K."""
@@ -249,7 +267,7 @@ def compare(model: ThermalModel, data, dt_s: float | None = None) -> Comparison:
     """
     from ..onsets import onset_switches
 
-    series = measured_series(data, dt_s, model.output_names)
+    series = measured_series(data, dt_s, model.output_names, model.spec.interface)
     first_model, _ = onset_switches(model)
     coefficients = initial_coefficients(first_model, series)
     result = simulate(model, series.inputs, x0=initial_state(first_model, series, coefficients))
@@ -259,11 +277,12 @@ def compare(model: ThermalModel, data, dt_s: float | None = None) -> Comparison:
         frame[f"{name}_model"] = result[name].to_numpy()
         frame[f"{name}_residual"] = frame[f"{name}_model"] - frame[f"{name}_measured"]
     theta = series.outputs[0]
-    frame["I_squared"] = np.mean([frame[p] ** 2 for p in PHASE_CURRENTS], axis=0)
+    currents = list(model.spec.interface.load_currents)
+    frame["I_squared"] = np.mean([frame[p] ** 2 for p in currents], axis=0)
     frame["theta_winding"] = theta
     frame["dtheta_dt"] = winding_rate_K_per_min(series.time_s, theta)
     outputs = list(model.output_names)
-    load_percent = 100.0 * frame[list(PHASE_CURRENTS)].mean(axis=1) / model.spec.rated_current_A
+    load_percent = 100.0 * frame[currents].abs().mean(axis=1) / model.spec.rated_current_A
     load = pd.Series([next(label for edge, label in LOAD_BANDS if v < edge) for v in load_percent])
     rate = frame["dtheta_dt"]
     heating = pd.Series(np.where(rate > STEADY_RATE_K_PER_MIN, "heating",
@@ -288,6 +307,6 @@ def compare(model: ThermalModel, data, dt_s: float | None = None) -> Comparison:
         "initial_state": {"a": float(coefficients[0]), "c_C": float(coefficients[1]),
                           "method": "blend of soaked and loaded steady state matching the first sample"},
     }
-    comparison = Comparison(model.name, series.source, frame, metrics, outputs)
+    comparison = Comparison(model.name, series.source, frame, metrics, outputs, regressors(model.spec.interface))
     metrics["rmse_all_sensors"] = comparison.rmse()
     return comparison

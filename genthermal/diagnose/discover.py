@@ -52,6 +52,7 @@ import numpy as np
 
 from ..effects import CATALOGUE, Effect
 from ..errors import InputError
+from ..machines.interface import Role
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
 from .experiment import SeparatingExperiment, separating_experiment
@@ -99,7 +100,7 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
 
 def series_for(model: ThermalModel, data, dt_s: float | None = None) -> MeasuredSeries:
     """Measurements of ``data`` on a uniform grid for ``model``'s outputs."""
-    return measured_series(data, dt_s, model.output_names)
+    return measured_series(data, dt_s, model.output_names, model.spec.interface)
 
 
 @dataclasses.dataclass
@@ -274,10 +275,14 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     biases = ", ".join(f"{'hot' if b > 0 else 'cold'} by {abs(b):.2f} K in {n}" for n, b in
                        zip(outputs, np.nanmean(residual[:, after], axis=1)))
     inputs = series.inputs
-    regressors = {"I^2": np.mean([inputs[p].to_numpy() ** 2 for p in ("I_u", "I_v", "I_w")], axis=0),
-                  "winding temperature": series.outputs[0], "I_exc": inputs["I_exc"].to_numpy(),
-                  "inlet temperature": inputs["T_inlet"].to_numpy(),
-                  "dθ/dt": winding_rate_K_per_min(series.time_s, series.outputs[0])}
+    interface = search.model.spec.interface
+    regressors = {"I^2": np.mean([inputs[p].to_numpy() ** 2 for p in interface.load_currents], axis=0),
+                  "winding temperature": series.outputs[0]}
+    if interface.has_role(Role.EXCITATION_CURRENT):
+        excitation = interface.role(Role.EXCITATION_CURRENT)
+        regressors[excitation] = inputs[excitation].to_numpy()
+    regressors["inlet temperature"] = inputs[interface.coolant_input].to_numpy()
+    regressors["dθ/dt"] = winding_rate_K_per_min(series.time_s, series.outputs[0])
     links = []
     for name, e in zip(outputs, residual):
         scores = {r: correlation(e[after], v[after]) for r, v in regressors.items()}
@@ -391,7 +396,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                               explain(best, search, runner_up))
         if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
-                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names)["unexplained"]):
+                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names, model.spec.interface)["unexplained"]):
             iteration.pairs = PairSearch(search).rank(
                 ranked, progress=lambda done, total, label: report(f"pair {done}/{total} fitted: {label}"))
             chosen = choose_pair(iteration.pairs, ranked, search.noise)
@@ -413,7 +418,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         if not iterate or len(iterations) >= max_iterations:
             break
     noise = noise_std(series.outputs)
-    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names)
+    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names, model.spec.interface)
     report(residual["summary"])
     experiment, other = None, rival(iterations[0])
     if other is not None and design_experiment:

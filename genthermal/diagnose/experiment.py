@@ -24,7 +24,8 @@ the smaller of the two directions,
 
 which one sample of the test would show. Blocks are chosen greedily, each maximising :math:`S` of
 the test with the rest of the blocks held at the same choice, subject to the ratings: every phase
-current at most the rated current and the winding at most :data:`THETA_MAX_C` in both candidates.
+current at most the rated current and the protected sensor at most its limit (the machine's
+generator role and sensor limit, ``spec.interface``) in both candidates.
 """
 
 from __future__ import annotations
@@ -49,8 +50,6 @@ BLOCKS = 6
 BLOCK_MIN = 5.0
 LOAD_PERCENTS = (30.0, 60.0, 100.0)
 PHASE_SHARES = ((1.0, 1.0, 1.0), (1.0, 0.2, 0.2), (0.2, 1.0, 0.2), (0.2, 0.2, 1.0))
-#: Winding temperature limit, °C (thesis θmax).
-THETA_MAX_C = 110.0
 #: Sample period of the predicted test, s.
 DT_S = 10.0
 
@@ -156,11 +155,14 @@ def separating_experiment(model: ThermalModel, first: Mapping[str, Mapping[str, 
     label = "_vs_".join("+".join(e) for e in (first, second))
     options = list(itertools.product(LOAD_PERCENTS, PHASE_SHARES))
     outputs = list(model.output_names)
+    generator = model.spec.interface.generator
+    limited = generator.limited_sensor
+    theta_max = model.spec.interface.limits_C[limited]
 
     def evaluate(blocks):
-        inputs = _mission(blocks, rated, T_inlet_C, label).to_inputs(DT_S)
+        inputs = _mission(blocks, rated, T_inlet_C, label).to_inputs(DT_S, generator)
         runs = [simulate(m, inputs, x0=T_inlet_C)[outputs].to_numpy().T for m in models]
-        peak = max(float(r[outputs.index("T_winding")].max()) for r in runs) if "T_winding" in outputs else -np.inf
+        peak = max(float(r[outputs.index(limited)].max()) for r in runs)
         best = None
         for refitted, truth in ((1, 0), (0, 1)):
             columns = [(simulate(m, inputs, x0=T_inlet_C)[outputs].to_numpy().T - runs[refitted]) / step
@@ -181,10 +183,10 @@ def separating_experiment(model: ThermalModel, first: Mapping[str, Mapping[str, 
         scored = []
         for option in options:
             result = evaluate(chosen + [option] * (BLOCKS - block))
-            if result[3] <= THETA_MAX_C:
+            if result[3] <= theta_max:
                 scored.append((result[0], option, result))
         if not scored:
-            raise InputError("experiment", label, f"no test within the ratings keeps the winding below {THETA_MAX_C} °C")
+            raise InputError("experiment", label, f"no test within the ratings keeps {limited} below {theta_max:g} °C")
         _, option, best = max(scored, key=lambda item: item[0])
         chosen.append(option)
     separation, at_min, sensor, peak = best

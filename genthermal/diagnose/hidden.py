@@ -135,7 +135,8 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
            noise_var=THESIS_NOISE_VARIANCE_K2) -> pd.DataFrame:
     """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets."""
     dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
-    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=noise_var)
+    # the outlet PT100 is a channel of the iron PT100s kind: it shares their variance
+    record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=(*noise_var, noise_var[-1]))
     if not injections:
         return record
     switches, model = [], plant
@@ -146,11 +147,14 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
     healthy = simulate(plant, inputs)
     faulty = simulate(plant, inputs, switches=switches)
     changed = record.copy()
-    for column in [c for c in record.columns if c.startswith("T_winding_")]:
-        changed[column] += faulty["T_winding"] - healthy["T_winding"]
-    for column in ("T_iron", "T_outlet"):
-        if column in record and column in faulty:
-            changed[column] += faulty[column] - healthy[column]
+    interface = plant.spec.interface
+    sensors = [*interface.sensors, *([interface.outlet_sensor] if interface.outlet_sensor else [])]
+    for sensor in sensors:
+        if sensor.output not in faulty:
+            continue
+        for column in sensor.columns:
+            if column in record:
+                changed[column] += faulty[sensor.output] - healthy[sensor.output]
     return changed
 
 
@@ -196,7 +200,7 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
     inputs = load_mission(mission).to_inputs(dt_s)
     if unbalance:
         elapsed = inputs["time_s"] - inputs["time_s"].iloc[0]
-        inputs["I_u"] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
+        inputs[plant.spec.interface.generator.phase_inputs[0]] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
     duration = float(inputs["time_s"].iloc[-1] - inputs["time_s"].iloc[0])
     injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng) for e in effects]
     for injection in injections:

@@ -31,7 +31,8 @@ import sympy
 
 from ..effects import Effect, EffectParameter
 from ..errors import InputError
-from ..losses import PHASE_CURRENTS, input_symbol, mass_shares
+from ..losses import input_symbol, mass_shares
+from ..machines.interface import Role
 from ..model import ThermalModel
 from ..network import HeatSource
 from .search import FoundEffect
@@ -57,16 +58,29 @@ CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
     """Node groups of ``model`` for extra heat flows: plain name → capacitive nodes."""
     roles, states = model.spec.roles, set(model.state_names)
-    groups = {"slot winding": (roles.get("slot_winding"),), "end windings": tuple(roles.get("end_windings", ())),
-              "stator iron": tuple(roles.get("iron", ())), "rotor": ("rotor",), "frame": ("frame",)}
+    groups = {"slot winding": (roles.get(Role.SLOT_WINDING),), "end windings": tuple(roles.get(Role.END_WINDINGS, ())),
+              "stator iron": tuple(roles.get(Role.IRON, ())), "rotor": tuple(roles.get(Role.ROTOR, ())),
+              "frame": tuple(roles.get(Role.FRAME, ()))}
     return {g: nodes for g, nodes in groups.items() if nodes and all(n in states for n in nodes)}
 
 
-def _factor(form: str, temperature):
-    squares = sum(input_symbol(p) ** 2 for p in PHASE_CURRENTS)
-    return {"constant": sympy.Integer(1), "I2": squares, "I_exc2": input_symbol("I_exc") ** 2,
-            "I_u2": input_symbol("I_u") ** 2, "I_v2": input_symbol("I_v") ** 2, "I_w2": input_symbol("I_w") ** 2,
-            "I2_theta": squares * (temperature - 20)}[form]
+#: Machine roles each heat-flow form reads (a form applies to machines that have them).
+FORM_NEEDS = {"constant": (), "I2": (Role.LOAD_CURRENTS,), "I_exc2": (Role.EXCITATION_CURRENT,),
+              "I_u2": (Role.PHASE_CURRENTS,), "I_v2": (Role.PHASE_CURRENTS,), "I_w2": (Role.PHASE_CURRENTS,),
+              "I2_theta": (Role.LOAD_CURRENTS,)}
+#: Index of the phase (in the machine's PHASE_CURRENTS role) of the single-phase forms.
+_PHASE_FORMS = {"I_u2": 0, "I_v2": 1, "I_w2": 2}
+
+
+def _factor(form: str, temperature, roles):
+    if form in _PHASE_FORMS:
+        return input_symbol(roles[Role.PHASE_CURRENTS][_PHASE_FORMS[form]]) ** 2
+    if form == "I_exc2":
+        return input_symbol(roles[Role.EXCITATION_CURRENT]) ** 2
+    if form == "constant":
+        return sympy.Integer(1)
+    squares = sum(input_symbol(p) ** 2 for p in roles[Role.LOAD_CURRENTS])
+    return squares if form == "I2" else squares * (temperature - 20)
 
 
 def _slug(group: str) -> str:
@@ -95,12 +109,13 @@ def heat_flow_effect(group: str, nodes: tuple[str, ...], form: str, name: str | 
     def transform(network, roles, k):
         shares = mass_shares(network, nodes)
         return network.with_heat_sources(
-            [HeatSource(n, shares[n] * k * _factor(form, network.temperature_symbol(n)), name) for n in nodes])
+            [HeatSource(n, shares[n] * k * _factor(form, network.temperature_symbol(n), roles), name) for n in nodes])
 
     return Effect(name, f"extra heat flow k {label or '(constant)'} into the {group}".replace("  ", " "),
                   rf"q_{{{_slug(group)}}} \mathrel{{+}}= k\,{label or '1'}",
                   (EffectParameter(f"k_{name}", 0.0, unit, -bound, bound, typical),), transform,
-                  f"residual follows {label or 'a constant heat input'} and is largest near the {group}")
+                  f"residual follows {label or 'a constant heat input'} and is largest near the {group}",
+                  needs=FORM_NEEDS[form])
 
 
 def conductance_effect(role: str, name: str | None = None) -> Effect:
@@ -112,13 +127,14 @@ def conductance_effect(role: str, name: str | None = None) -> Effect:
     def transform(network, roles, k):
         if role == "air_streams":
             return network.scale_air_streams(k)
-        for a, b in roles[role]:
+        for a, b in roles[Role(role)]:
             network = network.scale_links(a, b, k)
         return network
 
     return Effect(name, f"{CONDUCTANCES[role]} multiplied by a factor", r"G \to k\,G",
                   (EffectParameter(f"k_{name}", 1.0, "1", 0.05, 20.0, 0.5),), transform,
-                  f"{CONDUCTANCES[role]} changed")
+                  f"{CONDUCTANCES[role]} changed",
+                  needs=(Role.COOLANT_FLOW,) if role == "air_streams" else (Role(role),))
 
 
 def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
@@ -127,11 +143,12 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
     for group, nodes in node_groups(model).items():
         forms = HEAT_FORMS if group == "slot winding" else COMMON_FORMS
         for form in forms:
-            effect = heat_flow_effect(group, nodes, form)
-            library[effect.name] = effect
+            if all(model.spec.interface.has_role(role) for role in FORM_NEEDS[form]):
+                effect = heat_flow_effect(group, nodes, form)
+                library[effect.name] = effect
     for role in CONDUCTANCES:
-        if role == "air_streams" or role in model.spec.roles:
-            effect = conductance_effect(role)
+        effect = conductance_effect(role)
+        if all(model.spec.interface.has_role(need) for need in effect.needs):
             library[effect.name] = effect
     return library
 

@@ -9,7 +9,7 @@ import numpy as np
 from ..outputs import write_json
 from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from ..resources import DEMO_DATA_DIR
-from .compare import REGRESSORS, Comparison, compare
+from .compare import Comparison, compare
 from .discover import Diagnosis
 
 #: The shipped demo dataset (which effect is hidden is said in its README, not in the CSV).
@@ -56,12 +56,13 @@ def plot_residuals(time_s, residuals: dict, names, path: Path, title: str = "") 
 
 
 def plot_regressors(comparison: Comparison, path: Path) -> str:
-    """Residual of each sensor against the candidate regressors (I², θ, I_exc, T_inlet, dθ/dt)."""
-    frame, names = comparison.frame, comparison.output_names
-    fig, axes = plt.subplots(len(names), len(REGRESSORS), figsize=(3.0 * len(REGRESSORS), 2.7 * len(names)),
+    """Residual of each sensor against the candidate regressors (I², θ, I_exc, T_inlet, dθ/dt for the
+    thesis generator: ``comparison.regressor_labels``)."""
+    frame, names, labels = comparison.frame, comparison.output_names, comparison.regressor_labels
+    fig, axes = plt.subplots(len(names), len(labels), figsize=(3.0 * len(labels), 2.7 * len(names)),
                              squeeze=False)
     for i, name in enumerate(names):
-        for j, (column, label) in enumerate(REGRESSORS.items()):
+        for j, (column, label) in enumerate(labels.items()):
             ax = axes[i, j]
             ax.plot(frame[column], frame[f"{name}_residual"], ".", ms=2, alpha=0.5)
             ax.axhline(0.0, color="k", lw=0.6)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..losses import PHASE_CURRENTS
 from .compare import MeasuredSeries
 
 LEVEL_FACTOR = 2.0
@@ -46,18 +45,18 @@ def correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.corrcoef(a[ok], b[ok])[0, 1])
 
 
-def _regressors(series: MeasuredSeries, output_names) -> dict:
+def _regressors(series: MeasuredSeries, output_names, interface) -> dict:
     inputs = series.inputs
-    regressors = {"mean I^2": np.mean([inputs[p].to_numpy(dtype=float) ** 2 for p in PHASE_CURRENTS], axis=0),
-                  "I_exc": inputs["I_exc"].to_numpy(dtype=float),
-                  "T_inlet": inputs["T_inlet"].to_numpy(dtype=float),
-                  "T_ambient": inputs["T_ambient"].to_numpy(dtype=float)}
+    currents = interface.load_currents
+    regressors = {"mean I^2": np.mean([inputs[p].to_numpy(dtype=float) ** 2 for p in currents], axis=0)}
+    others = [name for name in interface.input_names if name not in currents]
+    regressors.update({name: inputs[name].to_numpy(dtype=float) for name in others})
     for name, measured in zip(output_names, series.outputs):
         regressors[f"measured {name}"] = measured
     return regressors
 
 
-def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names) -> dict:
+def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names, interface) -> dict:
     """Run the three tests of the module docstring on ``predicted - series.outputs``.
 
     Parameters
@@ -68,6 +67,8 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     noise : float
         Estimated sensor noise standard deviation, K.
     output_names : sequence of str
+    interface : MachineInterface
+        The model's (``model.spec.interface``): the inputs the residual is correlated with.
 
     Returns
     -------
@@ -77,7 +78,7 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
         ``largest`` (``sensor``, ``time_h``, ``residual_K`` of the smoothed residual) and ``summary``.
     """
     residual = np.asarray(predicted, dtype=float) - series.outputs
-    regressors = _regressors(series, output_names)
+    regressors = _regressors(series, output_names, interface)
     window = max(1, int(round(SMOOTHING_S / series.dt_s)))
     per_sensor, largest = {}, None
     overall = float(np.sqrt(np.nanmean(residual ** 2)))

@@ -162,7 +162,7 @@ class ParametricSimulator:
         th, ac = ca.MX.sym("theta", len(self.fitted)), ca.MX.sym("x0_coefficients", 2)
         S = ca.MX.sym("indicator", n_regimes, self.n_samples)
         U = ca.MX.sym("inputs", nu, self.n_samples)
-        x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index("T_inlet"), 0])
+        x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index(model.spec.interface.coolant_input), 0])
         _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th))
         decision = ca.vertcat(th, ac)
         args = [th, ac, S, U]

@@ -22,8 +22,8 @@ import numpy as np
 from ..codegen import generate_c
 from ..design import linear_design_model
 from ..errors import InputError
-from ..estimation.kalman import THESIS_R_K2, KalmanFilter, output_matrices
-from ..losses import INPUT_NAMES
+from ..estimation.kalman import KalmanFilter, output_matrices
+from ..mission import input_columns
 from ..exciter import exciter_line
 from ..schedule.closed_loop import DEFAULT_MARGIN_K
 from ..schedule.power_system import PowerSystem
@@ -57,8 +57,10 @@ class ManagerSettings:
         Sample time, s.
     field_no_load_A, field_gain : float
         Exciter law ``I_exc = field_no_load_A + field_gain * I`` on the target: the least-squares
-        line of the AVR law (:func:`genthermal.exciter.exciter_line`, power factor 0.8 lagging,
-        7 A rated) over 0 … rated current, so that the C code needs no square root per sample.
+        line of the AVR law (:func:`genthermal.exciter.exciter_line`, power factor 0.8 lagging;
+        defaults: the default law at its default rating; :func:`blockage_flight` passes the
+        machine's generator law at its rated current) over 0 … rated current, so that the C code
+        needs no square root per sample.
     """
 
     profile_A: np.ndarray
@@ -138,8 +140,9 @@ def sensor_states(model) -> tuple:
     if np.any(e != 0) or not np.all((C == 0) | (C == 1)) or not np.all(C.sum(axis=1) == 1):
         raise InputError("model outputs", model.output_names, "the onboard manager needs sensors that read one "
                          "node temperature each")
-    if tuple(model.input_names) != INPUT_NAMES:
-        raise InputError("model inputs", model.input_names, f"the onboard manager expects {INPUT_NAMES}")
+    expected = input_columns(model.spec.interface.generator)[1:]
+    if tuple(model.input_names) != expected:
+        raise InputError("model inputs", model.input_names, f"the onboard manager expects {expected}")
     return tuple(int(np.argmax(row)) for row in C)
 
 
@@ -176,12 +179,17 @@ def blockage_flight(system: PowerSystem, rule_margin_K: float = DEFAULT_MARGIN_K
         raise InputError("generators/faults", f"{system.n_generators} generators, {len(faults)} fault(s)",
                          "the onboard manager flight needs 2 generators and one fault with an effect on the first")
     design = linear_design_model(system.nominal_model)
-    profile = system.mission.to_inputs(dt_s)["I_u"].to_numpy()[:-1]
+    generator = system.nominal_model.spec.interface.generator
+    profile = system.mission.to_inputs(dt_s, generator)[generator.phase_inputs[0]].to_numpy()[:-1]
+    field_no_load_A, field_gain = exciter_line(rated_current_A=system.nominal_model.spec.rated_current_A,
+                                               law=generator.exciter_law)
     settings = ManagerSettings(profile, system.limit_C - rule_margin_K, system.rest_current_A,
-                               system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s)
+                               system.current_limit_A, system.mission.T_ambient_C, sensor_states(design)[0], dt_s=dt_s,
+                               field_no_load_A=field_no_load_A, field_gain=field_gain)
     healthy, faulty = system.plant_model(0), system.plant_model(0, (0,))
     rng = np.random.default_rng(seed)
-    noise = rng.normal(0.0, np.sqrt(THESIS_R_K2), (len(profile) + spare_samples, 2, 2))
+    variances = np.asarray(healthy.spec.interface.noise_variances_K2)
+    noise = rng.normal(0.0, np.sqrt(variances), (len(profile) + spare_samples, 2, variances.size))
     flight = Flight(healthy, faulty, int(round(faults[0].onset_s / dt_s)), system.mission.T_inlet_C,
                     faults[0].inlet_rise_C, sensor_states(healthy), noise)
     return design, settings, flight

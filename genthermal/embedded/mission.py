@@ -150,8 +150,8 @@ def check_accuracy(run: MissionRun, host_states: np.ndarray, precision: str, tol
 
 
 def winding_state(model: ThermalModel) -> int:
-    """Index of the state the winding sensor measures."""
-    return model.state_names.index(model.spec.sensors["T_winding"])
+    """Index of the state the winding sensor measures (the sensor the generator role protects)."""
+    return model.state_names.index(model.spec.sensors[model.spec.interface.generator.limited_sensor])
 
 
 def run_mission(program: MissionProgram, timeout_s: float = 600.0) -> MissionRun:

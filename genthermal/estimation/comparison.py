@@ -27,14 +27,12 @@ from ..measurements import MeasurementData
 from ..model import ThermalModel
 from ..simulate import simulate
 from .arx import arx_fit, r_squared
-from .arx_search import input_signal, output_signal, select_input, training_record
+from .arx_search import OUTPUTS, input_signal, output_signal, select_input, training_record
 from .kalman import initial_state_from_measurements
 from .prediction import on_grid
 
 #: Model labels in table order.
 MODEL_LABELS = ("nonlinear physics", "linear physics", "ARX")
-#: Sensor column → :mod:`genthermal.estimation.arx_search` output name.
-SENSORS = {"T_winding": "winding", "T_iron": "iron"}
 TABLE_COLUMNS = ["model", "sensor", "order", "R2", "rmse_K", "max_abs_error_K", "detail"]
 
 
@@ -80,16 +78,18 @@ def compare_design_models(train: MeasurementData, validation: MeasurementData, p
     inputs = validation.frame[["time_s", *plant.input_names]]
     measured = validation.sensors
     y0, u0 = measured.iloc[0].to_numpy(), inputs[list(plant.input_names)].iloc[0].to_numpy()
+    # model output → ARX output (the first two sensors: MeasurementData.winding / .iron)
+    sensors = dict(zip(plant.output_names, OUTPUTS))
     rows = []
     for label, model in ((MODEL_LABELS[0], plant), (MODEL_LABELS[1], linear_design_model(plant))):
         x0 = initial_state_from_measurements(model, y0, u0)
         result = simulate(model, inputs, x0=x0)
-        for sensor in SENSORS:
+        for sensor in sensors:
             rows.append({"model": label, "sensor": sensor, "order": model.n_states,
                          **error_scores(measured[sensor], result[sensor]), "detail": model.name})
     options = {"ts_s": dt_s, "constant_term": True, **arx_search_options}
     discard_before_s = options.pop("discard_before_s", 0.0)
-    for sensor, output in SENSORS.items():
+    for sensor, output in sensors.items():
         selection = select_input(train, output, discard_before_s=discard_before_s, **options)
         best = selection.candidates.iloc[0]
         y, u = training_record(train, output, selection.input_name, discard_before_s)

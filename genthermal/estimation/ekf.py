@@ -58,12 +58,10 @@ import scipy.linalg
 
 from ..discretise import check_step_accuracy
 from ..errors import InputError
-from ..losses import INPUT_NAMES, PHASE_CURRENTS
 from ..model import ThermalModel
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
-    THESIS_R_K2,
     Update,
     _covariance,
     heat_flow_process_noise,
@@ -157,7 +155,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
         drift = np.repeat([disturbance_drift_W, load_scaled_drift_W][:1 + self.load_scaled], len(nodes))
         self.Q = scipy.linalg.block_diag(heat_flow_process_noise(model, dt_s, node_heat_noise_W),
                                          np.diag(drift**2 * self.dt_s / 3600.0))
-        self.R = _covariance("R", THESIS_R_K2 if R is None else R, ny)
+        self.R = _covariance("R", model.spec.interface.noise_variances_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
         default_P0 = np.concatenate([np.full(nx, DEFAULT_INITIAL_STD_K**2), np.full(nd, initial_disturbance_W**2)])
@@ -168,10 +166,10 @@ class ExtendedKalmanFilter(RecursiveFilter):
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
         nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
-        z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(INPUT_NAMES))
+        z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
         heat = z[nx:nx + n_nodes]
         if self.load_scaled:
-            phases = [u[INPUT_NAMES.index(name)] for name in PHASE_CURRENTS]
+            phases = [u[self.model.input_names.index(name)] for name in self.model.spec.interface.load_currents]
             load_squared = sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2)
             heat = heat + load_squared * z[nx + n_nodes:]
         z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
@@ -231,7 +229,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
         """
         nz, ny = len(self.state_names), len(self.output_names)
         z, P = ca.SX.sym("z_pred", nz), ca.SX.sym("P_pred", nz, nz)
-        u, y, measured = ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
+        u, y, measured = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
         mask = ca.diag(measured)
         H = mask @ ca.DM(self.H)
         R = mask @ ca.DM(self.R) @ mask + ca.diag(1 - measured)
@@ -251,7 +249,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
         outputs after step k + 1."""
         if not (isinstance(n_steps, (int, np.integer)) and n_steps >= 1):
             raise InputError("n_steps", n_steps, "must be an integer >= 1")
-        z, U = ca.MX.sym("z", len(self.state_names)), ca.MX.sym("U", len(INPUT_NAMES), int(n_steps))
+        z, U = ca.MX.sym("z", len(self.state_names)), ca.MX.sym("U", len(self.model.input_names), int(n_steps))
         Z = self.state_step.mapaccum("forecast", int(n_steps))(z, U)
         Y = ca.DM(self.H) @ Z + ca.repmat(ca.DM(self.e), 1, int(n_steps))
         return ca.Function(f"ekf_predict_{int(n_steps)}", [z, U], [Y], ["z", "U"], ["Y"])

@@ -65,7 +65,7 @@ class RecursiveFilter:
 
     def _record(self, inputs_df, sensors_df):
         time_s = inputs_df["time_s"].to_numpy(dtype=float) if "time_s" in inputs_df else None
-        U = input_matrix(inputs_df)
+        U = input_matrix(inputs_df, self.model)
         step = uniform_step(time_s, "inputs.time_s")
         if abs(step - self.dt_s) > 1e-6 * self.dt_s:
             raise InputError("inputs.time_s", f"step {step:g} s", f"the filter runs at {self.dt_s:g} s; "

@@ -55,12 +55,13 @@ import scipy.linalg
 import scipy.signal
 
 from ..errors import InputError
-from ..losses import INPUT_NAMES
+from ..machines import DEFAULT_MACHINE, MACHINES
 from ..model import ThermalModel
 from .filter_base import RecursiveFilter, checked_predict_steps
 
-#: Measurement noise covariance of thesis eq. 6.10, K² (stator winding, stator iron).
-THESIS_R_K2 = (0.0082, 0.013)
+#: Measurement noise covariance of the default machine, K² (thesis eq. 6.10: stator winding, stator
+#: iron); a filter's default R is its model's sensor variances (``spec.interface.sensors``).
+THESIS_R_K2 = MACHINES[DEFAULT_MACHINE].interface.noise_variances_K2
 #: Standard deviation of the unknown heat flow per node of the default Q, W.
 DEFAULT_HEAT_NOISE_W = 30.0
 #: Default initial standard deviation of every state, K.
@@ -79,7 +80,7 @@ def output_matrices(model: ThermalModel) -> tuple[np.ndarray, np.ndarray]:
         If an output depends on the inputs (D ≠ 0) or is not affine in the state; the filter and
         the prediction functions assume outputs that are node temperatures.
     """
-    x, u = ca.SX.sym("x", model.n_states), ca.SX.sym("u", len(INPUT_NAMES))
+    x, u = ca.SX.sym("x", model.n_states), ca.SX.sym("u", len(model.input_names))
     y = model.functions["outputs"](x, u, model.p0)
     C_expr = ca.jacobian(y, x)
     if ca.depends_on(y, u) or ca.depends_on(C_expr, x):
@@ -98,7 +99,8 @@ def initial_state_from_measurements(model: ThermalModel, y0, u0) -> np.ndarray:
     """
     y0 = np.asarray(y0, dtype=float)
     measured = np.isfinite(y0)
-    level = float(np.mean(y0[measured])) if measured.any() else float(u0[INPUT_NAMES.index("T_ambient")])
+    ambient = model.input_names.index(model.spec.interface.ambient_input)
+    level = float(np.mean(y0[measured])) if measured.any() else float(u0[ambient])
     x0 = np.full(model.n_states, level)
     for value, node in zip(y0, model.spec.sensors.values()):
         if np.isfinite(value) and node in model.state_names:
@@ -168,7 +170,8 @@ class KalmanFilter(RecursiveFilter):
         its diagonal. Default :func:`heat_flow_process_noise` with :data:`DEFAULT_HEAT_NOISE_W`.
     R : array_like, optional
         Measurement noise covariance, K², (n_outputs × n_outputs) or its diagonal, in
-        ``design_model.output_names`` order. Default thesis eq. 6.10, diag(0.0082, 0.013).
+        ``design_model.output_names`` order. Default the variances of the model's sensors
+        (``spec.interface``; the thesis generator: eq. 6.10).
     P0 : array_like, optional
         Initial covariance, K²; default :data:`DEFAULT_INITIAL_STD_K` ² I.
     """
@@ -187,7 +190,7 @@ class KalmanFilter(RecursiveFilter):
         self.output_names = list(design_model.output_names)
         nx, ny = len(self.state_names), len(self.output_names)
         self.Q = _covariance("Q", heat_flow_process_noise(design_model, dt_s) if Q is None else Q, nx)
-        self.R = _covariance("R", THESIS_R_K2 if R is None else R, ny)
+        self.R = _covariance("R", design_model.spec.interface.noise_variances_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
         self.P0 = _covariance("P0", np.full(nx, DEFAULT_INITIAL_STD_K**2) if P0 is None else P0, nx)
@@ -257,7 +260,7 @@ class KalmanFilter(RecursiveFilter):
         """
         n_outputs = len(self.output_names)
         x_pred = ca.SX.sym("x_pred", len(self.state_names))
-        u, y = ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("y", n_outputs)
+        u, y = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", n_outputs)
         measured = [ca.fabs(y[i]) <= _LARGEST_MEASUREMENT for i in range(n_outputs)]  # false for NaN, inf
         expected = ca.DM(self.C) @ x_pred + ca.DM(self.e)
         innovation = ca.vertcat(*(ca.if_else(measured[i], y[i] - expected[i], 0.0) for i in range(n_outputs)))
@@ -284,7 +287,7 @@ class KalmanFilter(RecursiveFilter):
         """
         if not (isinstance(n_steps, (int, np.integer)) and n_steps >= 1):
             raise InputError("n_steps", n_steps, "must be an integer >= 1")
-        x, U = ca.MX.sym("x", len(self.state_names)), ca.MX.sym("U", len(INPUT_NAMES), int(n_steps))
+        x, U = ca.MX.sym("x", len(self.state_names)), ca.MX.sym("U", len(self.model.input_names), int(n_steps))
         X = self.model.discretise(self.dt_s).simulator(int(n_steps))(x, U)
         Y = ca.DM(self.C) @ X + ca.repmat(ca.DM(self.e), 1, int(n_steps))
         return ca.Function(f"predict_{int(n_steps)}", [x, U], [Y], ["x", "U"], ["Y"])

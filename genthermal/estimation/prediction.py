@@ -422,7 +422,7 @@ def prediction_study(model: ThermalModel, data, starts_min=THESIS_STARTS_MIN, dt
     horizon_start_indices = horizon_starts(len(time_s), dt_s, horizons_min, every_min)
     inputs = data.frame[["time_s", *model.input_names]]
     result = kalman.run(inputs, data.sensors, steady_state=steady_state)
-    U, Y = input_matrix(inputs), result.measured
+    U, Y = input_matrix(inputs, model), result.measured
     open_loop = kalman.forecast(kalman.initial_state(Y[0], U[:, 0]), U)
     window = max(1, int(round(smoothing_min * 60.0 / dt_s)))
     predictions, indices, improved, censored = {}, {}, {}, {}

@@ -38,7 +38,7 @@ from ..ccompile import COMPILE_FLAGS, CompilationError, compile_objects, find_co
 from ..codegen import generate_c
 from ..errors import InputError
 from ..model import ThermalModel
-from .model_description import INPUT_START, STATE_START_C, FmuError, description_xml, variables
+from .model_description import STATE_START_C, FmuError, description_xml, variables
 
 __all__ = ["export_fmu", "piecewise_constant_input", "FmuError", "FmuExport", "ATOL_K", "RTOL"]
 
@@ -184,7 +184,7 @@ def piecewise_constant_input(inputs, names) -> np.ndarray:
 
 def _wrapper_source(model: ThermalModel, guid: str) -> str:
     template = resources.files(__package__).joinpath("fmi2_wrapper.c").read_text()
-    starts = [INPUT_START.get(name, 0.0) for name in model.input_names]
+    starts = [model.spec.interface.default_input_values()[name] for name in model.input_names]
     fields = {"PREFIX": PREFIX, "PREFIX_UPPER": PREFIX.upper(), "GUID": guid, "ATOL_K": repr(ATOL_K),
               "RTOL": repr(RTOL), "STATE_START": ", ".join([repr(STATE_START_C)] * model.n_states),
               "INPUT_START": ", ".join(map(repr, starts))}

@@ -16,13 +16,18 @@ parameters use. A unit outside it cannot be declared and is refused (:class:`Fmu
 from __future__ import annotations
 
 import dataclasses
+import math
 import xml.etree.ElementTree as ET
 
 from ..codegen import CodegenError
 from ..model import ThermalModel
 
-#: FMI unit name -> SI base-unit exponents (and for degC the offset to kelvin).
+#: FMI unit name -> SI base-unit exponents (and for degC the offset to kelvin, for rpm the factor
+#: to rad/s).
 UNITS = {
+    "rpm": {"rad": 1, "s": -1, "factor": 2 * math.pi / 60.0},
+    "W/K": {"kg": 1, "m": 2, "s": -3, "K": -1},
+    "J/K": {"kg": 1, "m": 2, "s": -2, "K": -1},
     "1": {},
     "m": {"m": 1},
     "A": {"A": 1},
@@ -40,8 +45,6 @@ UNITS = {
 }
 #: Start value of every state, °C (a cold machine at 20 °C); set them before initialisation.
 STATE_START_C = 20.0
-#: Start values of the inputs by name (A, °C).
-INPUT_START = {"T_inlet": 20.0, "T_ambient": 20.0}
 
 
 class FmuError(CodegenError):
@@ -62,11 +65,6 @@ class Variable:
     derivative_of: int | None = None
 
 
-def input_unit(name: str) -> str:
-    """Unit of a model input: A for currents (``I_*``), °C for temperatures (``T_*``)."""
-    return "A" if name.startswith("I_") else "degC"
-
-
 def variables(model: ThermalModel) -> list[Variable]:
     """Every variable of the FMU of ``model``, in value-reference order.
 
@@ -79,8 +77,8 @@ def variables(model: ThermalModel) -> list[Variable]:
                        STATE_START_C, "exact") for n in model.state_names]
     derivatives = [Variable(f"der(x_{n})", "local", "continuous", "K/s", f"d/dt of the temperature of node {n}",
                             derivative_of=i + 1) for i, n in enumerate(model.state_names)]
-    inputs = [Variable(n, "input", "continuous", input_unit(n), "RMS current" if n.startswith("I_") else
-                       "temperature", INPUT_START.get(n, 0.0)) for n in model.input_names]
+    inputs = [Variable(i.name, "input", "continuous", i.unit, i.description, i.default)
+              for i in model.spec.interface.inputs]
     outputs = [Variable(n, "output", "continuous", "degC", f"sensor temperature of node {model.spec.sensors[n]}")
                for n in model.output_names]
     parameters = []
@@ -128,8 +126,12 @@ def description_xml(model: ThermalModel, model_identifier: str, guid: str, sourc
             if name.endswith(".c"):
                 ET.SubElement(files, "File", {"name": name})
     units = ET.SubElement(root, "UnitDefinitions")
+    unknown = sorted({v.unit for v in every} - set(UNITS))
+    if unknown:
+        raise FmuError(f"unit {unknown[0]!r} of {model.name} has no FMI base-unit definition "
+                       f"(known: {', '.join(UNITS)}); add it to genthermal.fmu.model_description.UNITS")
     for name in sorted({v.unit for v in every}):
-        base = {k: str(v) for k, v in UNITS[name].items()}
+        base = {k: repr(v) if isinstance(v, float) else str(v) for k, v in UNITS[name].items()}
         ET.SubElement(ET.SubElement(units, "Unit", {"name": name}), "BaseUnit", base)
     ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": "14400", "tolerance": "1e-8"})
     listed = ET.SubElement(root, "ModelVariables")

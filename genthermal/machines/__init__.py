@@ -1,22 +1,35 @@
-"""Built-in machines. ``build_model("genco_rf201a")`` gives the thesis generator."""
+"""Machines: the built-in thesis generator, and any machine a user plugs in.
+
+``build_model("genco_rf201a")`` gives the thesis generator; ``build_model("path/to/motor.py")`` or
+the name of an installed plug-in gives a user's machine (:mod:`genthermal.machines.registry`). A
+machine is a :class:`Machine`: its :class:`MachineInterface` (inputs, sensors, ratings, limits,
+roles), its parameter set and its network builder.
+"""
 
 from __future__ import annotations
 
-from ..errors import InputError
 from ..model import ModelSpec, ThermalModel
 from ..parameters import ParameterSet
 from . import genco_rf201a
+from .interface import GeneratorRole, InputKind, Machine, MachineInterface, ModelInput, Role, Sensor
+from .registry import BUILT_IN, known_machines, resolve_machine
 
-MACHINES = {genco_rf201a.NAME: genco_rf201a}
+#: Built-in machines by name (plug-ins are found through :func:`resolve_machine`).
+MACHINES = BUILT_IN
+DEFAULT_MACHINE = genco_rf201a.NAME
+
+__all__ = ["MACHINES", "DEFAULT_MACHINE", "GeneratorRole", "InputKind", "Machine", "MachineInterface",
+           "ModelInput", "Role", "Sensor", "build_model", "known_machines", "resolve_machine"]
 
 
-def build_model(machine: str = genco_rf201a.NAME, parameters: ParameterSet | None = None) -> ThermalModel:
-    """Build the nonlinear simulation model of a built-in machine.
+def build_model(machine: "str | Machine" = DEFAULT_MACHINE, parameters: ParameterSet | None = None) -> ThermalModel:
+    """Build the nonlinear simulation model of a machine.
 
     Parameters
     ----------
-    machine : str
-        Name of a built-in machine (``"genco_rf201a"``).
+    machine : str or Machine
+        A built-in name (``"genco_rf201a"``), an installed plug-in's name, the path of a ``.py``
+        machine file, or a :class:`Machine`.
     parameters : ParameterSet, optional
         Parameter values; defaults to the machine's own (with provenance).
 
@@ -25,12 +38,8 @@ def build_model(machine: str = genco_rf201a.NAME, parameters: ParameterSet | Non
     ThermalModel
         Use :func:`genthermal.design.linear_design_model` for the linear design model.
     """
-    try:
-        module = MACHINES[machine]
-    except KeyError:
-        raise InputError("machine", machine, f"unknown machine; built in: {', '.join(MACHINES)}") from None
-    parameters = parameters if parameters is not None else module.default_parameters()
-    spec = ModelSpec(name=module.NAME, sensors=dict(module.SENSORS),
-                     boundary_inputs=dict(module.BOUNDARY_INPUTS), outlet_node=module.OUTLET_NODE,
-                     rated_current_A=module.RATED_CURRENT_A, roles=dict(module.ROLES))
-    return ThermalModel(module.build_network(parameters), parameters, spec)
+    definition = resolve_machine(machine)
+    parameters = parameters if parameters is not None else definition.default_parameters()
+    source = machine if isinstance(machine, str) else definition.name
+    spec = ModelSpec(name=definition.name, interface=definition.interface, machine_source=source)
+    return ThermalModel(definition.build_network(parameters), parameters, spec)

@@ -18,33 +18,75 @@ from __future__ import annotations
 from sympy import pi
 
 from .. import elements as el
+from ..exciter import exciter_current
 from ..losses import copper_loss_sources, iron_loss_sources
 from ..network import AirStream, HeatSource, Link, Network, Node
 from ..parameters import Parameter, ParameterSet
+from .interface import GeneratorRole, InputKind, Machine, MachineInterface, ModelInput, Role, Sensor
 
 NAME = "genco_rf201a"
 
-#: Sensors of the rig (thesis Table 3.4) as (output name, node).
-SENSORS = {"T_winding": "stator_winding", "T_iron": "stator_iron"}
-#: Boundary nodes and the input that sets their temperature.
-BOUNDARY_INPUTS = {"coolant_inlet": "T_inlet", "ambient": "T_ambient"}
 WINDING_NODES = ("stator_winding", "end_winding_in", "end_winding_out")
 IRON_NODES = ("stator_iron", "stator_teeth")
-#: Where effects find the machine's parts (see genthermal.effects).
-ROLES = {
-    "slot_winding": "stator_winding",
-    "end_windings": ("end_winding_in", "end_winding_out"),
-    "iron": IRON_NODES,
-    "winding_insulation": (("stator_winding_radial", "yoke_teeth_interface"),
-                           ("stator_winding_radial", "stator_teeth_radial")),
-    "frame_to_ambient": (("frame", "ambient"),),
-    # convection coefficients of surfaces swept by the fan's air (they fall with the coolant flow)
-    "internal_convection": ("h_top_air", "h_end_air", "h_air_gap"),
-}
-#: Air node whose temperature leaves through the outlet duct (``T_outlet``).
-OUTLET_NODE = "end_air_out"
+PHASE_CURRENTS = ("I_u", "I_v", "I_w")
 #: Rated RMS phase current, A (thesis Table 3.3).
 RATED_CURRENT_A = 7.0
+#: Winding temperature limit θmax, °C (thesis 7.3.1; the hot-spot rating is 140 °C).
+WINDING_LIMIT_C = 110.0
+#: Sensor noise variances of thesis eq. 6.10, K²: stator winding PT100s, stator iron PT100 (also
+#: used for the outlet-air PT100, a channel of the same kind).
+WINDING_NOISE_K2, IRON_NOISE_K2 = 0.0082, 0.013
+
+#: Model inputs in input-vector order (thesis Table 3.4: logged by the rig).
+INPUTS = (
+    ModelInput("I_u", "A", InputKind.CURRENT, "stator phase current U, RMS"),
+    ModelInput("I_v", "A", InputKind.CURRENT, "stator phase current V, RMS"),
+    ModelInput("I_w", "A", InputKind.CURRENT, "stator phase current W, RMS"),
+    ModelInput("I_exc", "A", InputKind.CURRENT, "exciter field current"),
+    ModelInput("T_inlet", "degC", InputKind.TEMPERATURE, "cooling-air inlet temperature", 20.0),
+    ModelInput("T_ambient", "degC", InputKind.TEMPERATURE, "ambient temperature", 20.0),
+)
+#: Sensors of the rig (thesis Table 3.4): three winding PT100s averaged, one iron PT100.
+SENSORS = (
+    Sensor("T_winding", "stator_winding", ("T_winding_u", "T_winding_v", "T_winding_w"), WINDING_NOISE_K2,
+           WINDING_LIMIT_C, "stator slot winding PT100s, one per phase"),
+    Sensor("T_iron", "stator_iron", ("T_iron",), IRON_NOISE_K2, None, "stator back iron PT100"),
+)
+OUTLET_SENSOR = Sensor("T_outlet", "end_air_out", ("T_outlet",), IRON_NOISE_K2, None,
+                       "cooling-air outlet PT100 (optional column)")
+#: Boundary nodes and the input that sets their temperature.
+BOUNDARY_INPUTS = {"coolant_inlet": "T_inlet", "ambient": "T_ambient"}
+
+
+def _exciter_law(mean_phase_current_A, power_factor, rated_current_A):
+    return exciter_current(mean_phase_current_A, power_factor, rated_current_A)
+
+
+#: Where effects, schedulers and discovery find the machine's parts.
+ROLES = {
+    Role.SLOT_WINDING: "stator_winding",
+    Role.END_WINDINGS: ("end_winding_in", "end_winding_out"),
+    Role.IRON: IRON_NODES,
+    Role.ROTOR: ("rotor",),
+    Role.FRAME: ("frame",),
+    Role.WINDING_INSULATION: (("stator_winding_radial", "yoke_teeth_interface"),
+                              ("stator_winding_radial", "stator_teeth_radial")),
+    Role.FRAME_TO_AMBIENT: (("frame", "ambient"),),
+    # convection coefficients of surfaces swept by the fan's air (they fall with the coolant flow)
+    Role.INTERNAL_CONVECTION: ("h_top_air", "h_end_air", "h_air_gap"),
+    Role.COOLANT_FLOW: True,
+    Role.LOAD_CURRENTS: PHASE_CURRENTS,
+    Role.PHASE_CURRENTS: PHASE_CURRENTS,
+    Role.EXCITATION_CURRENT: "I_exc",
+    Role.GENERATOR: GeneratorRole(PHASE_CURRENTS, "I_exc", "T_inlet", "T_ambient", _exciter_law, "T_winding"),
+}
+#: Rating point (thesis Table 3.3): rated current on every phase, the AVR's field current at power
+#: factor 0.8 lagging, inlet and ambient at their defaults (20 °C).
+RATED_INPUTS = {**{phase: RATED_CURRENT_A for phase in PHASE_CURRENTS},
+                "I_exc": exciter_current(RATED_CURRENT_A, rated_current_A=RATED_CURRENT_A)}
+INTERFACE = MachineInterface(INPUTS, SENSORS, BOUNDARY_INPUTS, RATED_CURRENT_A, ambient_input="T_ambient",
+                             coolant_input="T_inlet", roles=ROLES, rated_inputs=RATED_INPUTS,
+                             outlet_sensor=OUTLET_SENSOR)
 
 
 def _p(name, value, unit, provenance, source, **bounds):
@@ -229,7 +271,11 @@ def build_network(parameters: ParameterSet) -> Network:
     )
     network = Network(nodes, tuple(links), streams)
     sources: list[HeatSource] = [
-        *copper_loss_sources(network, WINDING_NODES, S["R0"], S["alpha_cu"]),
+        *copper_loss_sources(network, WINDING_NODES, PHASE_CURRENTS, S["R0"], S["alpha_cu"]),
         *iron_loss_sources(network, IRON_NODES, S["P_iron"]),
     ]
     return network.with_heat_sources(sources)
+
+
+MACHINE = Machine(NAME, "Genco RF201A 5 kVA air-cooled aircraft-type generator (the thesis machine)",
+                  INTERFACE, default_parameters, build_network)

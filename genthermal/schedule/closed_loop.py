@@ -30,7 +30,6 @@ import dataclasses
 
 import numpy as np
 
-from ..estimation.kalman import THESIS_R_K2
 from ..simulate import simulate
 from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
@@ -45,7 +44,7 @@ SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Default back-off margin below θmax, K.
 DEFAULT_MARGIN_K = 2.5
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
-#: within one cycle by this fraction (the plant's copper loss at 7 A and 110 °C is ~20 % above the
+#: within one cycle by this fraction (the thesis generator's copper loss at rated current and its winding limit is ~20 % above the
 #: linear design model's).
 DEFAULT_RISE_BACKOFF = 0.3
 
@@ -319,10 +318,11 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     _, switches = system.plant_switches(g)
     later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
     frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C,
-                             system.mission.power_factor, system.rated_current_A)
+                             system.mission.power_factor, system.rated_current_A,
+                             model.spec.interface.generator)
     run = simulate(model, frame, x0=x0, switches=later)
     states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
-    return run[["T_winding", "T_iron"]].to_numpy()[1:].T, states[-1]
+    return run[list(model.output_names)].to_numpy()[1:].T, states[-1]
 
 
 def _told_beliefs(system: PowerSystem, t_s: float) -> list:
@@ -350,7 +350,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     dt = settings.dt_s
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
     rng = np.random.default_rng(settings.seed)
-    noise_sd = np.sqrt(np.asarray(THESIS_R_K2))
+    noise_sd = np.sqrt(np.asarray(system.planning_model.spec.interface.noise_variances_K2))
     segments = mission_segments(system.mission)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)

@@ -44,9 +44,7 @@ import pandas as pd
 from ..errors import InputError
 from ..estimation.ekf import ExtendedKalmanFilter
 from ..estimation.kalman import KalmanFilter
-from ..losses import INPUT_NAMES
-from ..measurements import WINDING_SENSORS
-from ..exciter import exciter_current
+from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 
 #: Filters the closed loop can use: name → how to build one from ``(design generator, flown
@@ -291,27 +289,33 @@ class Identification:
                 "solve_s": self.solve_s}
 
 
-def record_frame(time_s, currents_A, excitation_A, inlet_C, ambient_C: float, measured_C) -> pd.DataFrame:
+def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C: float,
+                 measured_C) -> pd.DataFrame:
     """A generator's in-flight record in the measurement CSV schema (balanced phases).
 
     Parameters
     ----------
+    interface : MachineInterface
+        The generator's (``model.spec.interface``, with the generator role): the column names.
     time_s : array_like
         (n,) s.
     currents_A, excitation_A, inlet_C : array_like
         (n,) phase current, field current (A) and inlet temperature (°C) in force at each sample.
     ambient_C : float
     measured_C : array_like
-        (2, n) measured winding and iron temperatures, °C.
+        (n_sensors, n) measured sensor temperatures in the interface's output order, °C.
     """
+    generator = interface.generator
     frame = {"time_s": np.asarray(time_s, dtype=float)}
-    for name in ("I_u", "I_v", "I_w"):
+    for name in generator.phase_inputs:
         frame[name] = currents_A
-    frame.update(I_exc=excitation_A, T_inlet=inlet_C, T_ambient=np.full(len(frame["time_s"]), ambient_C))
-    for sensor in WINDING_SENSORS:
-        frame[sensor] = measured_C[0]
-    frame["T_iron"] = measured_C[1]
-    return pd.DataFrame(frame)[["time_s", *INPUT_NAMES, *WINDING_SENSORS, "T_iron"]]
+    frame[generator.excitation_input] = excitation_A
+    frame[generator.coolant_input] = inlet_C
+    frame[generator.ambient_input] = np.full(len(frame["time_s"]), ambient_C)
+    for sensor, measured in zip(interface.sensors, measured_C):
+        for column in sensor.columns:
+            frame[column] = measured
+    return pd.DataFrame(frame)[list(required_columns(interface))]
 
 
 class FaultMonitor:
@@ -368,8 +372,10 @@ class FaultMonitor:
         time_s = np.concatenate(self._time) + self.dt_s
         current = np.concatenate(self._currents, axis=1)[g]
         measured = np.concatenate(self._measured, axis=2)[g]
-        excitation = exciter_current(current, self.system.mission.power_factor, self.system.rated_current_A)
-        return record_frame(time_s, current, excitation, self.system.inlet_C(g, time_s - self.dt_s),
+        interface = self.system.planning_model.spec.interface
+        excitation = interface.generator.exciter_law(current, self.system.mission.power_factor,
+                                                     self.system.rated_current_A)
+        return record_frame(interface, time_s, current, excitation, self.system.inlet_C(g, time_s - self.dt_s),
                             self.system.mission.T_ambient_C, measured)
 
     def design_generator(self, g: int):

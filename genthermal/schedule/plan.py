@@ -19,8 +19,9 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
-from ..exciter import DEFAULT_POWER_FACTOR, exciter_current
-from ..mission import Mission
+from ..exciter import DEFAULT_POWER_FACTOR
+from ..machines.interface import GeneratorRole
+from ..mission import DEFAULT_GENERATOR, DEFAULT_RATED_CURRENT_A, Mission
 
 #: Tolerance on the limit when checking a prediction, K.
 LIMIT_TOLERANCE_K = 1e-6
@@ -261,17 +262,21 @@ def remaining_after(segments, schedule: Schedule, timeline: Timeline, n_steps: i
 
 
 def generator_inputs(timeline: Timeline, generator: int, t0_s: float, inlet_C, ambient_C: float,
-                     power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0) -> pd.DataFrame:
+                     power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = DEFAULT_RATED_CURRENT_A,
+                     role: GeneratorRole = DEFAULT_GENERATOR) -> pd.DataFrame:
     """Input frame of one generator (columns of :meth:`Mission.to_inputs`) for ``timeline``
     starting at ``t0_s``; ``inlet_C(t)`` gives the inlet temperature (°C); the exciter current
-    follows the load at ``power_factor``. A last row repeats the final input so the frame also
+    follows the load at ``power_factor`` by the exciter law of ``role`` (the machine's generator
+    role, default the default machine's). A last row repeats the final input so the frame also
     yields the state at the end."""
     n = timeline.n_steps
     time_s = t0_s + np.arange(n + 1) * timeline.dt_s
     current = np.append(timeline.currents_A[generator], timeline.currents_A[generator, -1])
-    return pd.DataFrame({"time_s": time_s, "I_u": current, "I_v": current, "I_w": current,
-                         "I_exc": exciter_current(np.clip(current, 0.0, None), power_factor, rated_current_A),
-                         "T_inlet": inlet_C(time_s), "T_ambient": np.full(n + 1, ambient_C)})
+    columns = {"time_s": time_s, **{phase: current for phase in role.phase_inputs}}
+    columns[role.excitation_input] = role.exciter_law(np.clip(current, 0.0, None), power_factor, rated_current_A)
+    columns[role.coolant_input] = inlet_C(time_s)
+    columns[role.ambient_input] = np.full(n + 1, ambient_C)
+    return pd.DataFrame(columns)
 
 
 @dataclasses.dataclass

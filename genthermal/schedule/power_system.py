@@ -11,10 +11,12 @@ validated here)::
     generators:                    # optional mapping
       count: 2                     # >= 2 (default 2), or names: [left, right]
       rest_percent: 27.3           # minimum power mode, % of rated (default: condition 1 continuous)
-      limit_C: 110                 # temperature limit theta_max, degC (thesis 7.3.1)
+      limit_C: 110                 # temperature limit theta_max, degC (default: the machine's limit of its
+                                   # protected sensor; the thesis generator's 110, thesis 7.3.1)
       current_limit_percent: 100   # highest phase current a generator may carry, % of rated
       plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
-      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration)
+      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration), or any machine
+                                   # with the generator role (a plug-in name or a .py machine file)
     faults:                        # optional list
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 31,
@@ -42,16 +44,13 @@ from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
 from ..effects import get_effect
 from ..errors import InputError
-from ..losses import INPUT_NAMES
-from ..machines import MACHINES
+from ..machines import DEFAULT_MACHINE
 from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
-#: Temperature limit of the thesis experiments, degC (hot-spot rating 140 degC, 30 K allowance).
-DEFAULT_LIMIT_C = 110.0
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
@@ -195,10 +194,13 @@ class AffineGenerator:
         Rated phase current, A.
     """
 
-    def __init__(self, model, power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float = 7.0):
+    def __init__(self, model, power_factor: float = DEFAULT_POWER_FACTOR, rated_current_A: float | None = None):
+        generator = model.spec.interface.generator
         if not model.is_affine:
             raise InputError("model", model.name, "the scheduler plans on the linear design model")
-        nx, nu = model.n_states, len(INPUT_NAMES)
+        rated_current_A = model.spec.rated_current_A if rated_current_A is None else rated_current_A
+        names = list(model.input_names)
+        nx, nu = model.n_states, len(names)
         x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
         # the affine branch: the copper-loss floor of the design model acts below 1.6 A only, under
         # the planner's rest current (27.3 % of rated)
@@ -209,8 +211,10 @@ class AffineGenerator:
         L, B, Cy, Dy, c, ey = (np.asarray(m) for m in matrices(np.zeros(nx), np.zeros(nu)))
         self.model, self.L, self.B, self.c, self.Cy, self.Dy, self.ey = model, L, B, c.ravel(), Cy, Dy, ey.ravel()
         self.e_I = np.zeros(nu)
-        self.e_I[[INPUT_NAMES.index(p) for p in ("I_u", "I_v", "I_w")]] = 1.0
-        self.exciter_no_load_A, self.e_I[INPUT_NAMES.index("I_exc")] = exciter_line(power_factor, rated_current_A)
+        self.e_I[[names.index(p) for p in generator.phase_inputs]] = 1.0
+        self.exciter_no_load_A, self.e_I[names.index(generator.excitation_input)] = exciter_line(
+            power_factor, rated_current_A, law=generator.exciter_law)
+        self._generator, self._names = generator, names
         eigenvalues, self.V = np.linalg.eig(L)
         if np.max(np.abs(eigenvalues.imag)) > 0 or np.max(eigenvalues.real) >= 0:
             raise InputError("model", model.name, "the design model needs real, negative eigenvalues")
@@ -220,10 +224,11 @@ class AffineGenerator:
 
     def input(self, current_A, inlet_C: float, ambient_C: float) -> np.ndarray:
         """Input vectors for phase currents ``current_A`` (A RMS), shape ``(..., n_inputs)``."""
-        u0 = np.zeros(len(INPUT_NAMES))
-        u0[INPUT_NAMES.index("I_exc")] = self.exciter_no_load_A
-        u0[INPUT_NAMES.index("T_inlet")] = inlet_C
-        u0[INPUT_NAMES.index("T_ambient")] = ambient_C
+        generator, names = self._generator, self._names
+        u0 = np.zeros(len(names))
+        u0[names.index(generator.excitation_input)] = self.exciter_no_load_A
+        u0[names.index(generator.coolant_input)] = inlet_C
+        u0[names.index(generator.ambient_input)] = ambient_C
         return u0 + np.multiply.outer(np.asarray(current_A, dtype=float), self.e_I)
 
     def forcing(self, u: np.ndarray) -> np.ndarray:
@@ -269,14 +274,16 @@ class PowerSystem:
     faults : tuple of Fault
     rest_percent : float
         Minimum power mode during a rest, % of rated current.
-    limit_C : float
-        :math:`\theta_{max}` for the winding and the iron, °C.
+    limit_C : float, optional
+        :math:`\theta_{max}` for the winding and the iron, °C; default the machine's limit of the
+        sensor its generator role protects (``spec.interface``).
     current_limit_percent : float
         Highest phase current a generator may carry, % of rated (100: rated 7 A).
     plant_mismatch : dict
         Parameter name → factor applied to the nominal value in the true plant.
     machine : str
-        Built-in machine of every generator.
+        Machine of every generator (a model name for :func:`~genthermal.model_file.load_model`); it
+        must have the generator role.
     model : ThermalModel, optional
         The model the manager plans on and filters with (``--model``: a calibrated or identified
         model file); default the machine's nominal simulation model.
@@ -289,10 +296,10 @@ class PowerSystem:
     generator_names: tuple[str, ...] = ("gen1", "gen2")
     faults: tuple[Fault, ...] = ()
     rest_percent: float = DEFAULT_REST_PERCENT
-    limit_C: float = DEFAULT_LIMIT_C
+    limit_C: float | None = None
     current_limit_percent: float = 100.0
     plant_mismatch: Mapping[str, float] = dataclasses.field(default_factory=lambda: dict(DEFAULT_PLANT_MISMATCH))
-    machine: str = "genco_rf201a"
+    machine: str = DEFAULT_MACHINE
     model: Any = None
     plant: Any = None
 
@@ -309,6 +316,13 @@ class PowerSystem:
                 raise InputError(f"faults[{index}].kind", fault.kind,
                                  f"{self.generator_names[fault.generator]} already has {fault.effect}")
         self._models: dict = {}
+        interface = self.planning_model.spec.interface
+        try:
+            generator = interface.generator
+        except InputError as error:
+            raise InputError("machine", self.planning_model.name, error.reason) from None
+        if self.limit_C is None:
+            self.limit_C = interface.limits_C[generator.limited_sensor]
 
     @classmethod
     def from_mission(cls, mission: Mission) -> "PowerSystem":
@@ -327,12 +341,14 @@ class PowerSystem:
             if isinstance(count, bool) or not isinstance(count, int) or not 2 <= count <= 8:
                 raise InputError("generators.count", count, "must be a whole number 2..8")
             names = tuple(f"gen{i + 1}" for i in range(count))
-        machine = config.get("machine", "genco_rf201a")
-        if not isinstance(machine, str) or machine.partition(":")[0] not in MACHINES or \
-                machine.partition(":")[2] not in ("", "nonlinear", *PARAMETER_SETS):
-            raise InputError("generators.machine", machine,
-                             f"unknown machine; built in: {', '.join(MACHINES)}, optionally with a parameter set "
-                             f"({', '.join(f'{m}:{v}' for m in MACHINES for v in PARAMETER_SETS)})")
+        machine = config.get("machine", DEFAULT_MACHINE)
+        if not isinstance(machine, str) or machine.endswith(":linear"):
+            raise InputError("generators.machine", machine, "give a simulation model: a machine name, optionally "
+                             f"with a parameter set ({', '.join(PARAMETER_SETS)}), or a machine file")
+        try:
+            _nominal_models(machine)
+        except InputError as error:
+            raise InputError("generators.machine", machine, error.reason) from None
         mismatch = config.get("plant_mismatch", DEFAULT_PLANT_MISMATCH)
         if not isinstance(mismatch, Mapping):
             raise InputError("generators.plant_mismatch", mismatch, "must map parameter names to factors")
@@ -347,7 +363,8 @@ class PowerSystem:
                                  f"({mission.duration_s / 60.0:g} min): the fault would never happen")
         return cls(mission, names, faults,
                    rest_percent=_number(config, "rest_percent", "generators", 0.0, 100.0, "%", DEFAULT_REST_PERCENT),
-                   limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC", DEFAULT_LIMIT_C),
+                   limit_C=_number(config, "limit_C", "generators", 40.0, 250.0, "degC")
+                   if "limit_C" in config else None,
                    current_limit_percent=_number(config, "current_limit_percent", "generators", 50.0, 150.0,
                                                  "%", 100.0),
                    plant_mismatch=factors, machine=machine)

@@ -35,9 +35,6 @@ from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from .closed_loop import FlightResult, ManagerSettings
 from .power_system import PowerSystem
 
-OUTPUT_LABELS = ("T_winding", "T_iron")
-
-
 def flight_summary(result: FlightResult) -> dict:
     """The summary keys (module docstring) of a flown or planned mission."""
     system = result.system
@@ -106,14 +103,15 @@ def summary_text(summary: dict, limit_C: float) -> str:
 def plot_flight(result: FlightResult, title: str = "", path=None):
     """Applied currents (rests shaded) and winding and iron temperatures of every generator."""
     system = result.system
+    labels = list(system.planning_model.output_names)
     hours = result.time_s / 3600.0
     fig, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True, gridspec_kw={"height_ratios": [1, 1.4, 1.4]})
     steps = hours[:-1]
     axes[0].step(steps, result.nominal_A, where="post", color="k", ls=":", lw=1, label="nominal")
     for g, name in enumerate(system.generator_names):
         axes[0].step(steps, result.currents_A[g], where="post", lw=1.3, label=name)
-        for panel, output in zip(axes[1:], OUTPUT_LABELS):
-            panel.plot(hours, result.temperatures_C[g, OUTPUT_LABELS.index(output)], lw=1.3, label=name)
+        for panel, output in zip(axes[1:], labels):
+            panel.plot(hours, result.temperatures_C[g, labels.index(output)], lw=1.3, label=name)
     for ax in axes:
         edges = np.flatnonzero(np.diff(np.concatenate([[0], result.resting.astype(int), [0]])))
         for start, end in zip(edges[::2], edges[1::2]):
@@ -127,7 +125,7 @@ def plot_flight(result: FlightResult, title: str = "", path=None):
             ax.axvline(found.detected_at_s / 3600.0, color="k" if found.effect else "grey", ls="-.", lw=1)
         axes[1].annotate(label, (found.detected_at_s / 3600.0, axes[1].get_ylim()[0]), rotation=90, fontsize=7,
                          va="bottom", ha="right")
-    for panel, output in zip(axes[1:], OUTPUT_LABELS):
+    for panel, output in zip(axes[1:], labels):
         panel.axhline(system.limit_C, color="red", ls="--", lw=1, label=f"limit {system.limit_C:g} °C")
         panel.set_ylabel(f"{output} [°C]")
         panel.legend(loc="upper left", fontsize=8)

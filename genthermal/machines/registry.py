@@ -1,0 +1,111 @@
+"""Find a machine by name, entry point or file: machines are plug-ins.
+
+``resolve_machine(reference)`` accepts, in this order:
+
+1. a built-in name (:data:`BUILT_IN`, e.g. ``genco_rf201a``);
+2. the name of an entry point in the group :data:`ENTRY_POINT_GROUP` (``genthermal.machines``) of
+   an installed package, whose object is a :class:`~genthermal.machines.interface.Machine` (or a
+   module with a ``MACHINE`` attribute); a package declares it in its ``pyproject.toml``::
+
+       [project.entry-points."genthermal.machines"]
+       my_motor = "my_package.my_motor:MACHINE"
+
+3. the path of a Python file (``path/to/machine.py``) that defines ``MACHINE``, or
+   ``path/to/file.py:ATTRIBUTE`` for another attribute name.
+
+Nothing under ``genthermal/`` changes when a user adds a machine.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+import types
+from pathlib import Path
+
+from ..errors import InputError
+from . import genco_rf201a
+from .interface import Machine
+
+#: The entry-point group plug-in packages register machines in.
+ENTRY_POINT_GROUP = "genthermal.machines"
+#: Machines shipped with genthermal, by name.
+BUILT_IN = {genco_rf201a.NAME: genco_rf201a.MACHINE}
+#: Attribute a machine file or module defines.
+MACHINE_ATTRIBUTE = "MACHINE"
+
+
+def entry_point_names() -> list[str]:
+    """Names of the machines installed packages register in :data:`ENTRY_POINT_GROUP`."""
+    return sorted({ep.name for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)})
+
+
+def known_machines() -> list[str]:
+    """Built-in and installed machine names."""
+    return [*BUILT_IN, *(name for name in entry_point_names() if name not in BUILT_IN)]
+
+
+def is_machine_reference(reference: str) -> bool:
+    """True when ``reference`` names a built-in or installed machine or a ``.py`` machine file."""
+    return reference in BUILT_IN or reference in entry_point_names() or _file_part(reference)[0] is not None
+
+
+def resolve_machine(reference) -> Machine:
+    """The :class:`Machine` named by ``reference`` (see the module docstring).
+
+    Raises
+    ------
+    InputError
+        Naming the reference for an unknown name, a missing or broken file, or an object that is
+        not a Machine.
+    """
+    if isinstance(reference, Machine):
+        return reference
+    if not isinstance(reference, str) or not reference:
+        raise InputError("machine", reference, "give a machine name or the path of a .py machine file")
+    if reference in BUILT_IN:
+        return BUILT_IN[reference]
+    entry_points = [ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP) if ep.name == reference]
+    if entry_points:
+        try:
+            loaded = entry_points[0].load()
+        except Exception as exc:  # a broken plug-in must name itself, whatever it raised
+            raise InputError("machine", reference, f"entry point {entry_points[0].value} of group "
+                             f"{ENTRY_POINT_GROUP} failed to load: {type(exc).__name__}: {exc}") from None
+        return _as_machine(loaded, reference, f"entry point {entry_points[0].value}")
+    path, attribute = _file_part(reference)
+    if path is None:
+        raise InputError("machine", reference, f"unknown machine; known: {', '.join(known_machines())}, or "
+                         "the path of a .py file defining MACHINE")
+    if not path.is_file():
+        raise InputError("machine file", str(path), "no such file")
+    return _as_machine(getattr(_load_file(path), attribute, None), reference, f"{path} attribute {attribute}")
+
+
+def _file_part(reference: str) -> tuple[Path | None, str]:
+    """(path, attribute) of ``file.py`` or ``file.py:ATTRIBUTE``; (None, "") for anything else."""
+    text, attribute = reference, MACHINE_ATTRIBUTE
+    head, sep, tail = reference.rpartition(":")
+    if sep and head.endswith(".py") and tail.isidentifier():
+        text, attribute = head, tail
+    return (Path(text), attribute) if text.endswith(".py") else (None, "")
+
+
+def _load_file(path: Path) -> types.ModuleType:
+    name = f"genthermal_user_machine_{abs(hash(str(path.resolve())))}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # the user's file: report what broke, naming it
+        raise InputError("machine file", str(path), f"failed to run: {type(exc).__name__}: {exc}") from None
+    return module
+
+
+def _as_machine(loaded, reference: str, where: str) -> Machine:
+    if isinstance(loaded, types.ModuleType):
+        loaded = getattr(loaded, MACHINE_ATTRIBUTE, None)
+    if not isinstance(loaded, Machine):
+        raise InputError("machine", reference, f"{where} is {type(loaded).__name__}, not a "
+                         "genthermal.machines.Machine (define MACHINE = Machine(...))")
+    return loaded

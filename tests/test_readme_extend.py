@@ -1,0 +1,50 @@
+"""The README's "Extend it" section runs as written: a user effect and a user machine."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from genthermal.effects import CATALOGUE
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def extend_blocks() -> list[str]:
+    text = README.read_text(encoding="utf-8")
+    section = text[text.index("## Extend it"):]
+    section = section[:section.index("\n## ", 1)]
+    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
+
+
+@pytest.fixture
+def user_effect_registered():
+    yield
+    CATALOGUE.pop("winding_ac_loss", None)  # the catalogue is global: leave it as the other tests expect
+
+
+def test_the_extend_it_code_runs(tmp_path, monkeypatch, capsys, user_effect_registered):
+    effect_code, machine_file, usage = extend_blocks()
+    assert machine_file.startswith("# my_motor.py")
+    exec(compile(effect_code, "README effect", "exec"), {})
+    assert CATALOGUE["winding_ac_loss"].needs
+    (tmp_path / "my_motor.py").write_text(machine_file)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(usage, "README machine", "exec"), {})
+    coil, applicable = capsys.readouterr().out.strip().splitlines()
+    # at rated current: 10 A^2 * R0 (1 + alpha theta) through 1/8 + 1/12 K/W above 25 degC
+    theta = 25.0
+    for _ in range(50):
+        theta = 25.0 + 100.0 * 0.5 * (1 + 0.00393 * theta) * (1 / 8 + 1 / 12)
+    assert float(coil.strip("[]")) == pytest.approx(theta, rel=1e-9)
+    assert "winding_ac_loss" in applicable and "winding_insulation_degradation" not in applicable
+
+
+def test_the_cli_describes_the_readme_machine(tmp_path, monkeypatch, capsys):
+    from genthermal.cli import main
+
+    (tmp_path / "my_motor.py").write_text(extend_blocks()[1])
+    monkeypatch.chdir(tmp_path)
+    assert main(["describe", "--model", "my_motor.py"]) == 0
+    out = capsys.readouterr().out
+    assert "my_motor" in out and "T_coil = node winding" in out and "limit 130 °C" in out
