@@ -342,18 +342,10 @@ class FaultMonitor:
         ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
     """
 
-    #: Role of each measured output's disturbance node in the detector.
-    NODE_ROLES = {"T_winding": "winding", "T_iron": "iron"}
-
     def __init__(self, system, settings: DetectionSettings, dt_s: float):
         self.system, self.settings, self.dt_s = system, settings, dt_s
         n = system.n_generators
-        sensors = system.planning_model.spec.sensors
-        unknown = [name for name in sensors if name not in self.NODE_ROLES]
-        if unknown:
-            raise InputError("model.sensors", unknown, f"the fault detector knows the sensors "
-                             f"{', '.join(self.NODE_ROLES)} only")
-        self.node_roles = [self.NODE_ROLES[name] for name in sensors]
+        self.node_roles = detector_node_roles(system.planning_model)
         self.detector = DisturbanceDetector(n, settings.detector, self.node_roles)
         self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
         self.model, self.beliefs = system.planning_model, [()] * n
@@ -447,6 +439,24 @@ class FaultMonitor:
             if others:
                 restart_disturbances(detection_estimators[g], [detection_estimators[h] for h in others])
             self.detector.restart(g)
+
+
+def detector_node_roles(model) -> list:
+    """Per sensor node of ``model`` (the extended Kalman filter's disturbance nodes), ``"winding"``
+    when it is the machine's slot-winding node and ``"iron"`` when it is one of its iron nodes
+    (:class:`~genthermal.machines.Role`); InputError for any other sensor node."""
+    from ..machines import Role
+
+    interface = model.spec.interface
+    winding = interface.role(Role.SLOT_WINDING, "the fault detector")
+    iron = tuple(interface.role(Role.IRON, "the fault detector"))
+    roles = []
+    for output, node in model.spec.sensors.items():
+        if node != winding and node not in iron:
+            raise InputError("model.sensors", output, f"senses node {node}, neither the slot winding ({winding}) "
+                             f"nor the iron ({', '.join(iron)}): the fault detector has no drift for it")
+        roles.append("winding" if node == winding else "iron")
+    return roles
 
 
 def restart_disturbances(estimator, references) -> None:
