@@ -2,7 +2,7 @@ r"""Discrete load schedule as a mixed-integer linear program (thesis 8.3.1: load
 
 Rests come in whole blocks of ``block_s`` (5 min) and loads move between generators in whole
 chunks of ``chunk_A``. On the linear design model the problem is then exactly a MILP, which HiGHS
-solves to proven optimality: the answer *certifies* the best discrete schedule for that model.
+solves with a proof: a certified answer is within 1 % of the best discrete schedule for that model.
 
 Per segment :math:`k` a one-hot choice :math:`\lambda_{k,n}\in\{0,1\}` of the rest length
 :math:`n\in\{0..N\}` blocks, and integer chunk counts :math:`m_{g,k}` (:math:`d_{g,k} = c\,m_{g,k}`,
@@ -17,8 +17,14 @@ with :math:`\underline\theta\lambda_{k,n} \le z_{g,k,n} \le \overline\theta\lamb
 the state when the segment starts. Inside the segment the temperatures at every check point are
 affine in :math:`s_{g,k}` and :math:`m_{g,k}` (exact zero-order hold), and so is the end state.
 Objective: :math:`\sum_{k,n} n\Delta_{block}\lambda_{k,n} + w\sum_{g,k} (T_k/3600)\,c\,|m_{g,k}|`
-(minutes). Solved by HiGHS through CasADi's ``conic`` plugin, or ``scipy.optimize.milp`` (also
-HiGHS) when that plugin is missing.
+(minutes). The state bounds :math:`\underline\theta, \overline\theta` come from the generator's
+steady states (:func:`_state_range`), which keeps the relaxation tight.
+
+Solved by HiGHS through ``scipy.optimize.milp``, which returns the incumbent and the proven bound
+when the time limit stops it (CasADi's ``conic`` plugin only when SciPy has no ``milp``). HiGHS stops
+at a relative gap of 1 %; the heuristic's and engineer's plans, rounded to the grid, give the
+incumbent to beat (warm start by cutoff). A plan the solver did not certify says so, with its gap,
+incumbent and bound, and which plan is flown: never a silent fallback.
 """
 
 from __future__ import annotations
@@ -31,9 +37,10 @@ import numpy as np
 import scipy.optimize
 import scipy.sparse
 
+from .engineer import engineer_plan
 from .heuristic import heuristic_plan
 from .optimal import LinearRows, sparse_dm
-from .plan import PlanningProblem, PlanResult, Schedule, evaluate
+from .plan import PlanningProblem, PlanResult, Schedule, evaluate, predict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,6 +64,10 @@ class MilpSettings:
     relative_gap : float
         HiGHS stops, and the plan is ``certified``, when the incumbent is within this fraction of
         the proven bound (issue 9's target: 1 %).
+    warm_start : bool
+        Round the heuristic's and engineer's plans to the MILP's grid (adding rest blocks until the
+        design model keeps the limit) and use the better one as the incumbent to beat: a cutoff on
+        the objective, and the plan flown when HiGHS stops without a better one.
     """
 
     block_s: float = 300.0
@@ -66,6 +77,7 @@ class MilpSettings:
     displacement_weight: float = 1.0
     time_limit_s: float = 30.0
     relative_gap: float = 0.01
+    warm_start: bool = True
 
 
 class _Variables:
@@ -161,8 +173,10 @@ def _solve_highs(c, A_sparse, lba, uba, lbx, ubx, integer, time_limit_s, relativ
         objective = float(c @ x) if x is not None else float("nan")
         bound = getattr(result, "mip_dual_bound", None)
         bound = float(bound) if bound is not None and np.isfinite(bound) else float("nan")
-        return MilpOutcome(x, f"HiGHS (scipy): {result.message}", result.status == 0 and x is not None,
-                           objective, objective if result.status == 0 and x is not None else bound)
+        proven = result.status == 0 and x is not None
+        if proven and not np.isfinite(bound):
+            bound = objective - relative_gap * max(abs(objective), 1.0)  # what "Optimal" guarantees
+        return MilpOutcome(x, f"HiGHS (scipy): {result.message}", proven, objective, bound)
     A = sparse_dm(A_sparse)
     options = {"discrete": integer.tolist(), "error_on_fail": False,
                "highs": {"output_flag": False, "mip_rel_gap": relative_gap, "time_limit": float(time_limit_s)}}
@@ -173,7 +187,8 @@ def _solve_highs(c, A_sparse, lba, uba, lbx, ubx, integer, time_limit_s, relativ
     x = np.asarray(result["x"]).ravel() if stats.get("primal_solution_status") == "Feasible" else None
     objective = float(c @ x) if x is not None else float("nan")
     proven = status == "Optimal" and x is not None
-    return MilpOutcome(x, f"HiGHS (CasADi): {status}", proven, objective, objective if proven else float("nan"))
+    bound = objective - relative_gap * max(abs(objective), 1.0) if proven else float("nan")
+    return MilpOutcome(x, f"HiGHS (CasADi): {status}", proven, objective, bound)
 
 
 def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings()) -> PlanResult:
@@ -182,9 +197,13 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
     Returns
     -------
     PlanResult
-        ``details`` holds the objective (min), HiGHS status, ``certified`` (proven optimal) and the
-        gap. On infeasibility or solver failure: the heuristic's plan, ``method`` =
-        ``milp->heuristic`` and a warning.
+        ``details``: HiGHS ``status``; ``certified`` (the plan is proven within
+        ``settings.relative_gap`` of the optimum); ``mip_gap``, ``incumbent_objective_min`` and
+        ``bound_min`` (None when unknown); ``plan_used`` (``milp incumbent``, ``rounded heuristic
+        (MILP start)``/``rounded engineer (MILP start)`` when HiGHS found nothing better, or
+        ``heuristic`` when there is no discrete schedule at all: then ``method`` is
+        ``milp->heuristic``); the problem size. Every plan that is not certified carries a warning
+        saying how far the MILP got and which plan is flown.
     """
     started = time.perf_counter()
     n_gen, n_seg, nx = problem.n_generators, len(problem.segments), problem.x0.shape[1]
@@ -234,15 +253,35 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
             entry_terms = [(start, -P), (chunks[g][k], settings.chunk_A * sigma)]
             entry_value = phi
     lbx, ubx, cost, integer = cols.arrays()
+    start_name, start_schedule = _discrete_start(problem, settings, n_blocks) if settings.warm_start else (None,
+                                                                                                          None)
+    start_objective = np.inf if start_schedule is None else milp_objective(problem, start_schedule, settings)
+    if np.isfinite(start_objective):  # cutoff: only schedules at least as good as the start
+        rows.add([(np.arange(len(cost)), cost[None, :])], [-np.inf], [start_objective + 1e-6])
     lba, uba = rows.bounds()
     matrix = rows.matrix(len(cost))
     outcome = _solve_highs(cost, matrix, lba, uba, lbx, ubx, integer, settings.time_limit_s, settings.relative_gap)
+    if start_schedule is not None and (outcome.x is None or outcome.objective > start_objective):
+        outcome = dataclasses.replace(outcome, x=None, objective=start_objective,
+                                      proven=bool(np.isfinite(outcome.bound)
+                                                  and start_objective - outcome.bound
+                                                  <= settings.relative_gap * max(abs(start_objective), 1.0)))
     size = {"n_rows": int(matrix.shape[0]), "n_columns": int(matrix.shape[1]), "n_integers": int(integer.sum())}
     facts = {"status": outcome.status, "certified": bool(outcome.proven),
              "mip_gap": None if np.isnan(outcome.gap) else float(outcome.gap),
              "incumbent_objective_min": None if np.isnan(outcome.objective) else float(outcome.objective),
              "bound_min": None if np.isnan(outcome.bound) else float(outcome.bound),
              "time_limit_s": float(settings.time_limit_s), **size}
+    if outcome.x is None and start_schedule is not None:
+        facts.update(certified=bool(outcome.proven), mip_gap=None if np.isnan(outcome.gap) else float(outcome.gap),
+                     incumbent_objective_min=float(start_objective))
+        warnings = [] if outcome.proven else [
+            f"MILP not certified ({outcome.status}): its incumbent is the {start_name} plan rounded to whole "
+            f"rest blocks and load chunks, {_minutes(start_objective)}, bound {_minutes(outcome.bound)}, gap "
+            f"{_percent(outcome.gap)}; flying it"]
+        result = evaluate(problem, start_schedule, "milp", time.perf_counter() - started, warnings)
+        result.details = {**facts, "plan_used": f"rounded {start_name} (MILP start)", "objective_min": start_objective}
+        return result
     if outcome.x is None:
         fallback = heuristic_plan(problem)
         fallback.method, fallback.solve_s = "milp->heuristic", time.perf_counter() - started
@@ -261,6 +300,71 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
     result = evaluate(problem, schedule, "milp", time.perf_counter() - started, warnings)
     result.details = {**facts, "plan_used": "milp incumbent", "objective_min": float(outcome.objective)}
     return result
+
+
+def _discrete_start(problem: PlanningProblem, settings: MilpSettings, n_blocks: int):
+    """The best of the heuristic's and engineer's plans rounded to the MILP's grid (rests up to
+    whole blocks, sheds up to whole chunks, takers balanced in whole chunks) that the design model
+    predicts within the limit: ``(name, Schedule)``, or ``(None, None)`` when none is."""
+    best, best_objective = (None, None), np.inf
+    for name, planner in (("heuristic", heuristic_plan), ("engineer", engineer_plan)):
+        try:
+            schedule = _rounded(problem, planner(problem).schedule, settings, n_blocks)
+        except ValueError:
+            continue
+        schedule = _rest_until_within(problem, schedule, settings, n_blocks)
+        if schedule is None:
+            continue
+        objective = milp_objective(problem, schedule, settings)
+        if objective < best_objective:
+            best, best_objective = (name, schedule), objective
+    return best
+
+
+def _rest_until_within(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings, n_blocks: int):
+    """Add rest blocks, one at a time before the segment of the predicted peak (or the latest
+    earlier segment with room), until the design model keeps the limit; None when it cannot."""
+    rests = schedule.rest_before_s.copy()
+    for _ in range(n_blocks * len(rests) + 1):
+        candidate = Schedule(schedule.displaced_A, rests)
+        peak, _, segment = predict(problem, candidate).peak()
+        if peak <= problem.limit_C:
+            return candidate
+        room = np.flatnonzero(rests[:segment + 1] + settings.block_s <= n_blocks * settings.block_s + 1e-6)
+        if room.size == 0:
+            return None
+        rests = rests.copy()
+        rests[room[-1]] += settings.block_s
+    return None
+
+
+def _rounded(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings, n_blocks: int) -> Schedule:
+    """``schedule`` on the MILP's grid; ValueError when it does not fit (a rest longer than
+    ``n_blocks`` blocks, or no balanced whole-chunk split within the displacement bounds)."""
+    blocks = np.ceil(schedule.rest_before_s / settings.block_s - 1e-6)
+    if np.any(blocks > n_blocks):
+        raise ValueError("rest longer than the MILP's longest rest")
+    chunk = settings.chunk_A
+    chunks = np.zeros(schedule.displaced_A.shape, dtype=int)
+    for k in range(schedule.displaced_A.shape[1]):
+        low, high = problem.displacement_bounds(k)
+        lowest, highest = int(np.ceil(low / chunk - 1e-9)), int(np.floor(high / chunk + 1e-9))
+        d = schedule.displaced_A[:, k] / chunk
+        m = np.clip(np.ceil(d - 1e-6), lowest, highest).astype(int)  # sheds up, takes down
+        excess = int(m.sum())  # > 0: takers take whole chunks more, the most room first
+        while excess != 0:
+            step = -1 if excess > 0 else 1
+            room = (m - lowest) if step < 0 else (highest - m)
+            candidates = np.flatnonzero((room > 0) & ((d <= 0) if step < 0 else (d >= 0)))
+            if candidates.size == 0:  # the takers are full: the shedders shed a chunk less
+                candidates = np.flatnonzero(room > 0)
+            if candidates.size == 0:
+                raise ValueError("no balanced whole-chunk split")
+            g = candidates[np.argmax(room[candidates])]
+            m[g] += step
+            excess += step
+        chunks[:, k] = m
+    return Schedule(chunk * chunks, settings.block_s * blocks + 0.0)
 
 
 def _minutes(value: float) -> str:
