@@ -239,10 +239,11 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
             for n in range(n_blocks + 1):  # z = 0 unless this rest length is chosen
                 rows.add([(z[n], np.eye(nx)), (rest[k][n], -hot[g])], np.full(nx, -np.inf), 0.0)
                 rows.add([(z[n], np.eye(nx)), (rest[k][n], -cold[g])], np.zeros(nx), np.inf)
-                for j in range(1, n + 1):  # temperatures at the end of every block of this rest
-                    offset = generator.Cy @ (np.eye(nx) - powers[j]) @ xss + y_rest - problem.limit_C
-                    rows.add([(z[n], generator.Cy @ powers[j]), (rest[k][n], offset)],
-                             np.full(len(offset), -np.inf), 0.0)
+            for j in range(1, n_blocks + 1):  # temperatures at the end of block j of any rest of >= j blocks
+                offset = generator.Cy @ (np.eye(nx) - powers[j]) @ xss + y_rest - problem.limit_C
+                rows.add([(z[n], generator.Cy @ powers[j]) for n in range(j, n_blocks + 1)]
+                         + [(rest[k][n], offset[:, None]) for n in range(j, n_blocks + 1)],
+                         np.full(len(offset), -np.inf), 0.0)
             start = cols.take(nx, -np.inf, np.inf)
             terms = [(z[n], -powers[n]) for n in range(n_blocks + 1)]
             terms += [(rest[k][n], -(np.eye(nx) - powers[n]) @ xss) for n in range(n_blocks + 1)]
