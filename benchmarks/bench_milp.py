@@ -9,6 +9,10 @@ for the ratio of added rest, by the optimal (NLP) scheduler.
 Usage::
 
     python benchmarks/bench_milp.py [--hours 2 4 8 16] [--generators 2 3 4] [--time-limit 30] [--no-nlp]
+                                    [--blocked 1]
+
+With ``--blocked 2`` gen1 and gen2 are both blocked (cases with fewer than 3 generators skipped):
+with one blockage, 3 and 4 generators have room enough that no rest is needed.
 
 Prints one JSON line per case: hours, generators, MILP status, ``certified``, ``mip_gap``,
 ``incumbent_objective_min``, ``bound_min``, method, added rest, solve seconds, and the optimal
@@ -53,31 +57,34 @@ def mission_actions(hours: float) -> list[tuple[int, float]]:
     return BEFORE_FAULT + middle + [LANDING]
 
 
-def build_system(hours: float, n_generators: int) -> PowerSystem:
-    """The ``hours`` mission flown by ``n_generators`` generators, gen1 blocked at 66 min."""
+def build_system(hours: float, n_generators: int, n_blocked: int = 1) -> PowerSystem:
+    """The ``hours`` mission flown by ``n_generators`` generators, the first ``n_blocked`` of them
+    blocked at 66 min."""
+    if not 1 <= n_blocked < n_generators:
+        raise ValueError(f"n_blocked={n_blocked}: must be 1..{n_generators - 1} (one generator stays healthy)")
     mission = Mission.from_dict({
-        "name": f"blockage_{hours:g}h_{n_generators}gen", "rated_current_A": 7.0, "T_inlet_C": 20.0,
+        "name": f"blockage_{hours:g}h_{n_generators}gen_{n_blocked}blocked", "rated_current_A": 7.0, "T_inlet_C": 20.0,
         "T_ambient_C": 20.0,
         "generators": {"count": n_generators, "rest_percent": 27.3, "limit_C": 110.0,
                        "current_limit_percent": 100},
-        "faults": [BLOCKAGE],
+        "faults": [{**BLOCKAGE, "generator": g + 1} for g in range(n_blocked)],
         "actions": [{"condition": c, "duration_min": m} for c, m in mission_actions(hours)]})
     return PowerSystem.from_mission(mission)
 
 
-def run_case(hours: float, n_generators: int, time_limit_s: float, with_nlp: bool) -> dict:
+def run_case(hours: float, n_generators: int, time_limit_s: float, with_nlp: bool, n_blocked: int = 1) -> dict:
     """Plan one case with the MILP (and the optimal scheduler) and report what each did."""
-    system = build_system(hours, n_generators)
+    system = build_system(hours, n_generators, n_blocked)
     settings = dataclasses.replace(ManagerSettings(), milp=MilpSettings(time_limit_s=time_limit_s))
     started = time.perf_counter()
     milp = plan_mission(system, "milp", settings)
     wall = time.perf_counter() - started
-    record = {"hours": hours, "generators": n_generators, "wall_s": round(wall, 2)}
+    record = {"hours": hours, "generators": n_generators, "blocked": n_blocked, "wall_s": round(wall, 2)}
     if not milp.plans:
         record["milp"] = "no plan needed"
         return record
     plan = milp.plans[0]
-    keys = ("method", "status", "certified", "mip_gap", "incumbent_objective_min", "bound_min", "feasible",
+    keys = ("method", "plan_used", "status", "certified", "mip_gap", "incumbent_objective_min", "bound_min", "feasible",
             "solve_s", "peak_C", "n_rows", "n_columns", "n_integers")
     record.update({k: plan.get(k) for k in keys})
     record["milp_added_rest_s"] = milp.time_s[-1] - system.mission.duration_s
@@ -96,10 +103,13 @@ def main(argv=None) -> int:
     parser.add_argument("--generators", type=int, nargs="+", default=[2, 3, 4])
     parser.add_argument("--time-limit", type=float, default=MilpSettings.time_limit_s, help="HiGHS time limit, s")
     parser.add_argument("--no-nlp", action="store_true", help="skip the optimal (NLP) scheduler")
+    parser.add_argument("--blocked", type=int, default=1, help="generators blocked (default 1: gen1)")
     args = parser.parse_args(argv)
     for hours in args.hours:
         for n in args.generators:
-            print(json.dumps(run_case(hours, n, args.time_limit, not args.no_nlp), default=float), flush=True)
+            if args.blocked < n:
+                print(json.dumps(run_case(hours, n, args.time_limit, not args.no_nlp, args.blocked), default=float),
+                      flush=True)
     return 0
 
 
