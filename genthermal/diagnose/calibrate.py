@@ -1,8 +1,9 @@
 r"""Least-squares calibration of named model parameters against measurements (CasADi + IPOPT).
 
 The trajectories and their exact Jacobians come from
-:class:`~genthermal.diagnose.trajectory.ParametricSimulator` (SDIRK2 on the affine model, the
-parameter-only expressions hoisted out of the time loop).
+:class:`~genthermal.diagnose.trajectory.ParametricSimulator` (the discrete step of
+:mod:`genthermal.discretise` with the parameters symbolic, the parameter-only expressions hoisted
+out of the time loop).
 
 Fit and confidence
 ------------------

@@ -1,21 +1,15 @@
 r"""Sensor trajectories of a model on measured inputs, differentiable in chosen parameters.
 
-Every genthermal model is affine in its state for a fixed input and parameter vector,
-:math:`\dot x = J(u,p)\,x + f_0(u,p)`, with sensor outputs :math:`y = C(u,p)\,x + d(u,p)`.
-:class:`ParametricSimulator` integrates it over each sample interval :math:`h` (inputs held,
-zero-order hold) with the L-stable, stiffly accurate two-stage SDIRK method
-(:math:`\gamma = 1 - 1/\sqrt2`, sub-steps of at most 30 s),
-
-.. math::
-    k_1 = M^{-1}(Jx + f_0), \quad k_2 = M^{-1}\big(J(x + (1-\gamma)h k_1) + f_0\big), \quad
-    x^+ = x + h\big((1-\gamma)k_1 + \gamma k_2\big), \qquad M = I - \gamma h J,
-
-keeping the fitted parameters :math:`\theta` symbolic (the stiff modes of 2-30 s are damped; the
-error against the exact zero-order hold is below 1 mK at 10 s and 5 mK at 30 s on the shipped
-missions). Everything that depends on :math:`\theta` only (conductances, capacitances, the elimination of the massless nodes) is
-extracted from the step by ``casadi.extract_parametric`` and evaluated once per trajectory, so a
-4-hour run at 10 s costs about 15 ms and its exact Jacobian :math:`\partial y/\partial\theta`
-(forward AD through ``mapaccum``) a few times that.
+:class:`ParametricSimulator` steps the model over each sample interval :math:`h` (inputs held,
+zero-order hold) by :func:`genthermal.discretise.parametric_step`: the step :func:`simulate
+<genthermal.simulate.simulate>`, the filters and the C library take (exact for an affine model,
+ETD2RK otherwise), with the fitted parameters :math:`\theta` symbolic, so trajectories equal
+``simulate``'s to round-off and their derivatives are exact. Everything that depends on
+:math:`\theta` only is evaluated once per trajectory: the matrix exponential
+(:func:`genthermal.discretise.symbolic_phi_function`) and what ``casadi.extract_parametric``
+extracts from the step (conductances, capacitances, the elimination of the massless nodes). A
+4-hour run at 10 s costs about 3 ms of CPU and its exact Jacobian :math:`\partial y/\partial\theta`
+(forward AD through ``mapaccum``, two parameters and the initial state) about 50 ms.
 
 Parameters can change at an onset: the simulator takes *regimes* (parameter overrides) and a
 one-hot indicator per sample saying which regime holds — the semantics of
@@ -44,49 +38,18 @@ from typing import Mapping, Sequence
 import casadi as ca
 import numpy as np
 
+from ..discretise import parametric_step
 from ..errors import InputError
 from ..model import ThermalModel
 
-#: Largest integration sub-step, s.
-MAX_SUBSTEP_S = 30.0
-_GAMMA = 1.0 - 1.0 / math.sqrt(2.0)
-
-
-def _lu_solver(M):
-    """Return ``solve(b)`` for the SX matrix ``M`` by LU without pivoting (M is diagonally dominant:
-    :math:`I - \\gamma h J` with J a conductance matrix scaled by capacitances)."""
-    n = M.size1()
-    U = [[M[i, j] for j in range(n)] for i in range(n)]
-    L = [[None] * n for _ in range(n)]
-    for k in range(n):
-        for i in range(k + 1, n):
-            L[i][k] = U[i][k] / U[k][k]
-            for j in range(k + 1, n):
-                U[i][j] = U[i][j] - L[i][k] * U[k][j]
-    inverse_pivot = [1 / U[k][k] for k in range(n)]
-
-    def solve(b):
-        y = [b[i] for i in range(n)]
-        for i in range(n):
-            for k in range(i):
-                y[i] = y[i] - L[i][k] * y[k]
-        for i in reversed(range(n)):
-            for j in range(i + 1, n):
-                y[i] = y[i] - U[i][j] * y[j]
-            y[i] = y[i] * inverse_pivot[i]
-        return ca.vertcat(*y)
-    return solve
-
 
 def _affine_parts(model: ThermalModel, p, x, u):
-    """Return ``(J, f0, C, d)`` with dx/dt = J x + f0 and y = C x + d (SX in u and p)."""
-    zero = ca.SX.zeros(x.numel())
+    """Return ``(J, f0)`` with dx/dt = J x + f0 (SX in u and p), for the steady state."""
     f = model.functions["rhs"](x, u, p)
-    y = model.functions["outputs"](x, u, p)
-    J, C = ca.jacobian(f, x), ca.jacobian(y, x)
-    if ca.depends_on(J, x) or ca.depends_on(C, x):
+    J = ca.jacobian(f, x)
+    if ca.depends_on(J, x):
         raise InputError("model", model.name, "calibration needs a model affine in its state")
-    return J, ca.substitute(f, x, zero), C, ca.substitute(y, x, zero)
+    return J, ca.substitute(f, x, ca.SX.zeros(x.numel()))
 
 
 class ParametricSimulator:
@@ -140,36 +103,40 @@ class ParametricSimulator:
         nx, nu, n_regimes = model.n_states, len(model.input_names), len(self.regimes)
         theta = ca.SX.sym("theta", len(self.fitted))
         x, u, s = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("s", n_regimes)
-        parts = [_affine_parts(model, self._regime_parameters(theta, r), x, u) for r in self.regimes]
-        J, f0, C, d = (sum((s[r] * parts[r][i] for r in range(n_regimes)), ca.SX(0)) if n_regimes > 1
-                       else parts[0][i] for i in range(4))
-        n_sub = max(1, math.ceil(self.dt_s / MAX_SUBSTEP_S - 1e-9))
-        h = self.dt_s / n_sub
-        solve = _lu_solver(ca.SX.eye(nx) - _GAMMA * h * J)
-        x_next = x
-        for _ in range(n_sub):
-            k1 = solve(J @ x_next + f0)
-            k2 = solve(J @ (x_next + (1 - _GAMMA) * h * k1) + f0)
-            x_next = x_next + h * ((1 - _GAMMA) * k1 + _GAMMA * k2)
-        y = C @ x + d
+        parameters = [self._regime_parameters(theta, r) for r in self.regimes]
+        regime_steps = [parametric_step(model, x, u, p, self.dt_s) for p in parameters]
+        outputs = [model.functions["outputs"](x, u, p) for p in parameters]
+        x_next, y = ((sum((s[r] * parts[r] for r in range(n_regimes)), ca.SX(0)) if n_regimes > 1 else parts[0])
+                     for parts in ([regime.x_next for regime in regime_steps], outputs))
         (x_next, y), symbols, parametric = ca.extract_parametric([x_next, y], theta, {"extract_trivial": True})
         e = ca.vertcat(*symbols) if symbols else ca.SX.zeros(0)
-        step = ca.Function("step", [x, ca.vertcat(u, s), e], [x_next, y])
+        phis = ca.vertcat(*[ca.vec(m) for regime in regime_steps for m in regime.phis])
+        used = [i for i, depends in enumerate(ca.which_depends(x_next, phis, 1, False)) if depends]
+        step = ca.Function("step", [x, ca.vertcat(u, s), e, phis[used]], [x_next, y])
         hoisted = ca.Function("hoisted", [theta], [ca.vertcat(*parametric) if parametric else ca.SX.zeros(0)])
-        J0, f00 = parts[0][0], parts[0][1]
+        state_matrices = ca.Function("state_matrices", [theta], [regime.state_matrix for regime in regime_steps])
+        J0, f00 = _affine_parts(model, parameters[0], x, u)
         steady = ca.Function("steady", [u, theta], [-ca.solve(J0, f00)])
 
         th, ac = ca.MX.sym("theta", len(self.fitted)), ca.MX.sym("x0_coefficients", 2)
         S = ca.MX.sym("indicator", n_regimes, self.n_samples)
         U = ca.MX.sym("inputs", nu, self.n_samples)
         x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index(model.spec.interface.coolant_input), 0])
-        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th))
-        decision = ca.vertcat(th, ac)
+        exponentials = ca.vertcat(*[ca.vec(m) for regime, L in zip(regime_steps, state_matrices.call([th]))
+                                    for m in regime.exponential(L)])[used]  # the entries the step uses
+        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th), exponentials)
         args = [th, ac, S, U]
         self._trajectory = ca.Function("trajectory", args, [Y], ["theta", "x0_coefficients", "indicator", "inputs"], ["y"])
-        self._with_jacobian = ca.Function("trajectory_jac", args, [Y, ca.jacobian(ca.vec(Y), decision)])
-        self._with_theta_jacobian = ca.Function("trajectory_jac_theta", args, [Y, ca.jacobian(ca.vec(Y), th)])
+        self._jacobian_of = (args, Y, {"decision": ca.vertcat(th, ac), "theta": th})
+        self._jacobians: dict = {}  # built on first use (most callers need one or none), shared by with_inputs
         self._steady = steady
+
+    def _jacobian_function(self, wrt: str) -> ca.Function:
+        """``(...) -> (Y, d vec(Y)/d wrt)`` for ``wrt`` "decision" (theta, a, c) or "theta"."""
+        if wrt not in self._jacobians:
+            args, Y, variables = self._jacobian_of
+            self._jacobians[wrt] = ca.Function(f"trajectory_jac_{wrt}", args, [Y, ca.jacobian(ca.vec(Y), variables[wrt])])
+        return self._jacobians[wrt]
 
     def with_inputs(self, inputs: np.ndarray) -> "ParametricSimulator":
         """The same simulator (same model, parameters, regimes, period, length) on other inputs."""
@@ -204,12 +171,12 @@ class ParametricSimulator:
     def outputs_and_jacobian(self, theta, x0_coefficients, indicator) -> tuple[np.ndarray, np.ndarray]:
         """Outputs and the exact Jacobian of ``vec(Y)`` (column-major: samples of output 0 and 1
         interleaved per sample) w.r.t. ``(theta, a, c)``, shape (n_outputs·N, n_theta + 2)."""
-        Y, jac = self._with_jacobian(theta, x0_coefficients, indicator, self.inputs)
+        Y, jac = self._jacobian_function("decision")(theta, x0_coefficients, indicator, self.inputs)
         return np.asarray(Y), np.asarray(jac)
 
     def outputs_and_theta_jacobian(self, theta, x0_coefficients, indicator) -> tuple[np.ndarray, np.ndarray]:
         """As :meth:`outputs_and_jacobian`, w.r.t. ``theta`` only (initial state held)."""
-        Y, jac = self._with_theta_jacobian(theta, x0_coefficients, indicator, self.inputs)
+        Y, jac = self._jacobian_function("theta")(theta, x0_coefficients, indicator, self.inputs)
         return np.asarray(Y), np.asarray(jac)
 
     def steady_state(self, theta) -> np.ndarray:

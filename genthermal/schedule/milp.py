@@ -228,10 +228,7 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
         u_rest = problem.inputs(g, problem.rest_current_A)
         xss = generator.steady_state(u_rest)
         y_rest = generator.Dy @ u_rest + generator.ey
-        E_block, _ = generator.step(settings.block_s)
-        powers = [np.eye(nx)]
-        for _ in range(n_blocks):
-            powers.append(E_block @ powers[-1])
+        powers = [generator.step(n * settings.block_s)[0] for n in range(n_blocks + 1)]  # Phi^n
         entry_terms, entry_value = [], problem.x0[g]
         for k in range(n_seg):
             z = [cols.take(nx, -np.inf, np.inf) for _ in range(n_blocks + 1)]  # bounded by hot/cold rows

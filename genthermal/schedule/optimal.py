@@ -128,9 +128,7 @@ class _Transcription:
                 n_y = generator.Cy.shape[0]
                 if current is None:  # rest substep of free length h = r_k / M
                     h_s = 60.0 * w[self.r_index(k)] / settings.rest_substeps
-                    decay = ca.exp(ca.DM(generator.eigenvalues) * h_s)
-                    modes = decay * (ca.DM(generator.V_inv) @ (previous - xss))
-                    nonlinear.append(w[x] - xss - ca.DM(generator.V) @ modes)
+                    nonlinear.append(w[x] - xss - generator.decay.apply(previous - xss, h_s))
                     linear.add([(x, generator.Cy)] + peak(n_y), [-np.inf] * n_y,
                                (0.0 if minimax else problem.limit_C) - y_rest)
                     continue

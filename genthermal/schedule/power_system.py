@@ -42,6 +42,7 @@ import numpy as np
 from ..coolant import OUTLET_DIAMETER_MM, inlet_rise, outlet_flow_fraction
 from ..conditions import LOAD_CONDITIONS, checked_number, reject_unknown_keys
 from ..design import linear_design_model
+from ..discretise import ModalDecay, phi_matrices
 from ..effects import get_effect
 from ..errors import InputError
 from ..machines import DEFAULT_MACHINE
@@ -180,9 +181,10 @@ class AffineGenerator:
     The phase current :math:`I` enters affinely, :math:`u = u_0 + I\,e_I` with
     :math:`e_I = (1, 1, 1, g_{exc}, 0, 0)` (balanced phases; :math:`I_{exc} \approx I_{exc,0} + g_{exc} I`,
     the least-squares line of the AVR exciter law at the load's power factor,
-    :func:`genthermal.exciter.exciter_line`). ``L`` has real
-    eigenvalues :math:`L = V\Lambda V^{-1}`, so a rest of free length :math:`h` at constant input
-    is exactly :math:`x(h) = x_{ss} + V e^{\Lambda h}V^{-1}(x(0) - x_{ss})`.
+    :func:`genthermal.exciter.exciter_line`). Time stepping is :mod:`genthermal.discretise`'s:
+    :meth:`step` is its exact zero-order hold (:func:`~genthermal.discretise.phi_matrices`), and
+    ``decay`` (:class:`~genthermal.discretise.ModalDecay`) gives a rest of free length :math:`h` at
+    constant input exactly, :math:`x(h) = x_{ss} + e^{hL}(x(0) - x_{ss})`.
 
     Parameters
     ----------
@@ -215,11 +217,7 @@ class AffineGenerator:
         self.exciter_no_load_A, self.e_I[names.index(generator.excitation_input)] = exciter_line(
             power_factor, rated_current_A, law=generator.exciter_law)
         self._generator, self._names = generator, names
-        eigenvalues, self.V = np.linalg.eig(L)
-        if np.max(np.abs(eigenvalues.imag)) > 0 or np.max(eigenvalues.real) >= 0:
-            raise InputError("model", model.name, "the design model needs real, negative eigenvalues")
-        self.eigenvalues, self.V_inv = eigenvalues.real, np.linalg.inv(self.V)
-        self.V = self.V.real
+        self.decay = ModalDecay.of(L, model.name)
         self._steps: dict = {}
 
     def input(self, current_A, inlet_C: float, ambient_C: float) -> np.ndarray:
@@ -236,12 +234,11 @@ class AffineGenerator:
         return u @ self.B.T + self.c
 
     def step(self, h_s: float) -> tuple[np.ndarray, np.ndarray]:
-        r"""Exact ZOH step of length ``h_s``: :math:`x^+ = Ex + \Gamma(Bu + c)` → ``(E, Γ)``."""
+        r"""Exact ZOH step of length ``h_s`` (s): :math:`x^+ = Ex + \Gamma(Bu + c)` → ``(E, Γ)``,
+        by :func:`genthermal.discretise.phi_matrices` (cached per length)."""
         key = round(float(h_s), 9)
         if key not in self._steps:
-            decay = np.exp(self.eigenvalues * key)
-            self._steps[key] = ((self.V * decay) @ self.V_inv,
-                                (self.V * ((decay - 1.0) / self.eigenvalues)) @ self.V_inv)
+            self._steps[key] = phi_matrices(self.L, key)[:2]
         return self._steps[key]
 
     def steady_state(self, u: np.ndarray) -> np.ndarray:
