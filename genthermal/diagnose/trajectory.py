@@ -52,6 +52,29 @@ def _affine_parts(model: ThermalModel, p, x, u):
     return J, ca.substitute(f, x, ca.SX.zeros(x.numel()))
 
 
+def _chunked_outputs(step: ca.Function, n_samples: int, x0: ca.MX, series: ca.MX, constants) -> ca.MX:
+    r"""Outputs of ``n_samples`` steps of ``step`` ``(x, v, *constants) -> (x_next, y)`` from ``x0``,
+    ``v`` the columns of ``series``, in chunks of about :math:`\sqrt N` steps.
+
+    ``mapaccum`` repeats every input that is the same at each step (the parameter-only
+    quantities, a few hundred numbers) once per step when the function is built and called; in
+    chunks they are repeated about :math:`2\sqrt N` times instead of :math:`N`, which keeps the
+    build time, the work memory and the derivatives' cost of a long trajectory from growing with
+    them. The steps and their order are unchanged, so the outputs are the same.
+    """
+    chunk_length = max(1, math.isqrt(n_samples))
+    n_chunks, tail = divmod(n_samples, chunk_length)
+    x, v = ca.MX.sym("x", x0.numel()), ca.MX.sym("v", series.size1(), chunk_length)
+    symbols = [ca.MX.sym(f"constant_{i}", c.sparsity()) for i, c in enumerate(constants)]
+    states, outputs = step.mapaccum("chunk", chunk_length, [0], [0])(x, v, *symbols)
+    chunk = ca.Function("chunk", [x, v, *symbols], [states[:, -1], outputs])
+    states, Y = chunk.mapaccum("chunks", n_chunks, [0], [0])(x0, series[:, :n_chunks * chunk_length], *constants)
+    if not tail:
+        return Y
+    _, Y_tail = step.mapaccum("tail", tail, [0], [0])(states[:, -1], series[:, n_chunks * chunk_length:], *constants)
+    return ca.horzcat(Y, Y_tail)
+
+
 class ParametricSimulator:
     """Sensor trajectories of ``model`` on a fixed input series, exact in chosen parameters.
 
@@ -124,7 +147,7 @@ class ParametricSimulator:
         x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index(model.spec.interface.coolant_input), 0])
         exponentials = ca.vertcat(*[ca.vec(m) for regime, L in zip(regime_steps, state_matrices.call([th]))
                                     for m in regime.exponential(L)])[used]  # the entries the step uses
-        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th), exponentials)
+        Y = _chunked_outputs(step, self.n_samples, x0, ca.vertcat(U, S), [hoisted(th), exponentials])
         args = [th, ac, S, U]
         self._trajectory = ca.Function("trajectory", args, [Y], ["theta", "x0_coefficients", "indicator", "inputs"], ["y"])
         self._jacobian_of = (args, Y, {"decision": ca.vertcat(th, ac), "theta": th})
