@@ -18,10 +18,10 @@ import time
 from pathlib import Path
 
 from genthermal.design import linear_design_model
-from genthermal.diagnose.discover import diagnose
+from genthermal.diagnose.catalogue import Catalogue
+from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import make_hidden_effect_case
-from genthermal.diagnose.open_search import describe_term, open_search
-from genthermal.effects import CATALOGUE
+from genthermal.diagnose.open_search import describe_term, heat_flow_library
 from genthermal.machines import build_model
 
 #: The library terms that count as the right node group and form for each catalogue effect.
@@ -45,16 +45,17 @@ def main() -> int:
     args = parser.parse_args()
     plant = build_model()
     design = linear_design_model(plant)
-    caches = {}
+    discovery, library = {}, {}  # one per model: what they build is reused across the records
     rows, started = [], time.perf_counter()
     for seed, effect in enumerate(EXPECTED, start=31):
         model = design if effect in LINEAR_EFFECTS else plant
         case = make_hidden_effect_case(effect, mission="thesis_fig_7_7", dt_s=args.dt, seed=seed, plant=model,
                                        unbalance=0.3 if effect == "phase_short_circuit" else 0.0)
         t0 = time.perf_counter()
-        without = {n: e for n, e in CATALOGUE.items() if n != effect}
-        reduced = diagnose(model, case.data, catalogue=without, cache=caches.setdefault(("cat", model.name), {}))
-        found = open_search(model, case.data, cache=caches.setdefault(("open", model.name), {}))
+        shared = discovery.setdefault(model.name, Discovery())
+        reduced = shared.with_settings(candidates=Catalogue.registered().without(effect)).fit(model, case.data)
+        generic = library.setdefault(model.name, Catalogue.of(heat_flow_library(model)))
+        found = shared.with_settings(candidates=generic).fit(model, case.data)
         top = found.iterations[0].ranked[0]
         terms = [f.effect for f in found.found]
         row = {"effect": effect, "truth": case.truth(), "catalogue_without_it": reduced.verdict,

@@ -16,7 +16,7 @@ import pytest
 
 from genthermal.cli import main
 from genthermal.diagnose.compare import compare
-from genthermal.diagnose.discover import diagnose
+from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
 from genthermal.model_file import load_model
 from genthermal.synth import THESIS_NOISE_VARIANCE_K2
@@ -29,9 +29,9 @@ LINEAR_EFFECTS = ("copper_resistance_temperature", "quadratic_copper_loss")
 
 
 @pytest.fixture(scope="module")
-def cache():
-    """Models and simulators of the candidate effects, shared by the diagnoses of one model."""
-    return {}
+def discovery():
+    """One Discovery for the file: the models and simulators it builds for a model are reused."""
+    return Discovery()
 
 
 def _case(effect, model, seed, **options):
@@ -39,12 +39,12 @@ def _case(effect, model, seed, **options):
 
 
 @pytest.mark.parametrize("seed, effect", list(enumerate(NONLINEAR_EFFECTS + LINEAR_EFFECTS, start=11)))
-def test_injected_effect_ranks_first_and_explains_the_data(effect, seed, plant_model, design_model, cache):
+def test_injected_effect_ranks_first_and_explains_the_data(effect, seed, plant_model, design_model, discovery):
     model = design_model if effect in LINEAR_EFFECTS else plant_model
     # balanced phases cannot tell a loss in I_u^2 from one in sum I^2 (see hidden.py): the
     # phase short is shown on a record with a single-phase load switched on phase u
     case = _case(effect, model, seed, unbalance=0.3 if effect == "phase_short_circuit" else 0.0)
-    result = diagnose(model, case.data, cache=cache.setdefault(model.name, {}))
+    result = discovery.fit(model, case.data)
     top = result.iterations[0].ranked[0]
     assert result.verdict == effect, [(c.effect, c.rmse_after) for c in result.iterations[0].ranked]
     assert top.rmse_after <= 1.5 * SENSOR_NOISE_STD < top.rmse_before
@@ -53,17 +53,17 @@ def test_injected_effect_ranks_first_and_explains_the_data(effect, seed, plant_m
     assert effect in result.iterations[0].explanation
 
 
-def test_healthy_data_give_none(plant_model, cache):
+def test_healthy_data_give_none(plant_model, discovery):
     case = _case(None, plant_model, seed=5)
-    result = diagnose(plant_model, case.data, cache=cache.setdefault(plant_model.name, {}))
+    result = discovery.fit(plant_model, case.data)
     assert result.verdict == "none"
     assert result.to_dict()["ranked"] and not any(c["significant"] for c in result.to_dict()["ranked"])
 
 
-def test_iterate_finds_two_effects(plant_model, cache):
+def test_iterate_finds_two_effects(plant_model, discovery):
     case = _case([Injection("coolant_flow_reduction", {"k_flow": 0.7}, 4200.0),
                   Injection("excitation_iron_loss", {"k_exc": 30.0}, 9000.0)], plant_model, seed=6)
-    result = diagnose(plant_model, case.data, iterate=True, cache=cache.setdefault(plant_model.name, {}))
+    result = discovery.with_settings(iterate=True).fit(plant_model, case.data)
     assert {f.effect for f in result.found} == {"coolant_flow_reduction", "excitation_iron_loss"}
     rmse = [it.rmse_before for it in result.iterations]
     assert rmse == sorted(rmse, reverse=True) and rmse[-1] <= 1.5 * SENSOR_NOISE_STD

@@ -81,24 +81,34 @@ def test_bad_effect_requests_are_refused_clearly(plant_model, call, named):
         call(plant_model)
 
 
-def test_a_user_effect_in_a_few_lines(plant_model):
+def test_a_user_effect_in_a_few_lines(plant_model, monkeypatch):
+    """Registered by name into a private copy of the registry (the package's is never touched),
+    and usable without registering through a candidate Catalogue."""
+    from genthermal import effects
+    from genthermal.diagnose.catalogue import Catalogue
+
+    monkeypatch.setattr(effects, "CATALOGUE", dict(CATALOGUE))
+
     def rotor_loss(network, roles, k):
         return network.with_heat_sources([HeatSource("rotor", k * input_symbol("I_exc") ** 2, "rotor")])
 
     effect = Effect("test_rotor_copper_loss", "rotor field loss k I_exc^2", r"q_r = k I_{exc}^2",
                     (EffectParameter("k_rotor", 0.0, "W/A^2", 0.0, 100.0, 20.0),), rotor_loss)
     register_effect(effect)
-    try:
-        u = plant_model.input_vector(**U_HOT)
-        x_base = plant_model.steady_state(u)
-        model = plant_model.with_effect("test_rotor_copper_loss", k_rotor=30.0)
-        x = model.steady_state(u)
-        rotor = model.state_names.index("rotor")
-        assert x[rotor] - x_base[rotor] > 2.0
-        with pytest.raises(InputError, match="already registered"):
-            register_effect(effect)
-    finally:
-        CATALOGUE.pop("test_rotor_copper_loss")
+    u = plant_model.input_vector(**U_HOT)
+    x_base = plant_model.steady_state(u)
+    model = plant_model.with_effect("test_rotor_copper_loss", k_rotor=30.0)
+    x = model.steady_state(u)
+    rotor = model.state_names.index("rotor")
+    assert x[rotor] - x_base[rotor] > 2.0
+    with pytest.raises(InputError, match="already registered"):
+        register_effect(effect)
+    base = Catalogue(CATALOGUE.values())
+    extended = base.extended(effect)
+    assert "test_rotor_copper_loss" in extended and "test_rotor_copper_loss" not in base
+    assert list(extended.without("test_rotor_copper_loss")) == list(base)
+    with pytest.raises(InputError, match="two candidate effects"):
+        extended.extended(effect)
 
 
 def test_effect_with_onset_switches_the_model_mid_run(plant_model):

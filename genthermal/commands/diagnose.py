@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from ..model_file import save_model
@@ -24,19 +25,25 @@ def register(subparsers) -> None:
                         "nothing is significant")
     parser.add_argument("--report", metavar="DIR", help="write report.md, diagnosis.json and plots into DIR")
     parser.add_argument("--out", metavar="FILE", help="write the model with the found effects as a model file")
+    parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
+                        help="processes fitting candidates side by side (default: up to 2 cores)")
+    parser.add_argument("--phases", choices=("auto", "resolved", "lumped"), default="auto",
+                        help="fit one winding node per phase sensor: when they differ (auto), always, never")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
-    from ..diagnose.discover import diagnose
+    from ..diagnose.discovery import Discovery
+    from ..diagnose.fitter import OnsetFitter
 
     model = model_from_args(args)
     data = fitting_data(args.data, model, args)
     baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
     with working("diagnose"):
-        result = diagnose(model, data, baseline=baseline, iterate=args.iterate, dt_s=data_step(args),
-                          progress=lambda line: say(f"  ... {line}"))
+        discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
+                              progress=lambda line: say(f"  ... {line}"))
+        result = discovery.fit(model, data, baseline=baseline, dt_s=data_step(args))
     document = result.to_dict()
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
     for c in document["ranked"]:

@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
-from ..schedule.closed_loop import SCHEDULERS, ManagerSettings, plan_mission
+from ..schedule.closed_loop import DEFAULT_REST_BUDGET_FRACTION, SCHEDULERS, ManagerSettings, plan_mission
 from ..schedule.monitor import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
@@ -32,6 +32,10 @@ def add_schedule_arguments(parser) -> None:
                         help="plans tolerate a design model that underestimates a temperature rise within one "
                         f"cycle by this fraction (default {ManagerSettings.rise_backoff:g}; 0 = margin only)")
     parser.add_argument("--cycle-min", default="5", help="management cycle, min (default 5, thesis 7.2)")
+    parser.add_argument("--rest-budget-min", default=None, metavar="MIN",
+                        help="most rest the whole flight may add, min (default "
+                        f"{100 * DEFAULT_REST_BUDGET_FRACTION:g} %% of the mission); when it is spent, or no rest "
+                        "keeps a generator within the limit, the manager switches that generator off and sheds load")
     parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
                         "(genthermal.model_file); default the scenario's machine")
     parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
@@ -56,8 +60,11 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     margin = _number_in("--margin", args.margin, 0.0, 50.0, "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
     cycle_min = _number_in("--cycle-min", args.cycle_min, 1.0, 60.0, "a number of minutes")  # 1 plan per cycle
-    settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin,
-                               rise_backoff=backoff)
+    budget_min = None
+    if getattr(args, "rest_budget_min", None) is not None:
+        budget_min = _number_in("--rest-budget-min", args.rest_budget_min, 0.0, 24 * 60.0, "a number of minutes")
+    settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin, rise_backoff=backoff,
+                               rest_budget_s=None if budget_min is None else 60.0 * budget_min)
     if getattr(args, "seed", None) is not None:
         if int(args.seed) < 0:
             raise InputError("--seed", args.seed, "must be a whole number >= 0")

@@ -131,6 +131,9 @@ def measured_series(data, dt_s: float | None = None, output_names=None, interfac
     if dt_s is not None or np.max(np.abs(steps - median)) > 1e-6 * median:
         data = resample(data, median if dt_s is None else dt_s)
     sensors = data.sensors
+    per_phase = [n for n in output_names if n not in sensors and n in data.frame]  # T_winding_u/v/w
+    if per_phase:
+        sensors = pd.concat([sensors.reset_index(drop=True), data.frame[per_phase].reset_index(drop=True)], axis=1)
     missing = [n for n in output_names if n not in sensors]
     if missing:
         raise InputError("model outputs", missing, "the data have no sensor for these outputs")

@@ -55,10 +55,10 @@ from ..errors import InputError
 from ..machines.interface import Role
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
-from .experiment import SeparatingExperiment, separating_experiment
-from .joint import JointCandidate, PairSearch
-from .residual import correlation, residual_tests
-from .search import Candidate, EffectSearch, FoundEffect, model_with_effects, noise_std
+from .experiment import SeparatingExperiment
+from .joint import JointCandidate
+from .residual import correlation
+from .search import Candidate, EffectSearch, model_with_effects
 
 DELTA_BIC_LIMIT = -10.0
 MIN_RMSE_REDUCTION = 0.10
@@ -69,22 +69,25 @@ MIN_EXCESS_EXPLAINED = 0.5
 DEFAULT_BASELINE_PARAMETERS = ("R0", "P_iron", "h_end_air", "h_top_air", "k_cr")
 
 
-def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise: float) -> bool:
+def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise: float,
+                 evidence_limit: float = DELTA_BIC_LIMIT) -> bool:
     """The four tests of the module docstring for a change from ``rmse_before`` to ``rmse_after``
-    (K) at a BIC change ``delta_bic``, with sensor noise ``noise`` (K)."""
+    (K) at a criterion change ``delta_bic``, with sensor noise ``noise`` (K); the change must be
+    below ``evidence_limit`` (the criterion's, -10 for BIC)."""
     noise = noise if np.isfinite(noise) else 0.0
-    return bool(delta_bic < DELTA_BIC_LIMIT
+    return bool(delta_bic < evidence_limit
                 and rmse_after <= (1 - MIN_RMSE_REDUCTION) * rmse_before
                 and rmse_before > NOISE_FLOOR_FACTOR * noise
                 and rmse_before ** 2 - rmse_after ** 2 >= MIN_EXCESS_EXPLAINED * (rmse_before ** 2 - noise ** 2))
 
 
-def is_significant(candidate: Candidate, noise: float) -> bool:
+def is_significant(candidate: Candidate, noise: float, evidence_limit: float = DELTA_BIC_LIMIT) -> bool:
     """The four tests of the module docstring, against the model without the candidate."""
-    return passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)
+    return passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise, evidence_limit)
 
 
-def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float) -> JointCandidate | None:
+def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,
+                evidence_limit: float = DELTA_BIC_LIMIT) -> JointCandidate | None:
     """The best-ranked pair that passes the four tests against the model without effects, against
     each of its two effects alone and against the best single effect (each effect must earn its
     place, and the pair must beat the best answer with one effect); None if no pair does."""
@@ -92,8 +95,9 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
     best_single = min(singles, key=lambda c: c.delta_bic)
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
         rivals = [by_name[e] for e in pair.effects] + [best_single]
-        if passes_tests(pair.rmse_before, pair.rmse_after, pair.delta_bic, noise) and all(
-                passes_tests(r.rmse_after, pair.rmse_after, pair.delta_bic - r.delta_bic, noise) for r in rivals):
+        if passes_tests(pair.rmse_before, pair.rmse_after, pair.delta_bic, noise, evidence_limit) and all(
+                passes_tests(r.rmse_after, pair.rmse_after, pair.delta_bic - r.delta_bic, noise, evidence_limit)
+                for r in rivals):
             return pair
     return None
 
@@ -182,6 +186,11 @@ class Diagnosis:
     experiment : SeparatingExperiment or None
         When another explanation fits about as well as the verdict (:func:`look_alike`): the short
         rig test that tells them apart (:mod:`genthermal.diagnose.experiment`).
+    criterion : str
+        Name of the information criterion that scored the candidates.
+    output_names : list of str
+        The sensors fitted, rows of ``series.outputs`` (the model's, or those of its phase-resolved
+        winding view, :mod:`genthermal.diagnose.phase_winding`, when the record's phases differ).
     """
 
     model: ThermalModel
@@ -193,6 +202,16 @@ class Diagnosis:
     residual: dict = dataclasses.field(default_factory=dict)
     catalogue: Mapping[str, Effect] = dataclasses.field(default_factory=lambda: CATALOGUE)
     experiment: SeparatingExperiment | None = None
+    criterion: str = "BIC"
+    output_names: list = dataclasses.field(default_factory=list)
+
+    def __post_init__(self):
+        self.output_names = list(self.output_names) or list(self.model.output_names)
+
+    @property
+    def ranking(self) -> list:
+        """The first round's single effects, best criterion change first (list of Candidate)."""
+        return self.iterations[0].ranked
 
     @property
     def verdict(self) -> str:
@@ -214,7 +233,9 @@ class Diagnosis:
         first = self.iterations[0]
         return {
             "model": self.model.name, "data": self.series.source, "samples": int(self.series.time_s.size),
-            "dt_s": self.series.dt_s, "noise_std_K": self.noise_std, "verdict": self.verdict,
+            "dt_s": self.series.dt_s, "noise_std_K": self.noise_std, "criterion": self.criterion,
+            "sensors": self.output_names,
+            "verdict": self.verdict,
             "explanation": first.explanation, "ranked": [c.to_dict() for c in first.ranked],
             "pairs": [p.to_dict() for p in first.pairs],
             "thresholds": {"delta_bic_below": DELTA_BIC_LIMIT, "min_rmse_reduction": MIN_RMSE_REDUCTION,
@@ -263,7 +284,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     """Plain language: what the residual looked like and which effect's signature it matches."""
     from .compare import winding_rate_K_per_min
 
-    series, outputs = search.series, search.model.output_names
+    series, outputs = search.series, search.output_names
     residual = search.predicted_before - series.outputs
     if candidate is None:
         return (f"No effect is significant: the model explains the data to RMSE {search.rmse_before:.3f} K "
@@ -325,10 +346,11 @@ def _ambiguity(candidate: Candidate, runner_up: Candidate | None) -> str:
 
 def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
              iterate: bool = False, dt_s: float | None = None, effects: Sequence[str] | None = None,
-             max_iterations: int = 4, cache: dict | None = None, pairs: bool = True,
-             catalogue: Mapping[str, Effect] = CATALOGUE,
+             max_iterations: int = 4, pairs: bool = True, catalogue: Mapping[str, Effect] | None = None,
              progress: Callable[[str], None] | None = None, design_experiment: bool = True) -> Diagnosis:
-    """Find the catalogue effect(s) ``model`` lacks to explain ``data``.
+    """Find the catalogue effect(s) ``model`` lacks to explain ``data``: one call of
+    :class:`~genthermal.diagnose.discovery.Discovery` (use a Discovery directly to fit several
+    records of the same model and reuse what it builds).
 
     Parameters
     ----------
@@ -348,15 +370,12 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         Restrict the candidates to these effects of ``catalogue``.
     max_iterations : int
         Bound on the rounds with ``iterate``.
-    cache : dict, optional
-        Share one dict between diagnoses of the same ``model`` (no ``baseline``) on series of the
-        same length to reuse the models and simulators built for the candidates.
     pairs : bool
         In the first round, when the residual after the best single effect fails the tests of
-        :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes
-        :func:`choose_pair`.
-    catalogue : mapping of str to Effect
-        The effects searched (default: the catalogue of :mod:`genthermal.effects`).
+        :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly
+        (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes :func:`choose_pair`.
+    catalogue : mapping of str to Effect, optional
+        The effects searched (default: the registered catalogue of :mod:`genthermal.effects`).
     progress : callable, optional
         Called with one line of text as each stage of the search finishes.
     design_experiment : bool
@@ -367,66 +386,17 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     -------
     Diagnosis
     """
-    from .calibrate import calibrate
+    from .catalogue import Catalogue
+    from .discovery import Discovery
+    from .fitter import OnsetFitter
 
+    candidates = Catalogue.registered() if catalogue is None else Catalogue.of(catalogue)
     for name in effects or ():
-        if name not in catalogue:
-            raise InputError("effects", name, f"not in the catalogue: {', '.join(catalogue)}")
-    report = progress or (lambda text: None)
-    series = series_for(model, data, dt_s)
-    calibration = None
-    if baseline is not None:
-        names = [n for n in baseline_parameters if n in model.parameters]
-        calibration = calibrate(model, baseline, names, dt_s)
-        model = calibration.model
-        report(f"baseline calibrated: {', '.join(names)}")
-    cache = {} if cache is None or baseline is not None else cache
-    found: list[FoundEffect] = []
-    iterations: list[Iteration] = []
-    while True:
-        search = EffectSearch(model, series, found, cache, catalogue)
-        names = [n for n in search.candidates() if effects is None or n in effects]
-        ranked = search.rank(names) if names else []
-        for candidate in ranked:
-            candidate.significant = is_significant(candidate, search.noise)
-        report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
-               + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
-        best = ranked[0] if ranked and ranked[0].significant else None
-        runner_up = ranked[1] if len(ranked) > 1 else None
-        iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
-                              explain(best, search, runner_up))
-        if (pairs and not found and len(ranked) >= 2 and ranked[0].rmse_after > NOISE_FLOOR_FACTOR * search.noise
-                and residual_tests(series, ranked[0].predicted, search.noise, model.output_names, model.spec.interface)["unexplained"]):
-            iteration.pairs = PairSearch(search).rank(
-                ranked, progress=lambda done, total, label: report(f"pair {done}/{total} fitted: {label}"))
-            chosen = choose_pair(iteration.pairs, ranked, search.noise)
-            if chosen is not None:
-                chosen.significant = True
-                iteration.added, iteration.added_pair = None, chosen
-                iteration.explanation = explain_pair(chosen, search, ranked[0])
-        iterations.append(iteration)
-        if iteration.added_pair:
-            chosen = iteration.added_pair
-            found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e])
-                     for e in chosen.effects]
-        elif best is None:
-            break
-        else:
-            found = [FoundEffect(f.effect, best.found_values[f.effect], search.elapsed_s(best.found_onsets[f.effect]),
-                                 best.found_onsets[f.effect]) for f in found]
-            found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
-        if not iterate or len(iterations) >= max_iterations:
-            break
-    noise = noise_std(series.outputs)
-    residual = residual_tests(series, iterations[-1].predicted_after, noise, model.output_names, model.spec.interface)
-    report(residual["summary"])
-    experiment, other = None, rival(iterations[0])
-    if other is not None and design_experiment:
-        chosen = iterations[0].added_pair or iterations[0].added
-        experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)
-        report(f"look-alike: {' + '.join(_explanations(other))}; designed a {experiment.mission.duration_s / 60:.0f}-min "
-               f"test that separates them by {experiment.separation_sigma:.0f} σ")
-        if iterations[0].added_pair:
-            iterations[0].explanation += (f" Caution: {' + '.join(other.effects)} explains the data almost as well "
-                                          f"(RMSE {other.rmse_after:.3f} K): these data cannot tell them apart.")
-    return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment)
+        if name not in candidates:
+            raise InputError("effects", name, f"not in the catalogue: {', '.join(candidates)}")
+    if effects is not None:
+        candidates = candidates.only(effects)
+    discovery = Discovery(candidates, fitter=OnsetFitter(pairs=pairs), iterate=iterate, max_iterations=max_iterations,
+                          baseline_parameters=baseline_parameters, design_experiment=design_experiment,
+                          progress=progress)
+    return discovery.fit(model, data, baseline=baseline, dt_s=dt_s)

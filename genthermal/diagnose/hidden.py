@@ -47,6 +47,7 @@ from ..mission import load_mission
 from ..model import ThermalModel
 from ..simulate import simulate
 from ..synth import THESIS_NOISE_VARIANCE_K2, synthesize
+from .phase_winding import phase_resolved as split_by_phase
 
 #: Missions hidden-effect cases are drawn on.
 MISSIONS = ("thesis_fig_7_7", "varying_load")
@@ -132,36 +133,40 @@ def random_injection(effect: str, duration_s: float, rng: np.random.Generator) -
 
 
 def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.DataFrame, seed: int,
-           noise_var=THESIS_NOISE_VARIANCE_K2) -> pd.DataFrame:
-    """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets."""
+           noise_var=THESIS_NOISE_VARIANCE_K2, phase_resolved: bool = False) -> pd.DataFrame:
+    """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets.
+
+    With ``phase_resolved``, the plant's slot winding is one node per phase
+    (:func:`genthermal.diagnose.phase_winding.phase_resolved`, taken after the effects) and each
+    ``T_winding_<phase>`` column reads its own phase node."""
     dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
     # the outlet PT100 is a channel of the iron PT100s kind: it shares their variance
     record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=(*noise_var, noise_var[-1]))
-    if not injections:
+    if not injections and not phase_resolved:
         return record
+    view = split_by_phase if phase_resolved else (lambda model: model)
     switches, model = [], plant
     for injection in sorted(injections, key=lambda i: i.onset_s):
         model = apply_effect(model, injection.effect, provenance="assumed", source="hidden-effect test data",
                              **injection.values)
-        switches.append((float(inputs["time_s"].iloc[0] + injection.onset_s), model))
-    healthy = simulate(plant, inputs)
-    faulty = simulate(plant, inputs, switches=switches)
+        switches.append((float(inputs["time_s"].iloc[0] + injection.onset_s), view(model)))
+    healthy = simulate(plant, inputs)  # what the record was synthesized from
+    faulty = simulate(view(plant), inputs, switches=switches)
     changed = record.copy()
     interface = plant.spec.interface
     sensors = [*interface.sensors, *([interface.outlet_sensor] if interface.outlet_sensor else [])]
     for sensor in sensors:
-        if sensor.output not in faulty:
-            continue
         for column in sensor.columns:
-            if column in record:
-                changed[column] += faulty[sensor.output] - healthy[sensor.output]
+            output = column if column in faulty else sensor.output  # a phase-resolved plant reads each phase
+            if column in record and output in faulty and sensor.output in healthy:
+                changed[column] += faulty[output] - healthy[sensor.output]
     return changed
 
 
 def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "random",
                             mission: str = "thesis_fig_7_7", dt_s: float = 10.0, seed: int = 0,
                             noise_var=THESIS_NOISE_VARIANCE_K2, plant: ThermalModel | None = None,
-                            unbalance: float = 0.0) -> HiddenEffectCase:
+                            unbalance: float = 0.0, phase_resolved: bool = False) -> HiddenEffectCase:
     """Build a hidden-effect test case.
 
     Parameters
@@ -182,6 +187,10 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
     unbalance : float
         Phase u carries ``1 + unbalance`` times its mission current while the single-phase load
         is on (0: balanced, the missions as written).
+    phase_resolved : bool
+        Simulate the plant with one slot-winding node per phase
+        (:mod:`genthermal.diagnose.phase_winding`): each phase sensor reads its own phase, so an
+        effect in one phase (a shorted turn) shows as a spread between the phase readings.
     """
     rng = np.random.default_rng(seed)
     nonlinear = build_model() if plant is None else plant
@@ -206,5 +215,5 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
     for injection in injections:
         if not 0.0 <= injection.onset_s <= duration:
             raise InputError(f"{injection.effect}.onset_s", injection.onset_s, f"must lie in [0, {duration:g}] s")
-    data = inject(plant, injections, inputs, seed, noise_var)
+    data = inject(plant, injections, inputs, seed, noise_var, phase_resolved)
     return HiddenEffectCase(data, injections, plant, mission, float(dt_s), seed, tuple(noise_var), unbalance)

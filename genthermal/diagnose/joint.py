@@ -6,15 +6,22 @@ an end-winding loss present from the start warms the winding too), and the secon
 undo it. Here every pair of the best single effects is fitted as one model:
 
 1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
-   effect with each of the others (pruning: an effect that explains little alone belongs to the
-   answer mostly next to the effect that dominates the record, as a slow insulation change under a
-   strong excitation-dependent iron loss does);
+   effect with each of the next ones up to rank :data:`PARTNER_RANKS` (pruning: an effect that
+   explains little alone belongs to the answer mostly next to the effect that dominates the
+   record, as a slow insulation change under a strong excitation-dependent iron loss does; the
+   bound keeps a library of twenty terms at a dozen pairs);
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
    effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
    neighbour: the grid only has to find the basin);
-3. from the best grid point, coordinate descent: each onset by golden section between its grid
-   neighbours with the values refitted, twice;
+3. coordinate descent over the two onsets, each searched over the whole record (grid, then golden
+   section) with both effects' values refitted, then within one grid step until neither moves;
+   started from the :data:`_DESCENTS` best of: the best grid point, both onsets where each effect
+   was fitted alone, and each of those with the other effect present from the start. The onset
+   landscape of a pair has valleys: fitted alone, a blockage from 80 min takes an onset that lets
+   it absorb a stray loss present from the start, and from there, descent over one onset at a
+   time cannot reach the truth; starting from "this onset, the other effect from the start"
+   does;
 4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
    the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
    stay on the decimated grid, a resolution of one minute); the others are scored on the full
@@ -36,20 +43,26 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
-from .search import (Candidate, EffectSearch, _bic_delta, _indicator, _Problem, _regimes, _Structure,
+from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
+from .parallel import map_in_workers
 from .trajectory import ParametricSimulator
 
 #: Single effects (best ΔBIC first) whose pairs are fitted.
 PAIR_POOL = 4
+#: The best single effect is also paired with each effect ranked below the pool up to this rank.
+PARTNER_RANKS = 8
 #: Onsets per effect in the coarse grid of a pair.
 PAIR_GRID = 5
 #: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
 _GRID_ITERATIONS = 2
 #: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
 POLISHED_PAIRS = 3
-#: Rounds of coordinate descent over the two onsets.
-_DESCENT_ROUNDS = 2
+#: Rounds of coordinate descent over the two onsets (the first over the whole record).
+_DESCENT_ROUNDS = 3
+#: Starting points of the descent kept (least RSS first) among the best grid point, both onsets
+#: where each effect was fitted alone, and each of those with the other effect from the start.
+_DESCENTS = 2
 
 
 @dataclasses.dataclass
@@ -118,6 +131,7 @@ class PairSearch:
     """
 
     def __init__(self, search: EffectSearch):
+        search._require_fitted()
         if search.found:
             raise InputError("search.found", [f.effect for f in search.found],
                              "a pair search starts from the model without found effects")
@@ -125,7 +139,8 @@ class PairSearch:
 
     def _structure(self, pair: Sequence[str], series) -> _Structure:
         search = self.search
-        key = ("pair model", search.model, tuple(pair))
+        effects = tuple(search.effect(name) for name in pair)
+        key = ("pair model", search.model, effects)
         if key not in search._cache:
             model = search.model
             for name in pair:
@@ -134,10 +149,11 @@ class PairSearch:
         model = search._cache[key]
         groups = [[p.name for p in search.effect(name).parameters] for name in pair]
         names = [n for group in groups for n in group]
-        simulator_key = ("pair simulator", search.model, tuple(pair), series.time_s.size, series.dt_s)
+        simulator_key = ("pair simulator", search.model, search.view, effects, series.time_s.size, series.dt_s)
         if simulator_key not in search._cache:
             regimes = _regimes([(g, {n: n for n in g}) for g in groups])
-            search._cache[simulator_key] = ParametricSimulator(model, series.dt_s, series.input_matrix, names, regimes)
+            search._cache[simulator_key] = ParametricSimulator(search.viewed(model), series.dt_s, series.input_matrix,
+                                                               names, regimes)
         simulator = search._cache[simulator_key].with_inputs(series.input_matrix)
         scalings = [parameter_scaling(model, p.name, typical=p.typical)
                     for name in pair for p in search.effect(name).parameters]
@@ -156,7 +172,7 @@ class PairSearch:
         n = search.coarse.time_s.size
         last = n - max(3, int(0.05 * n))
         grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
-        best = (math.inf, None, z)
+        best, z_alone = (math.inf, None, z), z
         for i, a in enumerate(grid):
             z_row = z
             for b in grid:
@@ -164,12 +180,30 @@ class PairSearch:
                 if rss < best[0]:
                     best = (rss, (i, int(np.searchsorted(grid, b))), z_row)
         _, (i, j), z = best
-        onsets = [int(grid[i]), int(grid[j])]
-        ranges = [(int(grid[max(g - 1, 0)]), int(grid[min(g + 1, grid.size - 1)])) for g in (i, j)]
-        rss = best[0]
-        for _ in range(_DESCENT_ROUNDS):
-            for position, (low, high) in enumerate(ranges):
-                onsets[position], z, rss = coarse.search_onset(onsets, position, z, search.x0_coefficients, low, high)
+        starts = [((int(grid[i]), int(grid[j])), z, best[0])]
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        alone = (first.onset_index // factor, second.onset_index // factor)
+        for onsets in {alone, (alone[0], 0), (0, alone[1])} - {starts[0][0]}:
+            starts.append((onsets, *coarse.fit(list(onsets), z_alone, search.x0_coefficients)))
+        starts.sort(key=lambda start: start[2])
+        step = int(grid[1] - grid[0])
+        return min((self._descend(coarse, list(onsets), z_start, step) for onsets, z_start, _ in starts[:_DESCENTS]),
+                   key=lambda result: result[2])
+
+    def _descend(self, coarse: _Structure, onsets: list, z, step: int):
+        """Coordinate descent from ``onsets``: each onset searched over the whole record (grid, then
+        golden section) with the values refitted, then within ± ``step`` samples until a round moves
+        neither; returns (onsets, z, RSS)."""
+        n, rss = coarse.series.time_s.size, math.inf
+        for round_ in range(_DESCENT_ROUNDS):
+            before = list(onsets)
+            for position in range(2):
+                bounds = ((None, None) if round_ == 0 else
+                          (max(onsets[position] - step, 0), min(onsets[position] + step, n - 1)))
+                onsets[position], z, rss = coarse.search_onset(onsets, position, z, self.search.x0_coefficients,
+                                                               *bounds)
+            if onsets == before:
+                break
         return onsets, z, rss
 
     def _finish(self, pair: tuple, onsets, z, polish: bool) -> JointCandidate:
@@ -198,7 +232,7 @@ class PairSearch:
         return JointCandidate(effects, {e: values[e] for e in effects},
                               {pair[m]: search.elapsed_s(onsets[m]) for m in order},
                               {pair[m]: int(onsets[m]) for m in order}, rss, k, search.rmse_before,
-                              math.sqrt(rss / search.n_valid), _bic_delta(rss, search.rss_before, search.n_valid, k),
+                              math.sqrt(rss / search.n_valid), search.criterion.delta(rss, search.rss_before, search.n_valid, k),
                               predicted)
 
     def fit(self, first: Candidate, second: Candidate, polish: bool = True) -> JointCandidate:
@@ -206,22 +240,31 @@ class PairSearch:
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
-    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None) -> list[JointCandidate]:
+    def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
+             workers: int = 1) -> list[JointCandidate]:
         """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
-        each other one on the decimated series,
+        each next one up to rank :data:`PARTNER_RANKS` on the decimated series,
         polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
         there at their coarse values; best ΔBIC first.
 
-        ``progress(done, total, label)`` is called after each pair when given."""
+        ``progress(done, total, label)`` is called after each pair when given. With ``workers`` > 1
+        the pairs are fitted in forked processes (:mod:`genthermal.diagnose.parallel`); the result
+        is the same."""
         ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
-        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:]]
-        coarse = []
-        for done, (first, second) in enumerate(pairs, start=1):
-            coarse.append(((first.effect, second.effect), *self._coarse_fit(first, second)))
-            if progress:
-                progress(done, len(pairs), f"{first.effect} + {second.effect}")
+        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:max(pool, PARTNER_RANKS)]]
+
+        def fit_pair(pair):
+            first, second = pair
+            onsets, z, rss = self._coarse_fit(first, second)
+            names = (first.effect, second.effect)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return names, onsets, z, rss, scored
+
+        coarse = map_in_workers(fit_pair, pairs, workers, progress and (
+            lambda done, total, pair: progress(done, total, f"{pair[0].effect} + {pair[1].effect}")))
         coarse.sort(key=lambda item: item[3])
-        ranked = [self._finish(pair, onsets, z, rank < POLISHED_PAIRS)
-                  for rank, (pair, onsets, z, _) in enumerate(coarse)]
+        ranked = [scored if rank >= POLISHED_PAIRS and scored is not None else
+                  self._finish(names, onsets, z, rank < POLISHED_PAIRS)
+                  for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
         return sorted(ranked, key=lambda c: c.delta_bic)

@@ -168,7 +168,9 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
 
 
 def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) -> str:
-    """Python source that registers the found term as a new effect called ``name``."""
+    """Python source that builds the found term as a new effect called ``name`` and adds it to
+    ``model`` at the fitted value. The code changes no global state; its last line, commented
+    out, registers the effect so that model files and the command line know it by name."""
     effect = catalogue[found.effect]
     (parameter,) = effect.parameters
     value = found.values[parameter.name]
@@ -178,12 +180,12 @@ def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) 
     else:
         form, group = _form_and_group(found.effect)
         build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
-    lines = ["from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups",
-             "from genthermal.effects import register_effect", ""]
+    lines = ["from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups", ""]
     if "NODES" in build:
         lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
-    lines += [f"effect = register_effect({build})",
-              f"model = model.with_effect(effect, k_{name}={value:.6g})   # fitted: {describe_term(found, catalogue)}"]
+    lines += [f"effect = {build}",
+              f"model = model.with_effect(effect, k_{name}={value:.6g})   # fitted: {describe_term(found, catalogue)}",
+              "# from genthermal.effects import register_effect; register_effect(effect)   # to use it by name"]
     return "\n".join(lines) + "\n"
 
 
@@ -203,8 +205,8 @@ def open_search(model: ThermalModel, data, **options):
     model : ThermalModel
     data : MeasurementData, pandas.DataFrame or path
     **options
-        Passed to :func:`~genthermal.diagnose.discover.diagnose` (``iterate``, ``dt_s``, ``cache``,
-        ``progress``, ``pairs``, ...).
+        Passed to :func:`~genthermal.diagnose.discover.diagnose` (``iterate``, ``dt_s``,
+        ``progress``, ``pairs``, ``effects``, ...).
 
     Returns
     -------

@@ -123,7 +123,7 @@ def write_diagnosis_report(diagnosis: Diagnosis, out_dir) -> Path:
     """Write ``report.md``, ``diagnosis.json`` and the before/after overlays into ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    series, names = diagnosis.series, diagnosis.model.output_names
+    series, names = diagnosis.series, diagnosis.output_names
     document = diagnosis.to_dict()
     write_json(out / "diagnosis.json", document)
     lines = [f"# Diagnosis of {document['model']} on {document['data']}", "",

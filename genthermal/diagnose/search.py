@@ -30,6 +30,8 @@ from ..effects import CATALOGUE, Effect, apply_effect
 from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, initial_coefficients
+from .criterion import BIC
+from .parallel import map_in_workers
 from .trajectory import ParametricSimulator, Scaling, parameter_scaling
 
 COARSE_ONSETS = 12
@@ -231,10 +233,6 @@ class _Problem:
         return z, rss
 
 
-def _bic_delta(rss_after: float, rss_before: float, n: int, k: int) -> float:
-    return n * math.log(rss_after / rss_before) + k * math.log(n)
-
-
 def decimated(series: MeasuredSeries, dt_s: float) -> MeasuredSeries:
     """``series`` on a coarser grid of about ``dt_s`` (an integer multiple of its step).
 
@@ -322,6 +320,9 @@ def _refine_onsets(structure: _Structure, onsets, positions, z, x0_coefficients)
 class EffectSearch:
     """Fit catalogue effects to one measured series, given the effects already found.
 
+    Building one fits nothing; :meth:`fit_found` refits the found effects and scores the model
+    with them, then :meth:`rank` fits the candidates.
+
     Parameters
     ----------
     model : ThermalModel
@@ -330,25 +331,46 @@ class EffectSearch:
     found : sequence of FoundEffect
         Effects accepted earlier; their values are refitted with the best candidates.
     cache : dict, optional
-        Models with effects at neutral values and their simulators, reused by searches on the same
-        ``model`` and series length (building them takes most of a search's time).
+        Memo of the models with effects at neutral values and their simulators, reused by
+        searches on the same ``model`` and series length (building them takes most of a search's
+        time). Keys hold the model and Effect objects themselves, never an ``id``.
     catalogue : mapping of str to Effect
         The effects to search (default the catalogue of :mod:`genthermal.effects`); the found
         effects are looked up in it too.
+    criterion : BIC, AIC or compatible, optional
+        Scores each candidate against the model with the found effects only
+        (:mod:`genthermal.diagnose.criterion`; default :class:`~genthermal.diagnose.criterion.BIC`).
+    view : callable, optional
+        Applied to every model after its effects, before it is simulated against the series
+        (:class:`~genthermal.diagnose.phase_winding.PhaseResolved`: one winding node per phase
+        sensor); the series' outputs are the view's. Hashable: it is part of the memo keys.
     """
 
     def __init__(self, model: ThermalModel, series: MeasuredSeries, found: Sequence[FoundEffect] = (),
-                 cache: dict | None = None, catalogue: Mapping[str, Effect] = CATALOGUE):
+                 cache: dict | None = None, catalogue: Mapping[str, Effect] = CATALOGUE, criterion=None,
+                 view=None):
         self.model, self.series, self.found = model, series, list(found)
         self.catalogue = catalogue
+        self.criterion = BIC() if criterion is None else criterion
+        self.view = view
         self._cache = {} if cache is None else cache
         self.coarse = decimated(series, GRID_DT_S)
         self.noise = noise_std(series.outputs)
         self._found_names = [n for f in self.found for n in f.values]
+        self.n_valid = int(np.isfinite(series.outputs).sum())
+        self._full: dict[str, _Structure] = {}
+        self._fitted = False
+
+    def fit_found(self) -> "EffectSearch":
+        """Refit the found effects (onsets by coordinate descent, then values and the initial state
+        together) and score the model with them: ``rss_before``, ``predicted_before``,
+        ``found_values``; returns self. The constructor fits nothing; every search method needs
+        this first."""
+        series = self.series
         base = self.neutral_model()
         groups = [(list(f.values), {n: n for n in f.values}) for f in self.found]
         simulator = self.simulator(None, series, self._found_names, groups)
-        self.x0_coefficients = initial_coefficients(model, series)
+        self.x0_coefficients = initial_coefficients(self.viewed(self.model), series)
         scalings = [parameter_scaling(base, n, start=v) for f in self.found for n, v in f.values.items()]
         onsets, z = _refine_onsets(_Structure(simulator, series, scalings), [f.onset_index for f in self.found],
                                    range(len(self.found)), np.zeros(len(scalings)), self.x0_coefficients)
@@ -359,10 +381,14 @@ class EffectSearch:
         z, self.rss_before = problem.gauss_newton(np.concatenate([z, [0.0, 0.0]]), self.x0_coefficients, indicator)
         theta = problem.theta(z)
         self.predicted_before = simulator.outputs(theta, problem.initial(z, self.x0_coefficients), indicator)
-        self.n_valid = int(np.isfinite(series.outputs).sum())
         values = iter(theta)
         self.found_values = {f.effect: {n: float(next(values)) for n in f.values} for f in self.found}
-        self._full: dict[str, _Structure] = {}
+        self._fitted = True
+        return self
+
+    def _require_fitted(self) -> None:
+        if not self._fitted:
+            raise InputError("EffectSearch", "not fitted", "call fit_found() before searching")
 
     def effect(self, name: str) -> Effect:
         """The effect called ``name`` in this search's catalogue."""
@@ -374,9 +400,23 @@ class EffectSearch:
         """Time of sample ``index`` from the start of the record, s."""
         return float(self.series.time_s[index] - self.series.time_s[0])
 
+    def _effects_key(self, extra: str | None) -> tuple:
+        """Memo key part: the found effects and ``extra`` as Effect objects (compared by value), so
+        that two catalogues with an effect of the same name never share an entry."""
+        return (tuple(self.effect(f.effect) for f in self.found), extra and self.effect(extra))
+
+    def viewed(self, model: ThermalModel) -> ThermalModel:
+        """``model`` as simulated against the series: through :attr:`view` when there is one (memoised)."""
+        if self.view is None:
+            return model
+        key = ("view", model, self.view)
+        if key not in self._cache:
+            self._cache[key] = self.view(model)
+        return self._cache[key]
+
     def neutral_model(self, extra: str | None = None) -> ThermalModel:
         """The model with the found effects and ``extra`` at neutral values (cached)."""
-        key = ("model", self.model, tuple(f.effect for f in self.found), extra)
+        key = ("model", self.model, self._effects_key(extra))
         if key not in self._cache:
             self._cache[key] = model_with_effects(self.model, self.found, extra, neutral=True,
                                                   catalogue=self.catalogue)
@@ -385,12 +425,17 @@ class EffectSearch:
     def simulator(self, extra: str | None, series: MeasuredSeries, fitted, groups) -> ParametricSimulator:
         """Simulator of :meth:`neutral_model` on ``series`` (cached by structure and length)."""
         regimes = _regimes(groups)
-        key = ("simulator", self.model, tuple(f.effect for f in self.found), extra, tuple(fitted), repr(regimes),
+        key = ("simulator", self.model, self.view, self._effects_key(extra), tuple(fitted), repr(regimes),
                series.time_s.size, series.dt_s)
         if key not in self._cache:
-            self._cache[key] = ParametricSimulator(self.neutral_model(extra), series.dt_s, series.input_matrix,
-                                                   fitted, regimes)
+            self._cache[key] = ParametricSimulator(self.viewed(self.neutral_model(extra)), series.dt_s,
+                                                   series.input_matrix, fitted, regimes)
         return self._cache[key].with_inputs(series.input_matrix)
+
+    @property
+    def output_names(self) -> list[str]:
+        """The sensors fitted (the view's outputs when there is a view)."""
+        return self.viewed(self.model).output_names
 
     @property
     def rmse_before(self) -> float:
@@ -412,6 +457,7 @@ class EffectSearch:
 
     def search(self, effect_name: str) -> Candidate:
         """Fit ``effect_name`` and its onset on the coarse grid; score it on the full series."""
+        self._require_fitted()
         effect = self.effect(effect_name)
         coarse = self._structure(effect_name, self.coarse)
         z_start = [s.decision(p.typical if p.typical is not None else p.neutral)
@@ -433,6 +479,8 @@ class EffectSearch:
         candidate's and the found effects' values and the initial state together by Gauss-Newton
         with the exact Jacobian."""
         effect = self.effect(candidate.effect)
+        if candidate.effect not in self._full:  # searched in a worker process
+            self._full[candidate.effect] = self._structure(candidate.effect, self.series)
         full = self._full[candidate.effect]
         factor = int(round(self.coarse.dt_s / self.series.dt_s))
         z = [s.decision(candidate.values[p.name]) for s, p in zip(full.problem.scalings, effect.parameters)]
@@ -470,13 +518,16 @@ class EffectSearch:
         found_onsets = found_onsets or {f.effect: f.onset_index for f in self.found}
         candidate = Candidate(name, values, self.elapsed_s(onset), int(onset),
                               rss, k, self.rmse_before, math.sqrt(rss / self.n_valid),
-                              _bic_delta(rss, self.rss_before, self.n_valid, k), found_values, predicted,
+                              self.criterion.delta(rss, self.rss_before, self.n_valid, k), found_values, predicted,
                               found_onsets)
         return candidate
 
-    def rank(self, effects: Sequence[str] | None = None) -> list[Candidate]:
-        """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC."""
+    def rank(self, effects: Sequence[str] | None = None, workers: int = 1) -> list[Candidate]:
+        """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC; with
+        ``workers`` > 1 the candidates are searched in forked processes
+        (:mod:`genthermal.diagnose.parallel`), with the same result."""
+        self._require_fitted()
         names = self.candidates() if effects is None else list(effects)
-        ranked = sorted((self.search(n) for n in names), key=lambda c: c.delta_bic)
+        ranked = sorted(map_in_workers(self.search, names, workers), key=lambda c: c.delta_bic)
         ranked[:POLISHED_CANDIDATES] = [self.polish(c) for c in ranked[:POLISHED_CANDIDATES]]
         return sorted(ranked, key=lambda c: c.delta_bic)

@@ -19,7 +19,16 @@ mismatch; its cost in mission time is measured by flying with and without it.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
-the generator and the action.
+the generator and the action. When that peak is above θmax itself, rest cannot help and the manager
+**sheds** load (:mod:`genthermal.schedule.shed`): each generator carries at most what keeps it
+within the planning limit, the others take what their limits allow, the rest is not served; a
+generator too hot even when carrying nothing is switched off for the rest of the mission. The
+flight reports ``feasible: false`` and the load not served.
+
+The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
+default :data:`DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
+is left of it, so a flight ends within its mission time plus the budget, after at most
+``(mission + budget) / cycle_s + 1`` management cycles, whatever the plant does.
 """
 
 from __future__ import annotations
@@ -34,9 +43,10 @@ from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
-from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, generator_inputs, mission_segments,
-                   predict, remaining_after)
+from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evaluate, generator_inputs,
+                   mission_segments, predict, remaining_after)
 from .power_system import PowerSystem
+from .shed import shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Default back-off margin below θmax, K.
@@ -45,6 +55,12 @@ DEFAULT_MARGIN_K = 2.5
 #: within one cycle by this fraction (the thesis generator's copper loss at rated current and its winding limit is ~20 % above the
 #: linear design model's).
 DEFAULT_RISE_BACKOFF = 0.3
+#: Default rest budget of a flight, as a fraction of the nominal mission duration. Choice of this
+#: project, not a thesis value: the thesis's longest managed rest is 20 min (rig, large blockage,
+#: 7.3.3) on a 4-h mission (8 %); a quarter of the mission (60 min on 4 h, the longest rest the
+#: schedulers take before one action) leaves room for that three times over and bounds a flight at
+#: 1.25 times its nominal duration.
+DEFAULT_REST_BUDGET_FRACTION = 0.25
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +80,10 @@ class ManagerSettings:
         :class:`~genthermal.schedule.plan.PlanningProblem`).
     max_rest_s : float
         Longest rest before one segment, s.
+    rest_budget_s : float or None
+        Most rest a whole flight may add, s; None (default): :data:`DEFAULT_REST_BUDGET_FRACTION`
+        of the mission's nominal duration (:meth:`rest_budget_for`). When it is spent, a plan that
+        needs more rest is flown without it, or the generator is shed.
     replan_tolerance_K : float
         A prediction above the planning limit by more than this triggers a re-plan, K.
     seed : int
@@ -87,6 +107,7 @@ class ManagerSettings:
     margin_K: float = DEFAULT_MARGIN_K
     rise_backoff: float = DEFAULT_RISE_BACKOFF
     max_rest_s: float = 3600.0
+    rest_budget_s: float | None = None
     replan_tolerance_K: float = 0.05
     seed: int = 0
     tell_fault: bool = False
@@ -96,6 +117,16 @@ class ManagerSettings:
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
+
+    def __post_init__(self):
+        if self.rest_budget_s is not None and not (np.isfinite(self.rest_budget_s) and self.rest_budget_s >= 0):
+            raise ValueError(f"rest_budget_s = {self.rest_budget_s!r}: must be a number of seconds >= 0 or None")
+
+    def rest_budget_for(self, mission_duration_s: float) -> float:
+        """The flight's rest budget, s, for a mission of ``mission_duration_s`` (s)."""
+        if self.rest_budget_s is not None:
+            return float(self.rest_budget_s)
+        return DEFAULT_REST_BUDGET_FRACTION * float(mission_duration_s)
 
 
 @dataclasses.dataclass
@@ -129,6 +160,14 @@ class FlightResult:
     monitor : FaultMonitor or None
         Alarms, identifications and recalibrations of the flight (closed loop).
     settings : ManagerSettings or None
+    cycles : int
+        Management cycles flown (closed loop; 0 for a plan).
+    rest_budget_s : float
+        The flight's rest budget, s.
+    shed_events : list of dict
+        One when the manager starts shedding load and one per generator switched off: ``time_s``,
+        ``shedding`` (names), ``switched_off`` (names switched off then),
+        ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
     """
 
     system: PowerSystem
@@ -145,17 +184,21 @@ class FlightResult:
     schedule_table: object = None
     monitor: object = None
     settings: object = None
+    cycles: int = 0
+    rest_budget_s: float = np.inf
+    shed_events: list = dataclasses.field(default_factory=list)
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
-              previous=None) -> PlanResult:
-    """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak.
+              previous=None, switched_off=None) -> PlanResult:
+    """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
     ----------
     scheduler : {"heuristic", "engineer", "optimal", "milp"}
     problem : PlanningProblem
-        Its ``limit_C`` is the planning limit (θmax minus the margin).
+        Its ``limit_C`` is the planning limit (θmax minus the margin); its ``rest_budget_s`` bounds
+        the total rest of the plan (rests beyond it are cut, earliest kept).
     settings : ManagerSettings
     names : sequence of str
         Generator names, for the messages.
@@ -163,6 +206,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         θmax, °C.
     previous : Schedule, optional
         Warm start of the optimal scheduler.
+    switched_off : array-like of bool, optional
+        (n_generators,) generators already switched off: the plan is :func:`~.shed.shed_plan`.
 
     Returns
     -------
@@ -170,8 +215,14 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         ``feasible`` is True only when the plan's own prediction, with its back-off (the margin and
         the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
         reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
-        (``planned_peak_C``) and what the manager does about it (``response``).
+        (``planned_peak_C``) and what the manager does about it (``response``); when that peak is
+        above θmax, the plan sheds load (``method`` ``shed``; ``shedding``: the generators whose
+        load is shed, ``switched_off``: the generators off).
     """
+    if switched_off is not None and np.any(switched_off):
+        off = np.array(switched_off, dtype=bool)
+        return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
+
     def run(p):
         if scheduler == "heuristic":
             return heuristic_plan(p, settings.heuristic)
@@ -180,14 +231,25 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         if scheduler == "optimal":
             return optimal_plan(p, settings.optimal, previous)
         return milp_plan(p, settings.milp)
-    result = run(problem)
+    result = _within_budget(problem, run(problem))
     if result.feasible:
         return result
-    lowest = lowest_reachable_peak(problem, settings.optimal)
+    lowest = _within_budget(problem, lowest_reachable_peak(problem, settings.optimal))
     segment = problem.segments[lowest.peak_segment]
     where = (f"the lowest reachable peak is {lowest.peak_C:.1f} °C, on {names[lowest.peak_generator]} during "
              f"action {segment.action_index + 1} ({segment.label})")
-    relaxed = run(dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1))
+    found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
+                 lowest_peak_action=segment.action_index + 1)
+    if lowest.peak_C > limit_C:
+        nobody = np.zeros(problem.n_generators, dtype=bool)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
+        shed.solve_s += result.solve_s + lowest.solve_s
+        shed.details.update(found)
+        return shed
+    within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
+    relaxed = _within_budget(problem, run(within_lowest))
+    if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
+        relaxed = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(relaxed.warnings))
     response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
                 f"{relaxed.schedule.displaced_Ah(problem.segments):.2f} A·h to the other generators")
     if relaxed.peak_C > limit_C:
@@ -198,18 +260,69 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     relaxed.feasible = False
     relaxed.solve_s += result.solve_s + lowest.solve_s
     relaxed.warnings.append(message)
-    relaxed.details.update(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
-                           lowest_peak_action=segment.action_index + 1, planned_peak_C=relaxed.peak_C,
-                           response=response)
+    relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
     return relaxed
 
 
-def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators) -> PlanningProblem:
+def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:
+    """``result`` with its rests cut to ``problem.rest_budget_s`` and the rest before the first
+    segment to ``max_rest_s`` minus the rest already taken before it; re-evaluated when cut."""
+    schedule = result.schedule.within_rest_budget(problem.rest_budget_s, _first_rest_max_s(problem))
+    if np.allclose(schedule.rest_before_s, result.schedule.rest_before_s, rtol=0.0, atol=1e-6):
+        return result
+    cut = evaluate(problem, schedule, result.method, result.solve_s, result.warnings)
+    cut.feasible = cut.feasible and result.feasible
+    cut.details = dict(result.details, rest_cut_to_budget_s=problem.rest_budget_s)
+    cut.warnings.append(f"rests cut to the {problem.rest_budget_s / 60:.1f} min left of the flight's rest budget "
+                        f"and {problem.max_rest_s / 60:g} min before one action")
+    return cut
+
+
+def _first_rest_max_s(problem: PlanningProblem) -> float:
+    """Rest still allowed before the first segment, s."""
+    return max(problem.max_rest_s - problem.rest_taken_s, 0.0)
+
+
+def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
+          where: str, receiver_margin_K: float) -> PlanResult:
+    """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
+    breaches θmax on a generator still on, switch that one off too; the
+    :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
+    ``feasible``."""
+    off = off.copy()
+    result = shed_plan(problem, off, receiver_margin_K)
+    while result.peak_C > limit_C and not off[result.peak_generator]:
+        off[result.peak_generator] = True
+        result = shed_plan(problem, off, receiver_margin_K)
+    newly = [names[g] for g in np.flatnonzero(off & ~already)]
+    shedding = [names[g] for g in result.details["shedding"]]
+    if where:
+        response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
+                    f"displacement keeps it within θmax {limit_C:g} °C; each generator carries at most what keeps "
+                    "it within the planning limit, the others take what their limits allow, the rest is not served"
+                    + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
+        result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+        result.details.update(response=response)
+    elif newly:
+        response = f"switch off {', '.join(newly)} (too hot even carrying nothing)"
+        result.warnings.append(f"shed: {response}")
+        result.details.update(response=response)
+    result.feasible = False
+    result.details.update(planned_peak_C=result.peak_C, shedding=shedding,
+                          switched_off=[names[g] for g in np.flatnonzero(off)])
+    return result
+
+
+def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
+             rest_budget_s: float, rest_taken_s: float = 0.0) -> PlanningProblem:
+    """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
+    ``rest_taken_s`` (s) of rest already flown right before the first segment."""
     inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    budget = max(float(rest_budget_s), 0.0)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
-                           system.limit_C - settings.margin_K, settings.max_rest_s, settings.dt_s,
-                           settings.rise_backoff, settings.cycle_s)
+                           system.limit_C - settings.margin_K, min(settings.max_rest_s, budget), settings.dt_s,
+                           settings.rise_backoff, settings.cycle_s, budget, float(rest_taken_s))
 
 
 class _Recorder:
@@ -219,7 +332,8 @@ class _Recorder:
         self.system, self.time = system, [0.0]
         self.temperatures = [np.full((system.n_generators, 2), system.mission.T_ambient_C)]
         self.currents, self.nominal, self.resting, self.action = [], [], [], []
-        self.plans, self.warnings = [], []
+        self.plans, self.warnings, self.shed_events = [], [], []
+        self.switched_off = np.zeros(system.n_generators, dtype=bool)
 
     def plan(self, t_s: float, result: PlanResult, believed=None) -> None:
         """Record a (re-)plan made at ``t_s`` with the ``believed`` effects per generator."""
@@ -230,6 +344,15 @@ class _Recorder:
                                   for name, effects in zip(self.system.generator_names, believed)}
         self.plans.append(record)
         self.warnings += result.warnings
+        newly = result.schedule.switched_off & ~self.switched_off
+        starts = result.method == "shed" and (not self.plans[:-1] or self.plans[-2]["method"] != "shed")
+        if starts or newly.any():
+            self.shed_events.append({"time_s": float(t_s), "shedding": list(result.details.get("shedding", [])),
+                                     "switched_off": [self.system.generator_names[g] for g in np.flatnonzero(newly)],
+                                     "lowest_reachable_peak_C": result.details.get("lowest_peak_C"),
+                                     "lowest_peak_action": result.details.get("lowest_peak_action"),
+                                     "response": result.details.get("response", "")})
+        self.switched_off |= result.schedule.switched_off
 
     def add(self, segments, timeline, n: int, outputs, t0: float) -> None:
         """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, 2, n) after each."""
@@ -243,13 +366,14 @@ class _Recorder:
                    float(segments[timeline.segment[i]].current_at(timeline.offset_s[i])) for i in range(n)]
         self.nominal.append(np.array(nominal))
 
-    def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None) -> FlightResult:
+    def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None, cycles=0,
+               rest_budget_s=np.inf) -> FlightResult:
         """The :class:`FlightResult`."""
         return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
                             np.moveaxis(np.array(self.temperatures), 0, 2), np.hstack(self.currents),
                             np.concatenate(self.nominal), np.concatenate(self.resting),
                             np.concatenate(self.action), self.plans, self.warnings, table,
-                            monitor, settings)
+                            monitor, settings, cycles, rest_budget_s, self.shed_events)
 
 
 def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_at):
@@ -279,6 +403,7 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     segments = mission_segments(system.mission)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    budget = settings.rest_budget_for(system.mission.duration_s)
     onset = min((f.onset_s for f in system.faults), default=0.0)
     t_plan = float(np.ceil(onset / settings.cycle_s - 1e-9) * settings.cycle_s)
     timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
@@ -291,16 +416,16 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     if segments:
         all_faults = tuple(range(len(system.faults)))
         generators = [system.design_generator(g, all_faults) for g in range(system.n_generators)]
-        problem = _problem(system, settings, segments, x, t_plan, generators)
+        problem = _problem(system, settings, segments, x, t_plan, generators, np.floor(budget / dt + 1e-9) * dt)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
-            schedule = result.schedule.rounded(dt)
+            schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
             recorder.plan(t_plan, result)
         table = schedule.table(segments, system.generator_names)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
         outputs, x = _design_steps(system, x, timeline, t_plan, timeline.n_steps, system.faults_known_at)
         recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
-    return recorder.result(scheduler, False, table)
+    return recorder.result(scheduler, False, table, rest_budget_s=budget)
 
 
 def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
@@ -352,8 +477,10 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
     recorder = _Recorder(system)
-    measured, t = None, 0.0
+    budget = settings.rest_budget_for(system.mission.duration_s)
+    measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
     while segments:
+        cycles += 1
         if measured is not None:
             for g, estimator in enumerate(estimators):
                 estimator.update(measured[g])
@@ -367,11 +494,14 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             else:
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [e.generator for e in estimators])
-        if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+                           [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
+                           resting_s)
+        shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
+        if shedding or predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                               previous=schedule)
-            schedule = result.schedule.rounded(dt)
+                               previous=schedule, switched_off=schedule.switched_off)
+            schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
+                                                                      _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
         n = min(cycle_steps, timeline.n_steps)
@@ -385,6 +515,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         monitor.record(t, applied.currents_A, sensed)
         measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
+        rested_s += float(np.count_nonzero(applied.resting)) * dt
+        running = np.flatnonzero(~applied.resting)
+        resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    return recorder.result(scheduler, True, monitor=monitor, settings=settings)
+    return recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles, rest_budget_s=budget)

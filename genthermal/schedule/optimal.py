@@ -141,6 +141,9 @@ class _Transcription:
                                (0.0 if minimax else problem.limit_C) - Q_f)
         for k in range(n_seg):
             linear.add([([self.d_index(g, k) for g in range(n_gen)], np.ones((1, n_gen)))], [0.0], [0.0])
+        if np.isfinite(problem.rest_budget_s):  # the flight's rest budget: total rest, minutes
+            linear.add([([self.r_index(k) for k in range(n_seg)], np.ones((1, n_seg)))], [-np.inf],
+                       [problem.rest_budget_s / 60.0])
         self.nonlinear = ca.vertcat(*nonlinear)
         A = sparse_dm(linear.matrix(self.n_w))
         lb, ub = linear.bounds()
@@ -158,7 +161,9 @@ class _Transcription:
         bounds = [problem.displacement_bounds(k) for k in range(n_seg)]
         self.lbw = np.concatenate([np.repeat([b[0] for b in bounds], n_gen), np.zeros(n_seg),
                                    np.full(n_gen * nx * self.n_nodes, -100.0), [-100.0] * int(minimax)])
-        self.ubw = np.concatenate([np.repeat([b[1] for b in bounds], n_gen), np.full(n_seg, problem.max_rest_s / 60.0),
+        longest_rest = np.full(n_seg, problem.max_rest_s / 60.0)
+        longest_rest[0] = max(problem.max_rest_s - problem.rest_taken_s, 0.0) / 60.0  # a rest under way counts
+        self.ubw = np.concatenate([np.repeat([b[1] for b in bounds], n_gen), longest_rest,
                                    np.full(n_gen * nx * self.n_nodes, 500.0), [500.0] * int(minimax)])
 
     def d_index(self, g: int, k: int) -> int:

@@ -6,7 +6,10 @@ flight). A :class:`Schedule` gives, per segment :math:`k`,
 * the displaced current :math:`d_{g,k}` of every generator :math:`g` (A RMS per phase, positive
   when the generator sheds load, negative when it takes load on; :math:`\sum_g d_{g,k} = 0`), so
   generator :math:`g` carries :math:`I_{ini}(t) - d_{g,k}` during the segment (thesis eqs. 7.3-7.4);
-* the rest :math:`r_k` before the segment (s): all generators in the minimum power mode.
+* the rest :math:`r_k` before the segment (s): all generators in the minimum power mode;
+* the generators **switched off** (load shed, :mod:`genthermal.schedule.shed`): they carry 0 A
+  from the first segment on, rests included; what the others do not take of their load is not
+  served.
 
 :func:`build_timeline` samples a schedule on a uniform grid (rests rounded up to the grid);
 :func:`predict` runs it on the design models (:class:`PlanningProblem`).
@@ -118,15 +121,23 @@ class Schedule:
         Shape (n_generators, n_segments), A RMS; positive: the generator sheds load.
     rest_before_s : numpy.ndarray
         Shape (n_segments,), s.
+    switched_off : numpy.ndarray, optional
+        Shape (n_generators,), True for a generator switched off (0 A throughout); default none.
     """
 
     displaced_A: np.ndarray
     rest_before_s: np.ndarray
+    switched_off: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.switched_off is None:
+            object.__setattr__(self, "switched_off", np.zeros(self.displaced_A.shape[0], dtype=bool))
 
     @classmethod
-    def nominal(cls, n_generators: int, n_segments: int) -> "Schedule":
-        """No displacement, no rest: the mission as planned."""
-        return cls(np.zeros((n_generators, n_segments)), np.zeros(n_segments))
+    def nominal(cls, n_generators: int, n_segments: int, switched_off=None) -> "Schedule":
+        """No displacement, no rest: the mission as planned (with ``switched_off`` generators off)."""
+        return cls(np.zeros((n_generators, n_segments)), np.zeros(n_segments),
+                   None if switched_off is None else np.array(switched_off, dtype=bool))
 
     @property
     def added_rest_s(self) -> float:
@@ -140,7 +151,16 @@ class Schedule:
 
     def rounded(self, dt_s: float) -> "Schedule":
         """The schedule with rests rounded up to whole steps of ``dt_s`` (s)."""
-        return Schedule(self.displaced_A, np.ceil(self.rest_before_s / dt_s - 1e-6) * dt_s)
+        return Schedule(self.displaced_A, np.ceil(self.rest_before_s / dt_s - 1e-6) * dt_s, self.switched_off)
+
+    def within_rest_budget(self, budget_s: float, first_max_s: float = np.inf) -> "Schedule":
+        """The schedule with the first rest cut to ``first_max_s`` (s) and then its rests cut,
+        earliest kept, so that they add up to at most ``budget_s`` (s)."""
+        rests = self.rest_before_s.copy()
+        if rests.size:
+            rests[0] = min(rests[0], max(first_max_s, 0.0))
+        allowed = np.clip(budget_s - np.concatenate([[0.0], np.cumsum(rests)[:-1]]), 0.0, None)
+        return Schedule(self.displaced_A, np.minimum(rests, allowed), self.switched_off)
 
     def table(self, segments, generator_names) -> pd.DataFrame:
         """One row per segment: action, rest before (min), duration (min), nominal and applied
@@ -152,7 +172,8 @@ class Schedule:
                    "duration_min": round(segment.duration_s / 60.0, 2),
                    "nominal_A": round(segment.levels[-1][1], 3)}
             for g, name in enumerate(generator_names):
-                row[f"{name}_A"] = round(segment.levels[-1][1] - self.displaced_A[g, k], 3)
+                carried = 0.0 if self.switched_off[g] else segment.levels[-1][1] - self.displaced_A[g, k]
+                row[f"{name}_A"] = round(carried, 3) + 0.0
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -198,7 +219,8 @@ class Timeline:
 def build_timeline(segments, schedule: Schedule, rest_current_A: float, dt_s: float,
                    window_s: float = 300.0) -> Timeline:
     """Sample ``schedule`` on a grid of ``dt_s``; rests rounded up to whole steps, segment
-    durations to the nearest step; windows of at most ``window_s`` for the robust back-off."""
+    durations to the nearest step; windows of at most ``window_s`` for the robust back-off;
+    switched-off generators carry 0 A."""
     n_generators = schedule.displaced_A.shape[0]
     currents, segment_of, resting, offsets, window_start = [], [], [], [], []
     first = 0
@@ -207,8 +229,10 @@ def build_timeline(segments, schedule: Schedule, rest_current_A: float, dt_s: fl
         n_run = max(int(round(segment.duration_s / dt_s)), 1)
         run_offsets = np.arange(n_run) * dt_s
         nominal = segment.current_at(run_offsets)
-        currents.append(np.hstack([np.full((n_generators, n_rest), rest_current_A),
-                                   nominal[None, :] - schedule.displaced_A[:, k:k + 1]]))
+        carried = np.hstack([np.full((n_generators, n_rest), rest_current_A),
+                             nominal[None, :] - schedule.displaced_A[:, k:k + 1]])
+        carried[schedule.switched_off] = 0.0
+        currents.append(carried)
         segment_of.append(np.full(n_rest + n_run, k))
         resting.append(np.arange(n_rest + n_run) < n_rest)
         offsets.append(np.concatenate([np.arange(n_rest) * dt_s, run_offsets]))
@@ -249,7 +273,7 @@ def remaining_after(segments, schedule: Schedule, timeline: Timeline, n_steps: i
         Empty when the plan is complete.
     """
     if n_steps >= timeline.n_steps:
-        return (), Schedule.nominal(schedule.displaced_A.shape[0], 0)
+        return (), Schedule.nominal(schedule.displaced_A.shape[0], 0, schedule.switched_off)
     k = int(timeline.segment[n_steps])
     rest = schedule.rest_before_s.copy()[k:]
     if timeline.resting[n_steps]:
@@ -258,7 +282,8 @@ def remaining_after(segments, schedule: Schedule, timeline: Timeline, n_steps: i
     else:
         rest[0] = 0.0
         first = segments[k].after(float(timeline.offset_s[n_steps]))
-    return (first,) + tuple(segments[k + 1:]), Schedule(schedule.displaced_A[:, k:].copy(), rest)
+    return (first,) + tuple(segments[k + 1:]), Schedule(schedule.displaced_A[:, k:].copy(), rest,
+                                                        schedule.switched_off.copy())
 
 
 def generator_inputs(timeline: Timeline, generator: int, t0_s: float, inlet_C, ambient_C: float,
@@ -309,6 +334,14 @@ class PlanningProblem:
     window_s : float
         Longest window of the back-off, s (the management cycle: the filter corrects the state
         once per cycle, so model errors build up over at most one window).
+    rest_budget_s : float
+        Total rest the plan may add, s (what is left of the flight's rest budget): a constraint of
+        the optimal scheduler and of the lowest-peak search; the other schedulers bound each rest
+        by ``max_rest_s`` and the manager cuts their total to this, earliest rests kept
+        (:meth:`Schedule.within_rest_budget`).
+    rest_taken_s : float
+        Rest already flown right before the first segment (a rest in progress), s: the rest
+        before that segment may add only ``max_rest_s`` minus this.
     """
 
     segments: tuple
@@ -323,6 +356,8 @@ class PlanningProblem:
     dt_s: float = 10.0
     rise_backoff: float = 0.0
     window_s: float = 300.0
+    rest_budget_s: float = np.inf
+    rest_taken_s: float = 0.0
 
     @property
     def n_generators(self) -> int:

@@ -9,9 +9,20 @@ Keys of :func:`flight_summary`:
 ``breach_s``            time with any generator above θmax, s
 ``replans``             number of (re-)plans
 ``median_solve_s``      median wall-clock time of a plan, s (0 without plans)
-``displaced_Ah``        phase current moved off generators times time, A·h
-``feasible``            every plan kept the prediction within the planning limit
-``warnings``            scheduler fallbacks and infeasibility messages
+``displaced_Ah``        phase current moved from one generator to another times time, A·h
+``feasible``            every plan kept the prediction (back-off included) within the planning
+                        limit and no load was shed
+``lowest_reachable_peak_C``  highest lowest-reachable peak of the infeasible plans, °C (None: all
+                        plans feasible)
+``manager_response``    what the manager did about infeasible plans (rest, displacement, shed)
+``rest_budget_s``       the flight's rest budget, s (:class:`ManagerSettings` ``rest_budget_s``)
+``shed``                load shedding: ``events`` (time_s, the generators shedding load and those
+                        switched off then, lowest reachable peak and the action where it falls,
+                        response), ``generators`` (names that shed load), ``switched_off`` (names),
+                        ``not_served_As`` / ``not_served_Ah`` per generator (phase current not
+                        carried by anyone, A·s / A·h), ``first_s`` / ``last_s`` of the load not
+                        served (None without)
+``management_cycles``   cycles of the closed loop (0 for a plan)
 
 Closed loop only (:mod:`genthermal.schedule.monitor`; judged against the scenario's faults, which
 the manager is not told unless ``tell_fault``):
@@ -33,6 +44,7 @@ import numpy as np
 from ..plots import finish_figure, plt  # the Agg backend is chosen there
 from .closed_loop import FlightResult, ManagerSettings
 from .power_system import PowerSystem
+from .shed import not_served
 
 def flight_summary(result: FlightResult) -> dict:
     """The summary keys (module docstring) of a flown or planned mission."""
@@ -40,8 +52,10 @@ def flight_summary(result: FlightResult) -> dict:
     names = system.generator_names
     dt = float(np.diff(result.time_s[:2])[0]) if result.time_s.size > 1 else 0.0
     above = result.temperatures_C[:, :, 1:] > system.limit_C
-    shed = np.clip(result.nominal_A[None, :] - result.currents_A, 0.0, None)[:, ~result.resting]
+    moved_off = np.clip(result.nominal_A[None, :] - result.currents_A, 0.0, None)[:, ~result.resting]
+    lost = not_served(result.nominal_A, result.currents_A, result.resting)
     solve_times = [plan["solve_s"] for plan in result.plans]
+    lowest = [plan["lowest_peak_C"] for plan in result.plans if "lowest_peak_C" in plan]
     summary = {
         "scheduler": result.scheduler,
         "closed_loop": result.closed_loop,
@@ -52,13 +66,32 @@ def flight_summary(result: FlightResult) -> dict:
         "breach_s": float(np.count_nonzero(above.any(axis=(0, 1))) * dt),
         "replans": len(result.plans),
         "median_solve_s": float(np.median(solve_times)) if solve_times else 0.0,
-        "displaced_Ah": float(shed.sum() * dt / 3600.0),
-        "feasible": all(plan["feasible"] for plan in result.plans),
+        "displaced_Ah": float((moved_off.sum() - lost.sum()) * dt / 3600.0),
+        "feasible": bool(all(plan["feasible"] for plan in result.plans) and not result.shed_events
+                         and not lost.any()),
+        "lowest_reachable_peak_C": float(max(lowest)) if lowest else None,
+        "manager_response": list(dict.fromkeys(plan["response"] for plan in result.plans if plan.get("response"))),
+        "rest_budget_s": float(result.rest_budget_s),
+        "shed": shed_summary(result, lost, dt),
+        "management_cycles": int(result.cycles),
         "warnings": list(dict.fromkeys(result.warnings)),
     }
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
     return summary
+
+
+def shed_summary(result: FlightResult, lost: np.ndarray, dt_s: float) -> dict:
+    """The ``shed`` block (module docstring) from the load not served ``lost`` (n_gen, n), A."""
+    names = result.system.generator_names
+    steps = np.flatnonzero(lost.sum(axis=0) > 1e-9)
+    return {"events": list(result.shed_events),
+            "generators": list(dict.fromkeys(n for event in result.shed_events for n in event["shedding"])),
+            "switched_off": list(dict.fromkeys(n for event in result.shed_events for n in event["switched_off"])),
+            "not_served_As": {n: float(lost[g].sum() * dt_s) for g, n in enumerate(names)},
+            "not_served_Ah": {n: float(lost[g].sum() * dt_s / 3600.0) for g, n in enumerate(names)},
+            "first_s": float(result.time_s[steps[0]]) if steps.size else None,
+            "last_s": float(result.time_s[steps[-1] + 1]) if steps.size else None}
 
 
 def detection_summary(result: FlightResult) -> dict:
@@ -95,6 +128,13 @@ def summary_text(summary: dict, limit_C: float) -> str:
                           + (f" (onset {i['onset_s'] / 60:.0f} min, {', '.join(f'{k}={v:.3g}' for k, v in i['parameters'].items())})"
                              if i["effect"] else "") for i in summary["identified"]) or "no fault alarm"
         lines.append(f"in-flight detection: {found}; false alarms {summary['false_alarms']}")
+    shed = summary.get("shed") or {}
+    if shed.get("events"):
+        served = ", ".join(f"{n} {v:.2f} A·h" for n, v in shed["not_served_Ah"].items() if v > 0)
+        when = ", ".join(f"{event['time_s'] / 60:.0f} min" for event in shed["events"])
+        off = f"; switched off {', '.join(shed['switched_off'])}" if shed["switched_off"] else ""
+        lines.append(f"shed: load of {', '.join(shed['generators'])} shed from {when}{off}; "
+                     f"load not served {served or 'none'}")
     lines += [w if w.startswith("infeasible") else f"warning: {w}" for w in summary["warnings"]]
     return "\n".join(lines)
 

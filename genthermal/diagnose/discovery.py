@@ -1,0 +1,278 @@
+r"""Discovery as one composed object: candidates, a criterion and a fitter behind ``fit``.
+
+In the manner of pysindy's ``SINDy(feature_library, optimizer)``, a :class:`Discovery` is built
+from three parts and does nothing until :meth:`Discovery.fit` is called:
+
+* ``candidates`` — a :class:`~genthermal.diagnose.catalogue.Catalogue` (default: the registered
+  catalogue effects, of which each fit uses those that apply to the model);
+* ``criterion`` — scores each candidate against the model without it
+  (:class:`~genthermal.diagnose.criterion.BIC` by default);
+* ``fitter`` — how effects and onsets are fitted (:class:`~genthermal.diagnose.fitter.OnsetFitter`:
+  single effects, then pairs jointly when one effect leaves more than noise).
+
+``fit(model, data)`` returns a :class:`~genthermal.diagnose.discover.Diagnosis`: its ``ranking``,
+its ``verdict`` and :meth:`~genthermal.diagnose.discover.Diagnosis.improved_model`. The decision
+rules (the four tests, "something is still missing", look-alikes and the separating experiment)
+are those of :mod:`genthermal.diagnose.discover`.
+
+The models with effects at neutral values and their compiled simulators take most of a search's
+time; a Discovery keeps them in a private memo so that fitting the same model to several records
+of the same length builds them once. The memo's keys hold the model object itself (not its
+``id``), so an entry can never be mistaken for a later model that reuses a freed address.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import ThermalModel
+from .compare import MeasuredSeries, as_measurements
+from .catalogue import Catalogue
+from .criterion import BIC
+from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
+                       choose_pair, explain, explain_pair, is_significant, rival, series_for)
+from .experiment import separating_experiment
+from .fitter import OnsetFitter
+from .phase_winding import phase_sensor
+from .sensor_view import SensorView, view_for
+from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
+from .search import EffectSearch, FoundEffect, noise_std
+
+
+class Discovery:
+    """Find the effect(s) a model lacks to explain a record.
+
+    Parameters
+    ----------
+    candidates : Catalogue, mapping of str to Effect, or sequence of Effect or str, optional
+        The effects searched. Default: the registered catalogue
+        (:meth:`Catalogue.registered`, taken when the Discovery is built); each fit searches those
+        that apply to its model.
+    criterion : BIC, AIC or compatible, optional
+        Information criterion (:mod:`genthermal.diagnose.criterion`); default BIC.
+    fitter : OnsetFitter, optional
+        Fitting settings (:class:`~genthermal.diagnose.fitter.OnsetFitter`); default: pairs on.
+    iterate : bool
+        After the first verdict, add it and search again until nothing is significant.
+    max_iterations : int
+        Bound on the rounds with ``iterate`` (≥ 1).
+    baseline_parameters : sequence of str
+        Parameters calibrated on a healthy baseline record when :meth:`fit` gets one (those the
+        model lacks are skipped).
+    design_experiment : bool
+        When another explanation fits about as well as the verdict, design the rig test that
+        separates them (:func:`~genthermal.diagnose.experiment.separating_experiment`).
+    progress : callable, optional
+        Called with one line of text as each stage finishes.
+    phases : {"auto", "resolved", "lumped"}
+        Winding sensors: ``"resolved"`` fits the phase-resolved winding view of the model
+        (:mod:`genthermal.diagnose.phase_winding`) to ``T_winding_u/v/w`` one by one; ``"lumped"``
+        fits the model's single winding node to their mean; ``"auto"`` resolves the phases when the
+        record has the three columns and they differ by more than noise
+        (:func:`~genthermal.diagnose.phase_winding.phases_differ`) — a fault in one phase, or an
+        unbalanced load.
+    outlet : bool or None
+        Fit the cooling-air outlet sensor ``T_outlet`` too (less coolant flow heats the outlet
+        air, better frame cooling does not); None: when the record has it and the model has an
+        outlet node (:mod:`genthermal.diagnose.sensor_view`).
+    """
+
+    PHASE_MODES = ("auto", "resolved", "lumped")
+
+    def __init__(self, candidates=None, criterion=None, fitter: OnsetFitter | None = None, iterate: bool = False,
+                 max_iterations: int = 4, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
+                 design_experiment: bool = True, progress: Callable[[str], None] | None = None,
+                 phases: str = "auto", outlet: bool | None = None):
+        if phases not in self.PHASE_MODES:
+            raise InputError("phases", phases, f"must be one of {', '.join(self.PHASE_MODES)}")
+        self.phases, self.outlet = phases, outlet
+        if int(max_iterations) != max_iterations or max_iterations < 1:
+            raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
+        self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
+        self.criterion = BIC() if criterion is None else criterion
+        for attribute in ("delta", "evidence_limit", "name"):
+            if not hasattr(self.criterion, attribute):
+                raise InputError("criterion", repr(self.criterion), f"has no {attribute!r}: use BIC() or AIC()")
+        self.fitter = OnsetFitter() if fitter is None else fitter
+        if not isinstance(self.fitter, OnsetFitter):
+            raise InputError("fitter", repr(self.fitter), "expected an OnsetFitter")
+        self.iterate, self.max_iterations = bool(iterate), int(max_iterations)
+        self.baseline_parameters = tuple(baseline_parameters)
+        self.design_experiment, self.progress = bool(design_experiment), progress
+        self._memo: dict = {}
+
+    def __repr__(self) -> str:
+        return (f"Discovery(candidates={self.candidates!r}, criterion={self.criterion!r}, fitter={self.fitter!r}, "
+                f"iterate={self.iterate})")
+
+    def with_settings(self, **changes) -> "Discovery":
+        """The same discovery with some constructor settings changed (``candidates``,
+        ``criterion``, ``fitter``, ``iterate``, ...), sharing this one's memo: models and
+        simulators already built are reused (memo keys hold the Effect objects, so effects of the
+        same name in different catalogues never mix)."""
+        settings = dict(candidates=self.candidates, criterion=self.criterion, fitter=self.fitter,
+                        iterate=self.iterate, max_iterations=self.max_iterations,
+                        baseline_parameters=self.baseline_parameters, design_experiment=self.design_experiment,
+                        progress=self.progress, phases=self.phases, outlet=self.outlet)
+        unknown = sorted(set(changes) - set(settings))
+        if unknown:
+            raise InputError("setting", unknown[0], f"unknown; Discovery takes {', '.join(settings)}")
+        other = Discovery(**{**settings, **changes})
+        other._memo = self._memo
+        return other
+
+    def _view(self, model: ThermalModel, measured) -> SensorView | None:
+        """The sensors of the record ``measured`` (MeasurementData or MeasuredSeries) to fit
+        (:func:`~genthermal.diagnose.sensor_view.view_for`), None when they are the model's own."""
+        if isinstance(measured, MeasuredSeries):
+            if self.phases == "resolved" or self.outlet:
+                raise InputError("data", "MeasuredSeries", "give the record itself to fit phase or outlet sensors")
+            return None
+        view = view_for(model, measured.frame, float(np.median(np.diff(measured.time_s))), self.phases, self.outlet)
+        return view if view.changes_model else None
+
+    @staticmethod
+    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel) -> bool:
+        """Fit pairs when the best single effect leaves more than noise: above
+        :data:`~genthermal.diagnose.discover.NOISE_FLOOR_FACTOR` σ, and either called unexplained by
+        the residual tests or above their structure level
+        (:data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` σ: a weaker second effect can
+        leave a residual too small to show clear structure; whether a pair is kept is decided by
+        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here)."""
+        if len(ranked) < 2 or ranked[0].rmse_after <= NOISE_FLOOR_FACTOR * search.noise:
+            return False
+        return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
+                or residual_tests(search.series, ranked[0].predicted, search.noise, viewed.output_names,
+                                  viewed.spec.interface)["unexplained"])
+
+    def _can_resolve_phases(self, model: ThermalModel, measured, view) -> bool:
+        """True when ``phases="auto"`` kept the winding lumped but the record has the three phase
+        sensors and the model a slot winding to split."""
+        reader = phase_sensor(model)
+        return (self.phases == "auto" and not (view and view.phases) and not isinstance(measured, MeasuredSeries)
+                and reader is not None and all(c in measured.frame for c in reader.columns))
+
+    def _phase_tie_break(self, model: ThermalModel, measured, dt_s, first: Iteration, other) -> Diagnosis | None:
+        """Two explanations fit the lumped winding about equally well: refit their effects with one
+        winding node per phase sensor (a loss in one phase heats that phase, one in every phase
+        does not spread them). Returns that diagnosis when it has a verdict and no look-alike
+        left, else None."""
+        chosen = first.added_pair or first.added
+        names = list(dict.fromkeys([*_explanations(chosen), *_explanations(other)]))
+        self._report(f"look-alikes {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))}: "
+                     "refitting them with one winding node per phase sensor")
+        resolved = self.with_settings(candidates=self.candidates.only(names), phases="resolved", iterate=False)
+        diagnosis = resolved.fit(model, measured, dt_s=dt_s)
+        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0]) is not None:
+            return None
+        diagnosis.iterations[0].explanation += (
+            f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
+            f"explained the data about equally well (RMSE {chosen.rmse_after:.3f} and {other.rmse_after:.3f} K); "
+            "the phase sensors tell them apart.")
+        return diagnosis
+
+    def _report(self, text: str) -> None:
+        if self.progress:
+            self.progress(text)
+
+    def fit(self, model: ThermalModel, data, baseline=None, dt_s: float | None = None) -> Diagnosis:
+        """Search ``data`` for the candidates ``model`` lacks.
+
+        Parameters
+        ----------
+        model : ThermalModel
+        data : MeasurementData, pandas.DataFrame or path
+            The measurements to explain.
+        baseline : MeasurementData, pandas.DataFrame or path, optional
+            Healthy measurements of the same machine: ``baseline_parameters`` are calibrated on
+            them first, so that what remains in ``data`` is the effect.
+        dt_s : float, optional
+            Resample the data (and baseline) to this period first, s.
+
+        Returns
+        -------
+        Diagnosis
+            ``ranking``, ``verdict``, ``improved_model()``, the residual tests and, for
+            look-alikes, the separating experiment.
+        """
+        from .calibrate import calibrate
+
+        if not isinstance(model, ThermalModel):
+            raise InputError("model", type(model).__name__, "expected a ThermalModel")
+        measured = data if isinstance(data, MeasuredSeries) else as_measurements(data, model.spec.interface)
+        view = self._view(model, measured)
+        calibration = None
+        if baseline is not None:
+            names = [n for n in self.baseline_parameters if n in model.parameters]
+            calibration = calibrate(model, baseline, names, dt_s)
+            model = calibration.model
+            self._report(f"baseline calibrated: {', '.join(names)}")
+        memo = self._memo if calibration is None else {}
+        if view is not None and ("view", model, view) not in memo:
+            memo[("view", model, view)] = view(model)
+        viewed = model if view is None else memo[("view", model, view)]
+        series = series_for(viewed, measured, dt_s)
+        if view is not None:
+            self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
+                         + (" (one winding node per phase)" if view.phases else ""))
+        catalogue = self.candidates
+        evidence = self.criterion.evidence_limit
+        found: list[FoundEffect] = []
+        iterations: list[Iteration] = []
+        while True:
+            search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view).fit_found()
+            ranked = self.fitter.singles(search)
+            for candidate in ranked:
+                candidate.significant = is_significant(candidate, search.noise, evidence)
+            self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
+                         + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
+            best = ranked[0] if ranked and ranked[0].significant else None
+            runner_up = ranked[1] if len(ranked) > 1 else None
+            iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
+                                  explain(best, search, runner_up))
+            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
+                iteration.pairs = self.fitter.joint(
+                    search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
+                chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence)
+                if chosen is not None:
+                    chosen.significant = True
+                    iteration.added, iteration.added_pair = None, chosen
+                    iteration.explanation = explain_pair(chosen, search, ranked[0])
+            iterations.append(iteration)
+            if iteration.added_pair:
+                chosen = iteration.added_pair
+                found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e])
+                         for e in chosen.effects]
+            elif best is None:
+                break
+            else:
+                found = [FoundEffect(f.effect, best.found_values[f.effect],
+                                     search.elapsed_s(best.found_onsets[f.effect]), best.found_onsets[f.effect])
+                         for f in found]
+                found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
+            if not self.iterate or len(iterations) >= self.max_iterations:
+                break
+        noise = noise_std(series.outputs)
+        residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names,
+                                  viewed.spec.interface)
+        self._report(residual["summary"])
+        experiment, other = None, rival(iterations[0])
+        if other is not None and self._can_resolve_phases(model, measured, view):
+            separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other)
+            if separated is not None:
+                return separated
+        if other is not None and self.design_experiment:
+            chosen = iterations[0].added_pair or iterations[0].added
+            experiment = separating_experiment(model, _explanations(chosen), _explanations(other), noise, catalogue)
+            self._report(f"look-alike: {' + '.join(_explanations(other))}; designed a "
+                         f"{experiment.mission.duration_s / 60:.0f}-min test that separates them by "
+                         f"{experiment.separation_sigma:.0f} σ")
+            if iterations[0].added_pair:
+                iterations[0].explanation += (f" Caution: {' + '.join(_explanations(other))} explains the data "
+                                              f"almost as well (RMSE {other.rmse_after:.3f} K): these data cannot "
+                                              "tell them apart.")
+        return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
+                         criterion=self.criterion.name, output_names=viewed.output_names)

@@ -1,0 +1,54 @@
+"""How a discovery fits its candidates: single effects with their onsets, then pairs jointly.
+
+:class:`OnsetFitter` is the ``fitter`` part of :class:`~genthermal.diagnose.discovery.Discovery`:
+the single-effect search of :mod:`genthermal.diagnose.search` and the joint pair search of
+:mod:`genthermal.diagnose.joint`, with the settings a caller may change.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Callable
+
+from ..errors import InputError
+from .joint import PAIR_POOL, PairSearch
+from .search import Candidate, EffectSearch
+
+
+@dataclasses.dataclass(frozen=True)
+class OnsetFitter:
+    """Settings of the effect and onset fits.
+
+    Attributes
+    ----------
+    pairs : bool
+        In the first round, when the best single effect leaves a residual that is not noise, fit
+        pairs of effects jointly (values and both onsets).
+    pair_pool : int
+        Pairs are formed among this many best single effects (and the best with each other one).
+    workers : int
+        Processes that fit candidates and pairs side by side (forked,
+        :mod:`genthermal.diagnose.parallel`; same results as 1). Workers build their own models
+        and simulators, which a Discovery's memo then does not keep: use 1 to fit many records of
+        one model, the number of cores for one record.
+    """
+
+    pairs: bool = True
+    pair_pool: int = PAIR_POOL
+    workers: int = 1
+
+    def __post_init__(self):
+        if int(self.pair_pool) != self.pair_pool or self.pair_pool < 2:
+            raise InputError("pair_pool", self.pair_pool, "must be an integer >= 2")
+        if int(self.workers) != self.workers or self.workers < 1:
+            raise InputError("workers", self.workers, "must be an integer >= 1")
+
+    def singles(self, search: EffectSearch) -> list[Candidate]:
+        """Every candidate the search's model can take, fitted with its onset; best first."""
+        names = search.candidates()
+        return search.rank(names, self.workers) if names else []
+
+    def joint(self, search: EffectSearch, singles: list[Candidate],
+              progress: Callable[[int, int, str], None] | None = None) -> list:
+        """Pairs of ``singles`` fitted jointly (:class:`~genthermal.diagnose.joint.PairSearch`); best first."""
+        return PairSearch(search).rank(singles, self.pair_pool, progress=progress, workers=self.workers)

@@ -1,0 +1,129 @@
+r"""Load shedding: the manager's last resort when no schedule keeps a generator within θmax.
+
+When the lowest reachable peak of a generator (min-max over displacement and rests within the
+flight's remaining rest budget, :func:`~genthermal.schedule.optimal.lowest_reachable_peak`) is
+above :math:`\theta_{max}`, rest and displacement cannot save it and the manager plans with
+:func:`shed_plan`; a generator still above :math:`\theta_{max}` when it carries nothing is
+**switched off** (0 A for the rest of the mission; a generator with a cooling fault is not brought
+back in flight):
+
+* going forward through the segments, without rests, each generator still on computes on the
+  linear design model (:class:`~genthermal.schedule.heuristic.SegmentResponse`, temperatures
+  affine in its current) the least load it must shed to stay within the planning limit and,
+  when it needs none, the room it has for more (current limit and thermal room, as the
+  engineer's heuristic computes it, :func:`~genthermal.schedule.engineer.receiver_room`);
+* a generator takes on others' load only up to the planning limit minus ``receiver_margin_K``
+  (the manager's margin once more, :class:`~genthermal.schedule.closed_loop.ManagerSettings`):
+  load moved onto it drives it where its model has not been checked in this flight;
+* the load of the switched-off generators (at least their lowest nominal current in the
+  segment) and what the others must shed go to the generators with room, in proportion to it;
+* what nobody can take is **not served** (reported per generator in A·s and A·h of phase
+  current by :func:`not_served`).
+
+A healthy generator is therefore never loaded beyond the planning limit of its design model;
+the mission goes on to its end.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .engineer import receiver_room
+from .heuristic import SegmentResponse
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate
+
+#: Smaller shortfalls of the total phase current are rounding of the schedulers' displacements, A.
+NOT_SERVED_TOLERANCE_A = 1e-6
+
+
+def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float = 0.0) -> PlanResult:
+    """Plan the generators still on when ``switched_off`` ones carry nothing (module docstring).
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+    switched_off : array-like of bool
+        (n_generators,) True for a generator switched off.
+    receiver_margin_K : float
+        A generator takes on load of others only up to the planning limit minus this, K (its
+        own load is kept within the planning limit itself).
+
+    Returns
+    -------
+    PlanResult
+        ``method`` ``shed``; no rests; ``feasible`` when every generator still on stays within
+        the planning limit (the ones switched off cool at 0 A); ``details["shedding"]``: indices
+        of the generators switched off or shedding load of their own.
+    """
+    started = time.perf_counter()
+    off = np.array(switched_off, dtype=bool)
+    if off.shape != (problem.n_generators,):
+        raise ValueError(f"switched_off has shape {off.shape}; expected ({problem.n_generators},)")
+    on = [g for g in range(problem.n_generators) if not off[g]]
+    n_seg = len(problem.segments)
+    displaced = np.zeros((problem.n_generators, n_seg))
+    x = problem.x0.copy()
+    shedding = set()
+    for k, segment in enumerate(problem.segments):
+        low, high = problem.displacement_bounds(k)
+        responses = {g: SegmentResponse(problem, g, k, x[g], 0.0) for g in on}
+        must_shed = {g: min(_least_shed(responses[g], problem.limit_C), high) for g in on}
+        shedding |= {g for g in on if must_shed[g] > 0}
+        room = {g: (max(min(-low, receiver_room(responses[g], problem.limit_C - receiver_margin_K)), 0.0)
+                    if must_shed[g] <= 0 else 0.0) for g in on}
+        offered = np.count_nonzero(off) * segment.low_A + sum(must_shed.values())
+        total_room = sum(room.values())
+        taken = min(offered, total_room)
+        for g in on:
+            displaced[g, k] = must_shed[g] - (taken * room[g] / total_room if total_room > 0 else 0.0)
+        x = np.array([responses[g].x_end0 + displaced[g, k] * responses[g].x_end_d if g in responses else x[g]
+                      for g in range(problem.n_generators)])
+    schedule = Schedule(displaced, np.zeros(n_seg), off)
+    result = evaluate(problem, schedule, "shed", time.perf_counter() - started)
+    result.details["shedding"] = sorted(set(np.flatnonzero(off)) | shedding)
+    return result
+
+
+def _least_shed(response: SegmentResponse, limit_C: float) -> float:
+    """Least constant current (A) to shed so that every sample shedding can still cool stays
+    within ``limit_C``; samples it cannot reach (the present, a machine already above the limit
+    just after the decision) are left out rather than asking for the whole load."""
+    relief = -response.yd
+    over = (response.y0 - limit_C > LIMIT_TOLERANCE_K) & (relief > 1e-9)
+    if not over.any():
+        return 0.0
+    return float(np.max((response.y0[over] - limit_C) / relief[over])) * (1.0 + 1e-9) + 1e-9
+
+
+def not_served(nominal_A: np.ndarray, currents_A: np.ndarray, resting: np.ndarray) -> np.ndarray:
+    """Phase current not served per step and per generator.
+
+    Each generator's share of the load is the nominal current (thesis eqs. 7.3-7.4); what the
+    generators carry together below their total share is not served. It is attributed to the
+    generators in proportion to how far each carries below its share (a switched-off generator:
+    its whole share). Rests are not counted: the load is deferred, not lost.
+
+    Parameters
+    ----------
+    nominal_A : numpy.ndarray
+        (n,) nominal phase current per generator, A.
+    currents_A : numpy.ndarray
+        (n_generators, n) applied phase currents, A.
+    resting : numpy.ndarray
+        (n,) True during rests.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_generators, n) phase current not served, A (0 during rests).
+    """
+    shortfall = np.clip(nominal_A[None, :] - currents_A, 0.0, None)
+    unserved = currents_A.shape[0] * nominal_A - currents_A.sum(axis=0)
+    unserved[unserved < NOT_SERVED_TOLERANCE_A] = 0.0  # displacements sum to zero only to rounding
+    total = shortfall.sum(axis=0)
+    share = np.divide(shortfall, total[None, :], out=np.zeros_like(shortfall), where=total[None, :] > 1e-12)
+    result = share * unserved[None, :]
+    result[:, np.asarray(resting, dtype=bool)] = 0.0
+    return result

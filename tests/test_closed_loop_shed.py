@@ -1,0 +1,162 @@
+"""The closed loop always finishes: a flight-level rest budget, and load shedding when no schedule
+keeps a generator within θmax (a plant hot even at rest)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from genthermal.cli import main
+from genthermal.mission import load_mission
+from genthermal.schedule.closed_loop import DEFAULT_REST_BUDGET_FRACTION, ManagerSettings, fly
+from genthermal.schedule.plan import PlanningProblem, Schedule, build_timeline, mission_segments, predict
+from genthermal.schedule.power_system import PowerSystem
+from genthermal.schedule.report import flight_summary
+from genthermal.schedule.shed import not_served, shed_plan
+
+SHORT = """name: short_blockage
+generators: {count: 2}
+faults:
+  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
+actions:
+  - {condition: taxi, duration_min: 15}
+  - {condition: cruise_combat, duration_min: 30}
+  - {condition: landing, duration_min: 15}
+"""
+# gen1's coolant nearly stops and its inlet rises to 80 °C: above θmax = 85 °C even at rest in landing,
+# while the healthy gen2 peaks near 80 °C on its own load
+HOT_AT_REST = (SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 85}")
+               .replace("k_flow: 0.2", "k_flow: 0.15").replace("inlet_rise_C: 31", "inlet_rise_C: 60"))
+
+
+def _system(tmp_path, text, name="scenario.yaml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return PowerSystem.from_mission(load_mission(str(path)))
+
+
+def _cycle_bound(system, settings):
+    """Most management cycles a flight may take: its mission plus its rest budget, one cycle each."""
+    budget = settings.rest_budget_for(system.mission.duration_s)
+    return math.ceil((system.mission.duration_s + budget) / settings.cycle_s) + 1
+
+
+@pytest.mark.parametrize("scheduler", ["heuristic", "optimal"])
+def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_the_limit(tmp_path, scheduler):
+    system = _system(tmp_path, HOT_AT_REST)
+    settings = ManagerSettings()
+    result = fly(system, scheduler, settings)
+    summary = flight_summary(result)
+    assert result.cycles <= _cycle_bound(system, settings)
+    assert summary["management_cycles"] == result.cycles
+    assert summary["mission_time_s"] <= system.mission.duration_s + summary["rest_budget_s"] + 1e-6
+    assert summary["feasible"] is False
+    assert summary["lowest_reachable_peak_C"] > system.limit_C
+    assert summary["shed"]["generators"][0] == "gen1"
+    event = summary["shed"]["events"][0]
+    assert event["shedding"] == ["gen1"] and event["time_s"] >= 600.0  # not before the onset
+    assert event["lowest_reachable_peak_C"] > system.limit_C and "shed load of gen1" in event["response"]
+    assert summary["shed"]["not_served_Ah"]["gen1"] > 0.5 and summary["shed"]["first_s"] >= event["time_s"]
+    assert any("shed load of gen1" in response for response in summary["manager_response"])
+    # the healthy generator takes load but never goes over θmax; nothing is above θmax
+    assert summary["max_T_winding"]["gen2"] <= system.limit_C and summary["max_T_iron"]["gen2"] <= system.limit_C
+    assert summary["breach_s"] == 0.0
+    shedding = (result.time_s[:-1] >= event["time_s"]) & ~result.resting
+    assert np.all(result.currents_A[0, shedding] <= result.nominal_A[shedding] + 1e-9)  # gen1 sheds load
+    assert np.mean(result.nominal_A[shedding] - result.currents_A[0, shedding]) > 1.0
+    assert np.any(result.currents_A[1, shedding] > result.nominal_A[shedding] + 0.5)  # gen2 takes some of it
+
+
+def test_rest_budget_bounds_the_rest_and_the_cycles(tmp_path):
+    """A plant that needs rest it is not allowed: the flight adds at most the budget."""
+    system = _system(tmp_path, SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 95}"))
+    budget_s = 120.0
+    settings = ManagerSettings(rest_budget_s=budget_s)
+    result = fly(system, "heuristic", settings)
+    summary = flight_summary(result)
+    assert float(np.count_nonzero(result.resting)) * settings.dt_s <= budget_s + 1e-9
+    assert summary["added_rest_s"] <= budget_s + 1e-9 and summary["rest_budget_s"] == budget_s
+    assert result.cycles <= _cycle_bound(system, settings)
+    larger = flight_summary(fly(system, "heuristic", ManagerSettings(rest_budget_s=3600.0)))
+    assert larger["added_rest_s"] > budget_s  # the budget is what held the rest back
+
+
+def test_normal_flight_is_unchanged_no_shed_and_feasible(tmp_path):
+    system = _system(tmp_path, SHORT)
+    result = fly(system, "heuristic")
+    summary = flight_summary(result)
+    assert summary["feasible"] is True and summary["breach_s"] == 0.0
+    assert summary["shed"]["events"] == [] and summary["shed"]["generators"] == []
+    assert all(v == 0.0 for v in summary["shed"]["not_served_As"].values()) and summary["shed"]["first_s"] is None
+    assert summary["lowest_reachable_peak_C"] is None and summary["manager_response"] == []
+    assert summary["rest_budget_s"] == DEFAULT_REST_BUDGET_FRACTION * system.mission.duration_s
+    # a budget that does not bind flies the same flight
+    same = fly(system, "heuristic", ManagerSettings(rest_budget_s=7200.0))
+    np.testing.assert_array_equal(same.temperatures_C, result.temperatures_C)
+    np.testing.assert_array_equal(same.currents_A, result.currents_A)
+
+
+def test_rests_cut_to_the_budget_earliest_first():
+    schedule = Schedule(np.zeros((2, 4)), np.array([300.0, 0.0, 600.0, 300.0]))
+    np.testing.assert_array_equal(schedule.within_rest_budget(700.0).rest_before_s, [300.0, 0.0, 400.0, 0.0])
+    np.testing.assert_array_equal(schedule.within_rest_budget(0.0).rest_before_s, np.zeros(4))
+    np.testing.assert_array_equal(schedule.within_rest_budget(1e6).rest_before_s, schedule.rest_before_s)
+    # a rest in progress counts against the longest rest before one action
+    np.testing.assert_array_equal(schedule.within_rest_budget(1e6, 100.0).rest_before_s, [100.0, 0.0, 600.0, 300.0])
+
+
+def test_not_served_is_attributed_to_the_generators_below_their_share():
+    nominal = np.array([5.0, 5.0, 5.0])
+    currents = np.array([[0.0, 0.0, 1.0], [7.0, 5.0, 1.0]])  # gen1 off; gen2 takes 2 A, then nothing; then rest
+    lost = not_served(nominal, currents, np.array([False, False, True]))
+    np.testing.assert_allclose(lost, [[3.0, 5.0, 0.0], [0.0, 0.0, 0.0]])
+    healthy_sheds = not_served(np.array([5.0]), np.array([[0.0], [4.0]]), np.array([False]))
+    np.testing.assert_allclose(healthy_sheds[:, 0], [5.0 * 6.0 / 6.0, 1.0 * 6.0 / 6.0])
+
+
+def test_shed_plan_keeps_the_generators_on_within_the_planning_limit(tmp_path):
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    problem = PlanningProblem(segments, generators, x0, np.array([80.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, system.limit_C - 2.5, rise_backoff=0.3)
+    result = shed_plan(problem, [True, False])
+    outputs = predict(problem, result.schedule).outputs
+    assert outputs[1].max() <= problem.limit_C + 0.05  # the healthy one takes only its room
+    assert np.any(result.schedule.displaced_A[1] < -0.1) and result.schedule.added_rest_s == 0.0
+    timeline = build_timeline(segments, result.schedule, system.rest_current_A, problem.dt_s)
+    assert np.all(timeline.currents_A[0] == 0.0)
+    with pytest.raises(ValueError, match="switched_off"):
+        shed_plan(problem, [True])
+
+
+def test_a_generator_too_hot_even_carrying_nothing_is_switched_off(tmp_path):
+    from genthermal.schedule.closed_loop import plan_with
+
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    x0[0] = 95.0  # gen1 already above θmax, with its inlet at 100 °C
+    problem = PlanningProblem(segments, generators, x0, np.array([100.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, system.limit_C - 2.5, rise_backoff=0.3, rest_budget_s=600.0)
+    result = plan_with("heuristic", problem, ManagerSettings(), system.generator_names, system.limit_C)
+    assert not result.feasible and result.method == "shed"
+    assert result.details["switched_off"] == ["gen1"] and "switch off gen1" in result.details["response"]
+    assert result.details["lowest_peak_C"] > system.limit_C
+    assert predict(problem, result.schedule).outputs[1].max() <= system.limit_C
+
+
+def test_fly_command_rest_budget_option(tmp_path, capsys):
+    scenario = tmp_path / "hot.yaml"
+    scenario.write_text(HOT_AT_REST)
+    out = tmp_path / "hot.json"
+    assert main(["fly", str(scenario), "--scheduler", "engineer", "--rest-budget-min", "5", "--json", str(out)]) == 0
+    summary = json.loads(out.read_text())
+    assert summary["rest_budget_s"] == 300.0 and summary["added_rest_s"] <= 300.0
+    assert summary["feasible"] is False and summary["shed"]["generators"][0] == "gen1"
+    assert "shed: load of gen1" in capsys.readouterr().out
+    assert main(["fly", str(scenario), "--rest-budget-min", "-3", "--json", str(tmp_path / "bad.json")]) == 2
+    assert "--rest-budget-min" in capsys.readouterr().err
