@@ -223,11 +223,10 @@ class ParametricSimulator:
         S[current, np.arange(self.n_samples)] = 1.0
         return S
 
-    def _prefix_reusable(self, start: int, x0_coefficients: np.ndarray, indicator: np.ndarray) -> bool:
-        """Whether the previous :meth:`outputs` call holds this call's outputs and state up to
-        sample ``start``: ``theta`` did not act there in either call, and both had the same initial
-        state and regimes there."""
-        last = self._last_run
+    def _prefix_reusable(self, last, start: int, x0_coefficients: np.ndarray, indicator: np.ndarray) -> bool:
+        """Whether ``last`` (the previous :meth:`outputs` call) holds this call's outputs and state up
+        to sample ``start``: ``theta`` did not act there in either call, and both had the same
+        initial state and regimes there."""
         return (last is not None and 0 < start < self.n_samples and start <= last[2]
                 and np.array_equal(last[0], x0_coefficients) and np.array_equal(last[1][:, :start], indicator[:, :start]))
 
@@ -245,11 +244,11 @@ class ParametricSimulator:
         free = self.theta_free_samples(indicator)
         chunk = _chunk_length(self.n_samples)
         start = free // chunk * chunk
-        if self._prefix_reusable(start, x0_coefficients, indicator):
-            previous = self._last_run[3]
-            suffix = self._suffix_function(start)(theta, self._last_run[4][:, start // chunk - 1],
+        last = self._last_run
+        if self._prefix_reusable(last, start, x0_coefficients, indicator):
+            suffix = self._suffix_function(start)(theta, last[4][:, start // chunk - 1],
                                                   indicator[:, start:], self.inputs[:, start:])
-            return np.hstack([previous[:, :start], np.asarray(suffix)])
+            return np.hstack([last[3][:, :start], np.asarray(suffix)])
         Y, states = (np.asarray(m) for m in self._trajectory_and_states(theta, x0_coefficients, indicator, self.inputs))
         self._last_run = (x0_coefficients, indicator.copy(), free, Y, states)
         return Y.copy()
