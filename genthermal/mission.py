@@ -73,7 +73,7 @@ INPUT_COLUMNS = input_columns()
 #: Accepted range of inlet and ambient temperatures, degC.
 TEMPERATURE_RANGE_C = (-60.0, 100.0)
 #: Top-level keys kept unchecked in :attr:`Mission.extras`.
-EXTRA_KEYS = ("extensions", "faults", "generators")
+EXTRA_KEYS = ("extensions", "faults", "generators", "sensor_faults")
 _MISSION_KEYS = ("name", "description", "rated_current_A", "power_factor", "T_inlet_C", "T_ambient_C",
                  "actions") + EXTRA_KEYS
 

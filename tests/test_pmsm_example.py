@@ -15,6 +15,7 @@ from genthermal.diagnose.compare import compare
 from genthermal.diagnose.discover import diagnose
 from genthermal.effects import applicable_effects
 from genthermal.errors import CompilerNotFoundError, InputError
+from genthermal.estimation.arx_search import MEAN_SQUARED_CURRENT, input_signal, input_signals, select_input
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.machines import build_model
 from genthermal.measurements import dataframe_to_measurements
@@ -190,3 +191,15 @@ def test_the_motor_exports_as_an_fmu_with_its_units(motor, tmp_path):
     assert {"rpm", "W/K", "J/K", "degC"} <= set(units)
     inputs = [v.name for v in description.modelVariables if v.causality == "input"]
     assert inputs == list(motor.input_names)
+
+
+def test_arx_input_selection_reads_the_motor_s_inputs(motor):
+    signals = input_signals(motor.spec.interface)
+    assert "motor_speed" in signals and "i_q" in signals and "I_exc" not in signals
+    data = dataframe_to_measurements(record(motor, drive_cycle(hours=1.0)), interface=motor.spec.interface)
+    selection = select_input(data, "winding", na_range=range(1, 3), nb_range=range(1, 3), nk_range=range(0, 2))
+    assert set(selection.per_input["input"]) == set(signals)
+    # the copper loss goes with the squared currents: the derived input explains the winding best
+    assert selection.input_name == MEAN_SQUARED_CURRENT
+    with pytest.raises(InputError, match="I_exc"):
+        input_signal(data, "I_exc")

@@ -53,7 +53,7 @@ def tiny(design_model):
 
 
 def test_milp_optimum_is_no_worse_than_any_enumerated_discrete_schedule(tiny):
-    settings = MilpSettings(chunk_A=0.5, max_rest_s=900.0)
+    settings = MilpSettings(chunk_A=0.5, max_rest_s=900.0, relative_gap=1e-9)
     result = milp_plan(tiny, settings)
     assert result.method == "milp" and result.details["certified"]
     assert result.feasible and predict(tiny, result.schedule).peak()[0] <= tiny.limit_C + 0.05

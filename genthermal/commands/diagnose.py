@@ -56,6 +56,8 @@ def run(args) -> int:
               f"{'  *' if p['significant'] else ''}")
     for k, iteration in enumerate(document["iterations"][1:], start=2):
         print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
+    for fault in document["sensor_faults"]:
+        print(f"  sensor fault: {fault['text']} (ΔBIC {fault['delta_ic']:.0f}, by {fault['evidence']})")
     print(f"verdict: {document['verdict']}")
     print(document["explanation"])
     print(document["residual"]["summary"])

@@ -204,6 +204,7 @@ class Diagnosis:
     experiment: SeparatingExperiment | None = None
     criterion: str = "BIC"
     output_names: list = dataclasses.field(default_factory=list)
+    sensor_screen: object = None
 
     def __post_init__(self):
         self.output_names = list(self.output_names) or list(self.model.output_names)
@@ -212,6 +213,12 @@ class Diagnosis:
     def ranking(self) -> list:
         """The first round's single effects, best criterion change first (list of Candidate)."""
         return self.iterations[0].ranked
+
+    @property
+    def sensor_faults(self) -> list:
+        """The sensor faults claimed (:class:`~genthermal.diagnose.sensor_faults.SensorHypothesis`);
+        the physical verdict is about the record with them corrected."""
+        return list(self.sensor_screen.found) if self.sensor_screen is not None else []
 
     @property
     def verdict(self) -> str:
@@ -246,6 +253,7 @@ class Diagnosis:
             "rmse_final": self.iterations[-1].rmse_after,
             "unexplained": self.unexplained, "residual": self.residual,
             "experiment": self.experiment.to_dict() if self.experiment else None,
+            "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
@@ -347,7 +355,8 @@ def _ambiguity(candidate: Candidate, runner_up: Candidate | None) -> str:
 def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
              iterate: bool = False, dt_s: float | None = None, effects: Sequence[str] | None = None,
              max_iterations: int = 4, pairs: bool = True, catalogue: Mapping[str, Effect] | None = None,
-             progress: Callable[[str], None] | None = None, design_experiment: bool = True) -> Diagnosis:
+             progress: Callable[[str], None] | None = None, design_experiment: bool = True,
+             sensor_faults: bool = True) -> Diagnosis:
     """Find the catalogue effect(s) ``model`` lacks to explain ``data``: one call of
     :class:`~genthermal.diagnose.discovery.Discovery` (use a Discovery directly to fit several
     records of the same model and reuse what it builds).
@@ -381,6 +390,9 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     design_experiment : bool
         When another explanation fits about as well as the verdict, design the rig test that
         separates them (:func:`genthermal.diagnose.experiment.separating_experiment`).
+    sensor_faults : bool
+        Weigh sensor faults against the physical effects (:mod:`genthermal.diagnose.sensor_screen`):
+        the verdict is then about the machine on the record with the faulty sensors corrected.
 
     Returns
     -------
@@ -398,5 +410,5 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         candidates = candidates.only(effects)
     discovery = Discovery(candidates, fitter=OnsetFitter(pairs=pairs), iterate=iterate, max_iterations=max_iterations,
                           baseline_parameters=baseline_parameters, design_experiment=design_experiment,
-                          progress=progress)
+                          progress=progress, sensor_faults=sensor_faults)
     return discovery.fit(model, data, baseline=baseline, dt_s=dt_s)

@@ -40,6 +40,7 @@ from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
+from .sensor_screen import SensorScreen
 
 
 class Discovery:
@@ -78,6 +79,10 @@ class Discovery:
         Fit the cooling-air outlet sensor ``T_outlet`` too (less coolant flow heats the outlet
         air, better frame cooling does not); None: when the record has it and the model has an
         outlet node (:mod:`genthermal.diagnose.sensor_view`).
+    sensor_faults : bool
+        Weigh sensor faults (bias, drift, stuck, gain, noise of one sensor) against the
+        candidates (:mod:`genthermal.diagnose.sensor_screen`): the verdict is then about the
+        machine on the record with the faulty sensors corrected.
     """
 
     PHASE_MODES = ("auto", "resolved", "lumped")
@@ -85,10 +90,10 @@ class Discovery:
     def __init__(self, candidates=None, criterion=None, fitter: OnsetFitter | None = None, iterate: bool = False,
                  max_iterations: int = 4, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
                  design_experiment: bool = True, progress: Callable[[str], None] | None = None,
-                 phases: str = "auto", outlet: bool | None = None):
+                 phases: str = "auto", outlet: bool | None = None, sensor_faults: bool = True):
         if phases not in self.PHASE_MODES:
             raise InputError("phases", phases, f"must be one of {', '.join(self.PHASE_MODES)}")
-        self.phases, self.outlet = phases, outlet
+        self.phases, self.outlet, self.sensor_faults = phases, outlet, bool(sensor_faults)
         if int(max_iterations) != max_iterations or max_iterations < 1:
             raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
         self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
@@ -116,7 +121,8 @@ class Discovery:
         settings = dict(candidates=self.candidates, criterion=self.criterion, fitter=self.fitter,
                         iterate=self.iterate, max_iterations=self.max_iterations,
                         baseline_parameters=self.baseline_parameters, design_experiment=self.design_experiment,
-                        progress=self.progress, phases=self.phases, outlet=self.outlet)
+                        progress=self.progress, phases=self.phases, outlet=self.outlet,
+                        sensor_faults=self.sensor_faults)
         unknown = sorted(set(changes) - set(settings))
         if unknown:
             raise InputError("setting", unknown[0], f"unknown; Discovery takes {', '.join(settings)}")
@@ -218,6 +224,10 @@ class Discovery:
         if view is not None:
             self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
                          + (" (one winding node per phase)" if view.phases else ""))
+        screen = None
+        if self.sensor_faults:
+            screen = SensorScreen(measured, series, viewed.spec.interface)
+            series = screen.corrected_series()
         catalogue = self.candidates
         evidence = self.criterion.evidence_limit
         found: list[FoundEffect] = []
@@ -231,6 +241,12 @@ class Discovery:
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
             best = ranked[0] if ranked and ranked[0].significant else None
             runner_up = ranked[1] if len(ranked) > 1 else None
+            if screen is not None and not screen.model_round_done and screen.against_model(search, ranked,
+                                                                                            search.noise):
+                self._report(f"sensor fault: {screen.found[-1].fault.describe()}; the round runs again on the "
+                             "corrected record")
+                series = screen.corrected_series()
+                continue
             iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                                   explain(best, search, runner_up))
             if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
@@ -274,5 +290,8 @@ class Discovery:
                 iterations[0].explanation += (f" Caution: {' + '.join(_explanations(other))} explains the data "
                                               f"almost as well (RMSE {other.rmse_after:.3f} K): these data cannot "
                                               "tell them apart.")
+        if screen is not None and screen.found:
+            iterations[0].explanation = (f"{screen.text(' + '.join(iterations[0].added_effects) or 'none')} "
+                                         + iterations[0].explanation)
         return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
-                         criterion=self.criterion.name, output_names=viewed.output_names)
+                         criterion=self.criterion.name, output_names=viewed.output_names, sensor_screen=screen)

@@ -15,12 +15,25 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
-from ..measurements import MeasurementData
+from ..machines.interface import InputKind, MachineInterface
+from ..measurements import DEFAULT_INTERFACE, MeasurementData
 from .arx import arx_fit, r_squared
 
-#: Input signals an ARX model can use: the phase currents and exciter current (A), and ``I_sq``, the
-#: mean of the squared phase currents (A²), proportional to the stator copper losses.
-INPUT_SIGNALS = ("I_u", "I_v", "I_w", "I_exc", "I_sq")
+#: Name of the derived input: the mean of the squared load currents (A²), proportional to the
+#: copper losses.
+MEAN_SQUARED_CURRENT = "I_sq"
+
+
+def input_signals(interface: MachineInterface) -> tuple:
+    """Input signals an ARX model of the machine ``interface`` can use: its current and speed
+    inputs (A, rpm) and :data:`MEAN_SQUARED_CURRENT` (A²) when it has load currents. For the thesis
+    generator: the phase currents, the exciter current and ``I_sq``."""
+    signals = (*interface.inputs_of_kind(InputKind.CURRENT), *interface.inputs_of_kind(InputKind.SPEED))
+    return (*signals, MEAN_SQUARED_CURRENT) if interface.load_currents else signals
+
+
+#: Input signals of the default machine (the thesis generator).
+INPUT_SIGNALS = input_signals(DEFAULT_INTERFACE)
 #: Outputs modelled, named as :attr:`MeasurementData.winding` / :attr:`MeasurementData.iron`.
 OUTPUTS = ("winding", "iron")
 CANDIDATE_COLUMNS = ["na", "nb", "nk", "R2", "AIC"]
@@ -46,14 +59,16 @@ class InputSelection:
 
 
 def input_signal(data: MeasurementData, name: str) -> np.ndarray:
-    """The input signal ``name`` (one of :data:`INPUT_SIGNALS`) of ``data``.
+    """The input signal ``name`` (one of :func:`input_signals` of the data's machine) of ``data``.
 
-    ``I_sq`` is :math:`(I_u^2 + I_v^2 + I_w^2) / 3`, A²; the others are the columns, A.
+    ``I_sq`` is the mean of the squared load currents (for the thesis generator
+    :math:`(I_u^2 + I_v^2 + I_w^2) / 3`), A²; the others are the columns, in their units.
     """
-    if name == "I_sq":
-        return (data.frame[["I_u", "I_v", "I_w"]].to_numpy() ** 2).mean(axis=1)
-    if name not in INPUT_SIGNALS:
-        raise InputError("input", name, f"unknown input signal; choose one of {', '.join(INPUT_SIGNALS)}")
+    signals = input_signals(data.interface)
+    if name not in signals:
+        raise InputError("input", name, f"unknown input signal; choose one of {', '.join(signals)}")
+    if name == MEAN_SQUARED_CURRENT:
+        return (data.frame[list(data.interface.load_currents)].to_numpy(dtype=float) ** 2).mean(axis=1)
     return data.frame[name].to_numpy(dtype=float)
 
 
@@ -112,7 +127,7 @@ def arx_search(y, u, na_range=range(1, 4), nb_range=range(1, 4), nk_range=range(
     return table.sort_values(["R2", "AIC"], ascending=[False, True], kind="stable").reset_index(drop=True)
 
 
-def select_input(data: MeasurementData, output: str, inputs=INPUT_SIGNALS, discard_before_s: float = 0.0,
+def select_input(data: MeasurementData, output: str, inputs=None, discard_before_s: float = 0.0,
                  **search_options) -> InputSelection:
     """Search every structure for each input of ``inputs`` and pick the input with the best R².
 
@@ -123,7 +138,7 @@ def select_input(data: MeasurementData, output: str, inputs=INPUT_SIGNALS, disca
     output : str
         "winding" or "iron".
     inputs : iterable of str
-        Input signals to try (default all of :data:`INPUT_SIGNALS`).
+        Input signals to try (default all of :func:`input_signals` of the data's machine).
     discard_before_s : float
         Leave out the start of the record, s (see :func:`training_record`).
     **search_options
@@ -131,6 +146,7 @@ def select_input(data: MeasurementData, output: str, inputs=INPUT_SIGNALS, disca
         ``constant_term``).
     """
     tables, best_rows = {}, []
+    inputs = input_signals(data.interface) if inputs is None else inputs
     for name in inputs:
         y, u = training_record(data, output, name, discard_before_s)
         tables[name] = arx_search(y, u, **search_options)

@@ -5,12 +5,14 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
    :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
-   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`);
+   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`); the fault monitor
+   (:mod:`genthermal.schedule.monitor`) tests the filters' disturbance heat flows and, on an
+   alarm, identifies the fault from the in-flight record;
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
-   temperature held (thesis 7.3.6) and the faults that have occurred so far (a fault is known at the
-   first cycle after its onset);
-3. **re-plan** if a temperature above the planning limit :math:`\theta_{max} - \text{margin}` is
-   predicted, warm-started from the current plan;
+   temperature held (thesis 7.3.6) and the faults identified so far (with ``tell_fault``: the
+   scenario's faults, each known at the first cycle after its onset);
+3. **re-plan** (unless ``replan`` is off) if a temperature above the planning limit
+   :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
 The true plant is the nonlinear model with the faults from their onsets and parameters that differ
@@ -46,6 +48,7 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evaluate, generator_inputs,
                    mission_segments, predict, remaining_after)
 from .power_system import PowerSystem
+from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .shed import shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
@@ -92,12 +95,18 @@ class ManagerSettings:
         Hand the manager every fault's effect and parameters from the first cycle after its onset
         (the comparison case); default False: the manager detects and identifies faults itself
         (:mod:`genthermal.schedule.monitor`).
+    replan : bool
+        Re-plan when the prediction crosses the planning limit (default); False flies the nominal
+        schedule whatever is predicted, which isolates the filter and the fault detector from the
+        scheduler (detection benchmarks).
     filter : str
         Filter in the loop, a key of :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`: ``"ekf"``
         (default, the extended Kalman filter on the flown nonlinear model) or ``"kf"`` (the
         thesis linear filter on the design model).
     detection : DetectionSettings
         Fault detection and identification in flight.
+    sensor_watch : SensorWatchSettings
+        Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
     """
@@ -111,8 +120,10 @@ class ManagerSettings:
     replan_tolerance_K: float = 0.05
     seed: int = 0
     tell_fault: bool = False
+    replan: bool = True
     filter: str = "ekf"
     detection: DetectionSettings = DetectionSettings()
+    sensor_watch: SensorWatchSettings = SensorWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
@@ -168,6 +179,8 @@ class FlightResult:
         One when the manager starts shedding load and one per generator switched off: ``time_s``,
         ``shedding`` (names), ``switched_off`` (names switched off then),
         ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
+    sensor_watch : SensorWatch or None
+        Sensor faults injected, claimed and masked (closed loop).
     """
 
     system: PowerSystem
@@ -187,6 +200,7 @@ class FlightResult:
     cycles: int = 0
     rest_budget_s: float = np.inf
     shed_events: list = dataclasses.field(default_factory=list)
+    sensor_watch: object = None
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
@@ -475,17 +489,33 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     filter_cache: dict = {}
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, settings.filter) for g in range(system.n_generators)]
+    # the fault detector reads an extended Kalman filter's disturbance states: with the linear
+    # filter in the loop it gets parallel extended Kalman filters of its own
+    detector_cache: dict = {}
+    detectors = estimators if settings.filter == "ekf" or settings.tell_fault else [
+        StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
+                       detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
+    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
+                                        system.planning_model.output_names)
+    injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
+    watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
     measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
     while segments:
         cycles += 1
         if measured is not None:
+            before = [(e.z.copy(), None if e.P is None else e.P.copy()) for e in estimators]
             for g, estimator in enumerate(estimators):
                 estimator.update(measured[g])
+                if detectors is not estimators:
+                    detectors[g].update(measured[g])
             if not settings.tell_fault:
-                monitor.cycle(t, estimators)
+                watch.cycle(t, estimators, measured, before, monitor)  # sensor faults first: never seen as heat
+                believed = list(monitor.beliefs)
+                monitor.cycle(t, estimators, detectors)
+                watch.review(t, believed, estimators, monitor)  # a new belief may be a sensor's doing
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
             if settings.tell_fault:
@@ -493,11 +523,14 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                               lambda g=g: believed_model(system.planning_model, beliefs[g]))
             else:
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
+                if detectors is not estimators:
+                    detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
                            resting_s)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
-        if shedding or predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
+        if settings.replan and (shedding or predict(problem, schedule).peak()[0]
+                                > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
@@ -511,7 +544,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+            if detectors is not estimators:
+                detectors[g].predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
+        sample_times = t + dt * np.arange(1, n + 1)
+        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
         monitor.record(t, applied.currents_A, sensed)
         measured = sensed[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
@@ -520,4 +557,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    return recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles, rest_budget_s=budget)
+    result = recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles,
+                             rest_budget_s=budget)
+    result.sensor_watch = watch
+    return result

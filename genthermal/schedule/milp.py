@@ -2,7 +2,7 @@ r"""Discrete load schedule as a mixed-integer linear program (thesis 8.3.1: load
 
 Rests come in whole blocks of ``block_s`` (5 min) and loads move between generators in whole
 chunks of ``chunk_A``. On the linear design model the problem is then exactly a MILP, which HiGHS
-solves to proven optimality: the answer *certifies* the best discrete schedule for that model.
+solves with a proof: a certified answer is within 1 % of the best discrete schedule for that model.
 
 Per segment :math:`k` a one-hot choice :math:`\lambda_{k,n}\in\{0,1\}` of the rest length
 :math:`n\in\{0..N\}` blocks, and integer chunk counts :math:`m_{g,k}` (:math:`d_{g,k} = c\,m_{g,k}`,
@@ -17,8 +17,14 @@ with :math:`\underline\theta\lambda_{k,n} \le z_{g,k,n} \le \overline\theta\lamb
 the state when the segment starts. Inside the segment the temperatures at every check point are
 affine in :math:`s_{g,k}` and :math:`m_{g,k}` (exact zero-order hold), and so is the end state.
 Objective: :math:`\sum_{k,n} n\Delta_{block}\lambda_{k,n} + w\sum_{g,k} (T_k/3600)\,c\,|m_{g,k}|`
-(minutes). Solved by HiGHS through CasADi's ``conic`` plugin, or ``scipy.optimize.milp`` (also
-HiGHS) when that plugin is missing.
+(minutes). The state bounds :math:`\underline\theta, \overline\theta` come from the generator's
+steady states (:func:`_state_range`), which keeps the relaxation tight.
+
+Solved by HiGHS through ``scipy.optimize.milp``, which returns the incumbent and the proven bound
+when the time limit stops it (CasADi's ``conic`` plugin only when SciPy has no ``milp``). HiGHS stops
+at a relative gap of 1 %; the heuristic's and engineer's plans, rounded to the grid, give the
+incumbent to beat (warm start by cutoff). A plan the solver did not certify says so, with its gap,
+incumbent and bound, and which plan is flown: never a silent fallback.
 """
 
 from __future__ import annotations
@@ -31,9 +37,10 @@ import numpy as np
 import scipy.optimize
 import scipy.sparse
 
+from .engineer import engineer_plan
 from .heuristic import heuristic_plan
 from .optimal import LinearRows, sparse_dm
-from .plan import PlanningProblem, PlanResult, Schedule, evaluate
+from .plan import PlanningProblem, PlanResult, Schedule, evaluate, predict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,7 +60,14 @@ class MilpSettings:
     displacement_weight : float
         :math:`w`, s of mission time per A·h of displaced load.
     time_limit_s : float
-        HiGHS time limit; a solution without a proof of optimality is reported as not certified.
+        HiGHS time limit, s; a solution without a proof of optimality is reported as not certified.
+    relative_gap : float
+        HiGHS stops, and the plan is ``certified``, when the incumbent is within this fraction of
+        the proven bound (issue 9's target: 1 %).
+    warm_start : bool
+        Round the heuristic's and engineer's plans to the MILP's grid (adding rest blocks until the
+        design model keeps the limit) and use the better one as the incumbent to beat: a cutoff on
+        the objective, and the plan flown when HiGHS stops without a better one.
     """
 
     block_s: float = 300.0
@@ -62,6 +76,8 @@ class MilpSettings:
     check_s: float = 60.0
     displacement_weight: float = 1.0
     time_limit_s: float = 30.0
+    relative_gap: float = 0.01
+    warm_start: bool = True
 
 
 class _Variables:
@@ -113,24 +129,66 @@ def _output_maps(generator, state, offsets):
     return generator.Cy @ Psi, generator.Cy @ phi + offsets[0], generator.Cy @ sigma + offsets[1]
 
 
-def _solve_highs(c, A_sparse, lba, uba, lbx, ubx, integer, time_limit_s):
-    """Solve the MILP with HiGHS; return ``(x or None, status text, proven optimal, gap)``."""
-    if ca.has_conic("highs"):
-        A = sparse_dm(A_sparse)
-        options = {"discrete": integer.tolist(), "error_on_fail": False,
-                   "highs": {"output_flag": False, "mip_rel_gap": 1e-9, "time_limit": float(time_limit_s)}}
-        solver = ca.conic("schedule_milp", "highs", {"h": ca.Sparsity(len(c), len(c)), "a": A.sparsity()}, options)
-        result = solver(g=c, a=A, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
-        stats = solver.stats()
-        status = str(stats.get("return_status"))
-        found = stats.get("primal_solution_status") == "Feasible"
-        x = np.asarray(result["x"]).ravel() if found else None
-        return x, f"HiGHS (CasADi): {status}", status == "Optimal", float(stats.get("mip_gap", np.nan))
-    result = scipy.optimize.milp(c, constraints=scipy.optimize.LinearConstraint(A_sparse, lba, uba),
-                                 bounds=scipy.optimize.Bounds(lbx, ubx), integrality=integer.astype(int),
-                                 options={"time_limit": time_limit_s, "mip_rel_gap": 1e-9})
-    gap = float(getattr(result, "mip_gap", np.nan))
-    return result.x, f"HiGHS (scipy): {result.message}", result.status == 0, gap
+@dataclasses.dataclass(frozen=True)
+class MilpOutcome:
+    """What HiGHS returned.
+
+    Attributes
+    ----------
+    x : numpy.ndarray or None
+        Best integer-feasible point found (the incumbent), or None when there is none.
+    status : str
+        Solver and its status text.
+    proven : bool
+        True when HiGHS proved the incumbent optimal within ``mip_rel_gap``.
+    objective : float
+        Incumbent objective, min (NaN without an incumbent).
+    bound : float
+        Best proven lower bound of the objective (dual bound), min (NaN when the solver gives none).
+    """
+
+    x: np.ndarray | None
+    status: str
+    proven: bool
+    objective: float
+    bound: float
+
+    @property
+    def gap(self) -> float:
+        """Relative gap ``(incumbent - bound) / max(|incumbent|, 1 min)``; NaN without both."""
+        if not (np.isfinite(self.objective) and np.isfinite(self.bound)):
+            return float("nan")
+        return max(self.objective - self.bound, 0.0) / max(abs(self.objective), 1.0)
+
+
+def _solve_highs(c, A_sparse, lba, uba, lbx, ubx, integer, time_limit_s, relative_gap) -> MilpOutcome:
+    """Solve the MILP with HiGHS through ``scipy.optimize.milp``, which returns the incumbent and
+    the dual bound when the time limit stops the search; through CasADi's ``conic`` plugin (no
+    bound reported) only when this SciPy has no ``milp``."""
+    if hasattr(scipy.optimize, "milp"):
+        result = scipy.optimize.milp(c, constraints=scipy.optimize.LinearConstraint(A_sparse, lba, uba),
+                                     bounds=scipy.optimize.Bounds(lbx, ubx), integrality=integer.astype(int),
+                                     options={"time_limit": float(time_limit_s), "mip_rel_gap": relative_gap})
+        x = None if result.x is None else np.asarray(result.x)
+        objective = float(c @ x) if x is not None else float("nan")
+        bound = getattr(result, "mip_dual_bound", None)
+        bound = float(bound) if bound is not None and np.isfinite(bound) else float("nan")
+        proven = result.status == 0 and x is not None
+        if proven and not np.isfinite(bound):
+            bound = objective - relative_gap * max(abs(objective), 1.0)  # what "Optimal" guarantees
+        return MilpOutcome(x, f"HiGHS (scipy): {result.message}", proven, objective, bound)
+    A = sparse_dm(A_sparse)
+    options = {"discrete": integer.tolist(), "error_on_fail": False,
+               "highs": {"output_flag": False, "mip_rel_gap": relative_gap, "time_limit": float(time_limit_s)}}
+    solver = ca.conic("schedule_milp", "highs", {"h": ca.Sparsity(len(c), len(c)), "a": A.sparsity()}, options)
+    result = solver(g=c, a=A, lba=lba, uba=uba, lbx=lbx, ubx=ubx)
+    stats = solver.stats()
+    status = str(stats.get("return_status"))
+    x = np.asarray(result["x"]).ravel() if stats.get("primal_solution_status") == "Feasible" else None
+    objective = float(c @ x) if x is not None else float("nan")
+    proven = status == "Optimal" and x is not None
+    bound = objective - relative_gap * max(abs(objective), 1.0) if proven else float("nan")
+    return MilpOutcome(x, f"HiGHS (CasADi): {status}", proven, objective, bound)
 
 
 def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings()) -> PlanResult:
@@ -139,17 +197,20 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
     Returns
     -------
     PlanResult
-        ``details`` holds the objective (min), HiGHS status, ``certified`` (proven optimal) and the
-        gap. On infeasibility or solver failure: the heuristic's plan, ``method`` =
-        ``milp->heuristic`` and a warning.
+        ``details``: HiGHS ``status``; ``certified`` (the plan is proven within
+        ``settings.relative_gap`` of the optimum); ``mip_gap``, ``incumbent_objective_min`` and
+        ``bound_min`` (None when unknown); ``plan_used`` (``milp incumbent``, ``rounded heuristic
+        (MILP start)``/``rounded engineer (MILP start)`` when HiGHS found nothing better, or
+        ``heuristic`` when there is no discrete schedule at all: then ``method`` is
+        ``milp->heuristic``); the problem size. Every plan that is not certified carries a warning
+        saying how far the MILP got and which plan is flown.
     """
     started = time.perf_counter()
     n_gen, n_seg, nx = problem.n_generators, len(problem.segments), problem.x0.shape[1]
     n_blocks = int(min(settings.max_rest_s, problem.max_rest_s) // settings.block_s)
     block_min = settings.block_s / 60.0
     durations_h = np.array([s.duration_s for s in problem.segments]) / 3600.0
-    hot = max(500.0, float(np.max(problem.x0)) + 1.0)
-    cold = min(-60.0, float(np.min(problem.x0)) - 1.0)
+    hot, cold = _state_range(problem)
     cols, rows = _Variables(), LinearRows()
     rest = [cols.take(n_blocks + 1, 0.0, 1.0, block_min * np.arange(n_blocks + 1), integer=True) for _ in range(n_seg)]
     chunks = [[None] * n_seg for _ in range(n_gen)]
@@ -170,15 +231,16 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
         powers = [generator.step(n * settings.block_s)[0] for n in range(n_blocks + 1)]  # Phi^n
         entry_terms, entry_value = [], problem.x0[g]
         for k in range(n_seg):
-            z = [cols.take(nx, -np.inf, np.inf) for _ in range(n_blocks + 1)]
+            z = [cols.take(nx, -np.inf, np.inf) for _ in range(n_blocks + 1)]  # bounded by hot/cold rows
             rows.add([(np.concatenate(z), np.tile(np.eye(nx), n_blocks + 1))] + entry_terms, entry_value, entry_value)
             for n in range(n_blocks + 1):  # z = 0 unless this rest length is chosen
-                rows.add([(z[n], np.eye(nx)), (rest[k][n], -hot * np.ones(nx))], np.full(nx, -np.inf), 0.0)
-                rows.add([(z[n], np.eye(nx)), (rest[k][n], -cold * np.ones(nx))], np.zeros(nx), np.inf)
-                for j in range(1, n + 1):  # temperatures at the end of every block of this rest
-                    offset = generator.Cy @ (np.eye(nx) - powers[j]) @ xss + y_rest - problem.limit_C
-                    rows.add([(z[n], generator.Cy @ powers[j]), (rest[k][n], offset)],
-                             np.full(len(offset), -np.inf), 0.0)
+                rows.add([(z[n], np.eye(nx)), (rest[k][n], -hot[g])], np.full(nx, -np.inf), 0.0)
+                rows.add([(z[n], np.eye(nx)), (rest[k][n], -cold[g])], np.zeros(nx), np.inf)
+            for j in range(1, n_blocks + 1):  # temperatures at the end of block j of any rest of >= j blocks
+                offset = generator.Cy @ (np.eye(nx) - powers[j]) @ xss + y_rest - problem.limit_C
+                rows.add([(z[n], generator.Cy @ powers[j]) for n in range(j, n_blocks + 1)]
+                         + [(rest[k][n], offset[:, None]) for n in range(j, n_blocks + 1)],
+                         np.full(len(offset), -np.inf), 0.0)
             start = cols.take(nx, -np.inf, np.inf)
             terms = [(z[n], -powers[n]) for n in range(n_blocks + 1)]
             terms += [(rest[k][n], -(np.eye(nx) - powers[n]) @ xss) for n in range(n_blocks + 1)]
@@ -189,21 +251,148 @@ def milp_plan(problem: PlanningProblem, settings: MilpSettings = MilpSettings())
             entry_terms = [(start, -P), (chunks[g][k], settings.chunk_A * sigma)]
             entry_value = phi
     lbx, ubx, cost, integer = cols.arrays()
+    start_name, start_schedule = _discrete_start(problem, settings, n_blocks) if settings.warm_start else (None,
+                                                                                                          None)
+    start_objective = np.inf if start_schedule is None else milp_objective(problem, start_schedule, settings)
+    if np.isfinite(start_objective):  # cutoff: only schedules at least as good as the start
+        rows.add([(np.arange(len(cost)), cost[None, :])], [-np.inf], [start_objective + 1e-6])
     lba, uba = rows.bounds()
-    x, status, proven, gap = _solve_highs(cost, rows.matrix(len(cost)), lba, uba, lbx, ubx, integer,
-                                          settings.time_limit_s)
-    if x is None:
+    matrix = rows.matrix(len(cost))
+    outcome = _solve_highs(cost, matrix, lba, uba, lbx, ubx, integer, settings.time_limit_s, settings.relative_gap)
+    if start_schedule is not None and (outcome.x is None or outcome.objective > start_objective):
+        outcome = dataclasses.replace(outcome, x=None, objective=start_objective,
+                                      proven=bool(np.isfinite(outcome.bound)
+                                                  and start_objective - outcome.bound
+                                                  <= settings.relative_gap * max(abs(start_objective), 1.0)))
+    size = {"n_rows": int(matrix.shape[0]), "n_columns": int(matrix.shape[1]), "n_integers": int(integer.sum())}
+    facts = {"status": outcome.status, "certified": bool(outcome.proven),
+             "mip_gap": None if np.isnan(outcome.gap) else float(outcome.gap),
+             "incumbent_objective_min": None if np.isnan(outcome.objective) else float(outcome.objective),
+             "bound_min": None if np.isnan(outcome.bound) else float(outcome.bound),
+             "time_limit_s": float(settings.time_limit_s), **size}
+    if outcome.x is None and start_schedule is not None:
+        facts.update(certified=bool(outcome.proven), mip_gap=None if np.isnan(outcome.gap) else float(outcome.gap),
+                     incumbent_objective_min=float(start_objective))
+        warnings = [] if outcome.proven else [
+            f"MILP not certified ({outcome.status}): its incumbent is the {start_name} plan rounded to whole "
+            f"rest blocks and load chunks, {_minutes(start_objective)}, bound {_minutes(outcome.bound)}, gap "
+            f"{_percent(outcome.gap)}; flying it"]
+        result = evaluate(problem, start_schedule, "milp", time.perf_counter() - started, warnings)
+        result.details = {**facts, "plan_used": f"rounded {start_name} (MILP start)", "objective_min": start_objective}
+        return result
+    if outcome.x is None:
         fallback = heuristic_plan(problem)
         fallback.method, fallback.solve_s = "milp->heuristic", time.perf_counter() - started
-        fallback.warnings.append(f"MILP found no discrete schedule ({status}); using the heuristic")
+        fallback.warnings.append(f"MILP stopped without any discrete schedule ({outcome.status}, bound "
+                                 f"{_minutes(outcome.bound)}); flying the thesis heuristic's plan instead, "
+                                 "which is not a MILP solution")
+        fallback.details = {**facts, "plan_used": "heuristic", "objective_min": None}
         return fallback
+    x = outcome.x
     rests = np.array([settings.block_s * np.argmax(x[r]) for r in rest])
     displaced = np.array([[settings.chunk_A * round(x[chunks[g][k][0]]) for k in range(n_seg)] for g in range(n_gen)])
     schedule = Schedule(displaced, rests)
-    warnings = [] if proven else [f"MILP optimality not proven ({status})"]
+    warnings = [] if outcome.proven else [
+        f"MILP not certified ({outcome.status}): incumbent {_minutes(outcome.objective)}, bound "
+        f"{_minutes(outcome.bound)}, gap {_percent(outcome.gap)}; flying the incumbent"]
     result = evaluate(problem, schedule, "milp", time.perf_counter() - started, warnings)
-    result.details = {"objective_min": float(cost @ x), "status": status, "certified": bool(proven), "mip_gap": gap}
+    result.details = {**facts, "plan_used": "milp incumbent", "objective_min": float(outcome.objective)}
     return result
+
+
+def _discrete_start(problem: PlanningProblem, settings: MilpSettings, n_blocks: int):
+    """The best of the heuristic's and engineer's plans rounded to the MILP's grid (rests up to
+    whole blocks, sheds up to whole chunks, takers balanced in whole chunks) that the design model
+    predicts within the limit: ``(name, Schedule)``, or ``(None, None)`` when none is."""
+    best, best_objective = (None, None), np.inf
+    for name, planner in (("heuristic", heuristic_plan), ("engineer", engineer_plan)):
+        try:
+            schedule = _rounded(problem, planner(problem).schedule, settings, n_blocks)
+        except ValueError:
+            continue
+        schedule = _rest_until_within(problem, schedule, settings, n_blocks)
+        if schedule is None:
+            continue
+        objective = milp_objective(problem, schedule, settings)
+        if objective < best_objective:
+            best, best_objective = (name, schedule), objective
+    return best
+
+
+def _rest_until_within(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings, n_blocks: int):
+    """Add rest blocks, one at a time before the segment of the predicted peak (or the latest
+    earlier segment with room), until the design model keeps the limit; None when it cannot."""
+    rests = schedule.rest_before_s.copy()
+    for _ in range(n_blocks * len(rests) + 1):
+        candidate = Schedule(schedule.displaced_A, rests)
+        peak, _, segment = predict(problem, candidate).peak()
+        if peak <= problem.limit_C:
+            return candidate
+        room = np.flatnonzero(rests[:segment + 1] + settings.block_s <= n_blocks * settings.block_s + 1e-6)
+        if room.size == 0:
+            return None
+        rests = rests.copy()
+        rests[room[-1]] += settings.block_s
+    return None
+
+
+def _rounded(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings, n_blocks: int) -> Schedule:
+    """``schedule`` on the MILP's grid; ValueError when it does not fit (a rest longer than
+    ``n_blocks`` blocks, or no balanced whole-chunk split within the displacement bounds)."""
+    blocks = np.ceil(schedule.rest_before_s / settings.block_s - 1e-6)
+    if np.any(blocks > n_blocks):
+        raise ValueError("rest longer than the MILP's longest rest")
+    chunk = settings.chunk_A
+    chunks = np.zeros(schedule.displaced_A.shape, dtype=int)
+    for k in range(schedule.displaced_A.shape[1]):
+        low, high = problem.displacement_bounds(k)
+        lowest, highest = int(np.ceil(low / chunk - 1e-9)), int(np.floor(high / chunk + 1e-9))
+        d = schedule.displaced_A[:, k] / chunk
+        m = np.clip(np.ceil(d - 1e-6), lowest, highest).astype(int)  # sheds up, takes down
+        excess = int(m.sum())  # > 0: takers take whole chunks more, the most room first
+        while excess != 0:
+            step = -1 if excess > 0 else 1
+            room = (m - lowest) if step < 0 else (highest - m)
+            candidates = np.flatnonzero((room > 0) & ((d <= 0) if step < 0 else (d >= 0)))
+            if candidates.size == 0:  # the takers are full: the shedders shed a chunk less
+                candidates = np.flatnonzero(room > 0)
+            if candidates.size == 0:
+                raise ValueError("no balanced whole-chunk split")
+            g = candidates[np.argmax(room[candidates])]
+            m[g] += step
+            excess += step
+        chunks[:, k] = m
+    return Schedule(chunk * chunks, settings.block_s * blocks + 0.0)
+
+
+def _minutes(value: float) -> str:
+    return "unknown" if not np.isfinite(value) else f"{value:.2f} min"
+
+
+def _percent(value: float) -> str:
+    return "unknown" if not np.isfinite(value) else f"{100.0 * value:.1f} %"
+
+
+#: Slack of the state range beyond the extreme steady states and the state now, K: trajectories of
+#: the stable LPTN overshoot neither by more than their start's distance from steady state; the
+#: slack covers the exciter's and iron loss's dependence on current between the extremes.
+STATE_RANGE_SLACK_K = 10.0
+
+
+def _state_range(problem: PlanningProblem) -> tuple[list, list]:
+    """Per generator, (hot, cold) bounds (°C, one value for every state) for the disaggregation
+    rows: the extremes of the state now, the steady states at no current and at the current limit,
+    the inlet and the ambient, widened by :data:`STATE_RANGE_SLACK_K`. Much tighter than fixed
+    bounds, so the LP relaxation of the rest choice is tighter."""
+    hot, cold = [], []
+    nx = problem.x0.shape[1]
+    for g, generator in enumerate(problem.generators):
+        extremes = np.concatenate([problem.x0[g], generator.steady_state(problem.inputs(g, problem.current_limit_A)),
+                                   generator.steady_state(problem.inputs(g, 0.0)),
+                                   [problem.inlet_C[g], problem.ambient_C]])
+        hot.append(np.full(nx, extremes.max() + STATE_RANGE_SLACK_K))
+        cold.append(np.full(nx, extremes.min() - STATE_RANGE_SLACK_K))
+    return hot, cold
 
 
 def milp_objective(problem: PlanningProblem, schedule: Schedule, settings: MilpSettings = MilpSettings()) -> float:

@@ -7,35 +7,30 @@ manager believes: the flown (planning) model with the effects identified so far.
 with disturbance heat flows; ``kf`` is the thesis linear filter on its design model. The planner
 always plans on the design model; :func:`planner_state` hands it the filter's node temperatures.
 
-**Detection.** At every management cycle the filter's innovation :math:`e = y - \hat y^-` of the
-winding sensor is normalised by its predicted standard deviation, :math:`z_g = e_g/\sqrt{S_{ww}}`,
-:math:`S = CP^-C^T + R`. A model error common to all units (the planning model's cooling or
-resistance off by up to 30 %) gives innovations of 10 K per cycle, larger than a blockage's, so an
-absolute test cannot tell them apart. Two tests, each a CUSUM (Page 1954), separate them:
+**Detection.** Faults are detected on the extended Kalman filter's disturbance heat flows, not
+on its innovations: the disturbance states absorb a fault within a cycle or two, so the
+innovations stay small. :class:`~genthermal.schedule.detector.DisturbanceDetector` compares each
+generator's estimated extra heat flow into the winding and the iron with the generators believed
+healthy, normalised by the filter's covariance, and runs a one-sided CUSUM on it (the statistic,
+its thresholds and their provenance are in :mod:`genthermal.schedule.detector`). With the linear
+filter (``kf``) in the loop the detector runs on a parallel extended Kalman filter of its own.
 
-* **fault** (one generator): for a generator that carries no more current than the others (the
-  model error grows with load, so a generator that took load on from the others would see it as
-  a fault), the differential innovation :math:`d_g = e_g -
-  \operatorname{median}_{h\ne g} e_h` (K) removes what the generators share; one-sided,
-  :math:`g_k = \max(0, g_{k-1} + d_k - \nu_f)`, alarm when :math:`g_k > h_f` — one-sided because
-  every fault the manager watches for (blockage, shorted turn, end-winding stray loss, excitation
-  iron loss) heats the machine;
-* **model error** (all generators): the mean :math:`\bar z` over the generators believed healthy,
-  two-sided with :math:`\nu_m, h_m`. An alarm recalibrates the planning model's uncertain
-  parameters (``calibrate_parameters``) on the record of the generator that looks healthiest
-  (:func:`genthermal.diagnose.calibrate`), at most every ``recalibrate_every_s``.
-
-The differential test assumes the units share the model error; unit-to-unit differences are not
-separated from faults. Its false-alarm rate is measured on healthy flights with parameters off by
-up to ±30 % (``benchmarks/bench_scheduler.py``).
+A second test watches for a **model error** common to all generators: the mean :math:`\bar z`
+of the normalised winding innovations :math:`z_g = e_g/\sqrt{S_{ww}}` over the generators
+believed healthy, a two-sided CUSUM with :math:`\nu_m, h_m`. An alarm recalibrates the planning
+model's uncertain parameters (``calibrate_parameters``) on the record of the generator that looks
+healthiest (:func:`genthermal.diagnose.calibrate`), at most every ``recalibrate_every_s``.
 
 **Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
 generator's record, then the alarmed generator's record since the mission start (inputs and the
 noisy sensors, resampled to ``identify_dt_s``) is handed to :func:`genthermal.diagnose.diagnose`
 with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
 by ΔBIC, and accepted only when significant by diagnose's four tests. The manager then plans and
-filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`). An
-alarm that no effect explains is recorded and the detector restarts.
+filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`), and
+the generator's disturbance states restart from those of the healthy generators (the fault now
+being in its model, what remains is the shared model error). An alarm that no effect explains is
+recorded and the detector restarts; a generator is identified at most ``max_identifications``
+times per flight, at least ``identify_spacing_s`` apart.
 """
 
 from __future__ import annotations
@@ -50,6 +45,7 @@ from ..errors import InputError
 from ..estimation.ekf import ExtendedKalmanFilter
 from ..estimation.kalman import KalmanFilter
 from ..measurements import required_columns
+from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 
 #: Filters the closed loop can use: name → how to build one from ``(design generator, flown
 #: model, step s)``: ``ekf`` on the flown nonlinear model, ``kf`` on the design model.
@@ -65,12 +61,16 @@ class DetectionSettings:
 
     Attributes
     ----------
-    fault_drift, fault_threshold : float
-        :math:`\nu_f, h_f` of the differential (fault) CUSUM, K.
+    detector : DetectorSettings
+        Drifts and thresholds of the fault test (:mod:`genthermal.schedule.detector`).
     model_drift, model_threshold : float
         :math:`\nu_m, h_m` of the common (model error) CUSUM.
     calibrate_parameters : tuple of str
-        Parameters recalibrated on a model-error alarm.
+        Parameters recalibrated on the healthy generators' record before an identification and
+        on a model-error alarm (those the model lacks are skipped). Default: the five the
+        robustness grid varies; with ``R0`` and ``h_end_air`` alone, a plant whose ``P_iron`` is
+        off was "identified" as an excitation iron loss from the mission start instead of its
+        shorted turn (``benchmarks/bench_detection.py``, cases 5 and 9).
     recalibrate_every_s : float
         Shortest time between recalibrations, s.
     min_record_s : float
@@ -83,20 +83,36 @@ class DetectionSettings:
     identify_dt_s : float
         Sample period of the records handed to calibration and identification, s.
     max_identifications : int
-        Identifications per generator and flight (later alarms are recorded only).
+        Identifications (whatever their outcome) per generator and flight; later alarms are
+        recorded only.
+    identify_spacing_s : float
+        Shortest time between two identifications of one generator, s (alarms in between are
+        recorded only).
+    max_onset_lead_s : float
+        An identified effect must start at most this long before the alarm, s: the detector
+        compares the generators from the first cycles on, so a fault present much earlier would
+        have alarmed earlier; an effect fitted from the mission start is the model error, not
+        the fault.
+    equivalent_delta_bic : float
+        Effects within this ΔBIC of the identified one are reported as equivalent explanations
+        (Kass & Raftery 1995: a BIC difference below 2 is not worth more than a bare mention);
+        a shorted turn and an end-winding stray loss, both a loss ∝ I² in the winding, are
+        typically within it.
     """
 
-    fault_drift: float = 0.25
-    fault_threshold: float = 0.2
+    detector: DetectorSettings = DetectorSettings()
     model_drift: float = 2.5
     model_threshold: float = 5.0
-    calibrate_parameters: tuple = ("R0", "h_end_air")
+    calibrate_parameters: tuple = ("R0", "h_end_air", "h_top_air", "P_iron", "m_dot_fan")
     recalibrate_every_s: float = 1800.0
     min_record_s: float = 3600.0
     max_recalibrations: int = 3
     fault_effects: tuple = FAULT_EFFECTS
     identify_dt_s: float = 60.0
-    max_identifications: int = 3
+    max_identifications: int = 4
+    identify_spacing_s: float = 600.0
+    max_onset_lead_s: float = 3600.0
+    equivalent_delta_bic: float = 2.0
 
 
 def planner_state(filter_state, filter_state_names, design_model) -> np.ndarray:
@@ -240,6 +256,8 @@ class Identification:
         Fit of the record without and with the effect, K.
     runner_up : str or None
         Second-ranked effect and its ΔBIC gap, for ambiguity.
+    equivalent : list of str
+        Other effects that explain the record as well (within ``equivalent_delta_bic``).
     solve_s : float
         Wall-clock time of the identification, s.
     """
@@ -254,6 +272,7 @@ class Identification:
     rmse_after_K: float | None
     runner_up: str | None
     solve_s: float
+    equivalent: list = dataclasses.field(default_factory=list)
 
     @property
     def effects(self) -> tuple:
@@ -265,7 +284,8 @@ class Identification:
         return {"generator": names[self.generator], "detected_at_s": self.detected_at_s, "effect": self.effect,
                 "parameters": self.values, "onset_s": self.onset_s,
                 "confidence": {"delta_bic": self.delta_bic, "rmse_before_K": self.rmse_before_K,
-                               "rmse_after_K": self.rmse_after_K, "runner_up": self.runner_up},
+                               "rmse_after_K": self.rmse_after_K, "runner_up": self.runner_up,
+                               "equivalent": list(self.equivalent)},
                 "solve_s": self.solve_s}
 
 
@@ -315,7 +335,8 @@ class FaultMonitor:
     beliefs : list of tuple
         Per generator, the identified effects (``(name, ((parameter, value), ...))``).
     alarms : list of dict
-        ``time_s`` and ``generator`` of every fault alarm.
+        ``time_s``, ``generator``, ``node`` (``winding`` or ``iron``) and ``statistic`` (the
+        detector's :math:`r`) of every fault alarm.
     identifications : list of Identification
     calibrations : list of dict
         ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
@@ -324,7 +345,8 @@ class FaultMonitor:
     def __init__(self, system, settings: DetectionSettings, dt_s: float):
         self.system, self.settings, self.dt_s = system, settings, dt_s
         n = system.n_generators
-        self.fault_tests = [Cusum(settings.fault_drift, settings.fault_threshold) for _ in range(n)]
+        self.node_roles = detector_node_roles(system.planning_model)
+        self.detector = DisturbanceDetector(n, settings.detector, self.node_roles)
         self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
         self.model, self.beliefs = system.planning_model, [()] * n
         self.alarms, self.identifications, self.calibrations = [], [], []
@@ -357,18 +379,34 @@ class FaultMonitor:
         :meth:`design_generator` linearises)."""
         return believed_model(self.model, self.beliefs[g])
 
-    def cycle(self, t_s: float, estimators) -> None:
-        """Run both tests on the cycle's innovations (every estimator just updated)."""
+    def cycle(self, t_s: float, estimators, detection_estimators=None) -> None:
+        """Run both tests on the cycle just flown (every estimator just updated).
+
+        Parameters
+        ----------
+        t_s : float
+            Time of the cycle's end, s.
+        estimators : sequence of StateEstimator
+            The planner's filters (their innovations feed the model-error test).
+        detection_estimators : sequence of StateEstimator, optional
+            Extended Kalman filters whose disturbance states feed the fault test; default
+            ``estimators`` (which must then be extended Kalman filters).
+        """
         if len(self._time) < 2:
             return
+        detection_estimators = estimators if detection_estimators is None else detection_estimators
         z = np.array([e.innovation[0] / e.innovation_std[0] for e in estimators])
         healthy = [g for g in range(len(z)) if not self.beliefs[g]]
-        e = np.array([est.innovation[0] for est in estimators])
-        load = self._currents[-1].mean(axis=1)
-        for g in range(len(z)):
-            if load[g] <= np.median(np.delete(load, g)) + 1e-9 and \
-                    self.fault_tests[g].update(e[g] - np.median(np.delete(e, g))):
-                self._fault_alarm(g, t_s, z)
+        mean_square = np.mean(self._currents[-1] ** 2, axis=1)
+        load_factors = mean_square / self.system.rated_current_A ** 2
+
+        def extra(g, load_factor):
+            e = detection_estimators[g]
+            return extra_heat_flow(e.filter, e.z, e.P, load_factor)
+        r = self.detector.statistics(extra, load_factors, [not b for b in self.beliefs])
+        for g, node in self.detector.update(t_s, r):
+            if not any(a["time_s"] == t_s and a["generator"] == g for a in self.alarms):
+                self._fault_alarm(g, t_s, z, node, float(r[g, node]), detection_estimators)
         last = max((c["time_s"] for c in self.calibrations), default=-np.inf)
         if healthy and self.model_test.update(float(np.mean(z[healthy]))) and t_s >= self.settings.min_record_s and \
                 t_s - last >= self.settings.recalibrate_every_s and \
@@ -379,16 +417,17 @@ class FaultMonitor:
         from ..diagnose import calibrate
 
         g = min(candidates, key=lambda h: z[h])
-        result = calibrate(self.system.planning_model, self.frame(g), self.settings.calibrate_parameters,
-                           self.settings.identify_dt_s)
+        names = [n for n in self.settings.calibrate_parameters if n in self.system.planning_model.parameters]
+        result = calibrate(self.system.planning_model, self.frame(g), names, self.settings.identify_dt_s)
         self.model = result.model
         self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
                                   "parameters": dict(zip(result.names, result.values))})
 
-    def _fault_alarm(self, g: int, t_s: float, z) -> None:
-        self.alarms.append({"time_s": t_s, "generator": g})
-        done = sum(1 for i in self.identifications if i.generator == g and i.effect)
-        if done >= self.settings.max_identifications:
+    def _fault_alarm(self, g: int, t_s: float, z, node: int, statistic: float, detection_estimators) -> None:
+        self.alarms.append({"time_s": t_s, "generator": g, "node": self.node_roles[node], "statistic": statistic})
+        earlier = [i for i in self.identifications if i.generator == g]
+        if len(earlier) >= self.settings.max_identifications or \
+                (earlier and t_s - earlier[-1].detected_at_s < self.settings.identify_spacing_s):
             return
         others = [h for h in range(len(z)) if h != g and not self.beliefs[h]]
         if others:
@@ -397,23 +436,67 @@ class FaultMonitor:
         self.identifications.append(found)
         if found.effect:
             self.beliefs[g] = found.effects
+            if others:
+                restart_disturbances(detection_estimators[g], [detection_estimators[h] for h in others])
+            self.detector.restart(g)
+
+
+def detector_node_roles(model) -> list:
+    """Per sensor node of ``model`` (the extended Kalman filter's disturbance nodes), ``"winding"``
+    when it is the machine's slot-winding node and ``"iron"`` when it is one of its iron nodes
+    (:class:`~genthermal.machines.Role`); InputError for any other sensor node."""
+    from ..machines import Role
+
+    interface = model.spec.interface
+    winding = interface.role(Role.SLOT_WINDING, "the fault detector")
+    iron = tuple(interface.role(Role.IRON, "the fault detector"))
+    roles = []
+    for output, node in model.spec.sensors.items():
+        if node != winding and node not in iron:
+            raise InputError("model.sensors", output, f"senses node {node}, neither the slot winding ({winding}) "
+                             f"nor the iron ({', '.join(iron)}): the fault detector has no drift for it")
+        roles.append("winding" if node == winding else "iron")
+    return roles
+
+
+def restart_disturbances(estimator, references) -> None:
+    """Set ``estimator``'s disturbance states and their covariance to the median of the
+    ``references``' (generators believed healthy): once a fault is in a generator's model, what
+    its disturbances should carry is the model error the healthy generators share."""
+    nx = estimator.filter.model.n_states
+    stacked = np.array([r.z[nx:] for r in references])
+    middle = int(np.argsort(stacked[:, 0])[len(references) // 2])
+    estimator.z = np.concatenate([estimator.z[:nx], np.median(stacked, axis=0)])
+    P = estimator.P.copy()
+    P[nx:, :] = 0.0
+    P[:, nx:] = 0.0
+    P[nx:, nx:] = references[middle].P[nx:, nx:]
+    estimator.P = P
 
 
 def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: float,
                    settings: DetectionSettings) -> Identification:
-    """Identify the effect behind an alarm from the record (module docstring)."""
+    """Identify the effect behind an alarm from the record (module docstring): the best-ranked
+    significant effect of diagnose's search whose onset is at most ``max_onset_lead_s`` before
+    the alarm, with the effects equivalent to it."""
     from ..diagnose import diagnose
 
     started = time.perf_counter()
     diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects),
                          pairs=False, design_experiment=False)  # one fault at a time, no rig test in flight
     ranked = diagnosis.iterations[0].ranked
-    best = ranked[0] if ranked and ranked[0].significant else None
-    runner_up = (f"{ranked[1].effect} (ΔBIC +{ranked[1].delta_bic - ranked[0].delta_bic:.0f})"
-                 if len(ranked) > 1 else None)
+    earliest = detected_at_s - settings.max_onset_lead_s
+    admissible = [c for c in ranked if c.onset_s >= earliest]
+    best = admissible[0] if admissible and admissible[0].significant else None
+    others = [c for c in admissible if c is not best]
+    runner_up = (f"{others[0].effect} (ΔBIC +{others[0].delta_bic - admissible[0].delta_bic:.0f})"
+                 if best is not None and others else None)
     elapsed = time.perf_counter() - started
     if best is None:
-        return Identification(generator, detected_at_s, None, {}, None, ranked[0].delta_bic if ranked else None,
+        return Identification(generator, detected_at_s, None, {}, None,
+                              float(admissible[0].delta_bic) if admissible else None,
                               diagnosis.iterations[0].rmse_before, None, runner_up, elapsed)
+    equivalent = [c.effect for c in others if c.delta_bic - best.delta_bic <= settings.equivalent_delta_bic]
     return Identification(generator, detected_at_s, best.effect, dict(best.values), float(best.onset_s),
-                          float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up, elapsed)
+                          float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up,
+                          elapsed, equivalent)

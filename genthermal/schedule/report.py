@@ -31,6 +31,7 @@ the manager is not told unless ``tell_fault``):
 ``detected_at_s``       first fault alarm on a generator whose fault had started, s (None: none)
 ``detect_delay_s``      that alarm minus the fault's onset, s
 ``identified``          one entry per identification: generator, effect, parameters, onset, confidence
+                        (ΔBIC, fit before/after, runner-up, equivalent explanations)
 ``false_alarms``        fault alarms on a generator with no fault started at that time
 ``recalibrations``      in-flight recalibrations of the planning model: time, generator, parameters
 """
@@ -78,6 +79,8 @@ def flight_summary(result: FlightResult) -> dict:
     }
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
+    if getattr(result, "sensor_watch", None) is not None:
+        summary["sensor_faults"] = result.sensor_watch.to_dict(names)
     return summary
 
 

@@ -1,0 +1,158 @@
+"""The sensor-fault side of a diagnosis: screen the record, compete with the physical effects, correct.
+
+Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``):
+
+1. before any model: a sensor that disagrees with the other sensors of its output
+   (:func:`~genthermal.diagnose.sensor_faults.screen_redundant`) and a sensor whose noise grew
+   (:func:`~genthermal.diagnose.sensor_faults.screen_noise`) are claimed and corrected; the search
+   runs on the corrected record;
+2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
+   over all model outputs, is claimed when it passes the four tests and beats the best physical
+   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
+   detector names the sensor and the time, also when fitted on top of the best physical effect
+   it still passes the four tests against that effect alone); the round is then run again on the
+   record with that sensor corrected, so what the machine does is still judged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..machines.interface import Role
+from .compare import MeasuredSeries, as_measurements
+from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
+                            screen_against_model, screen_noise, screen_redundant, sensor_columns)
+
+
+def record_readings(data, series: MeasuredSeries, interface) -> dict:
+    """Every sensor column of ``data`` (schema of the machine ``interface``) on the grid of
+    ``series`` (linear interpolation over the finite samples; NaN outside them). A
+    :class:`MeasuredSeries` gives its outputs as sensors."""
+    if isinstance(data, MeasuredSeries):
+        return {name: np.array(row, dtype=float) for name, row in zip(interface.output_names, data.outputs)}
+    measurements = as_measurements(data, interface)
+    time_s = measurements.time_s
+    readings = {}
+    for output, columns in sensor_columns(interface).items():
+        for name in columns:
+            if name not in measurements.frame:
+                continue
+            values = measurements.frame[name].to_numpy(dtype=float)
+            ok = np.isfinite(values)
+            if ok.sum() < 2:
+                continue
+            on_grid = np.interp(series.time_s, time_s[ok], values[ok], left=np.nan, right=np.nan)
+            exact = np.searchsorted(time_s, series.time_s).clip(0, time_s.size - 1)
+            matched = np.isclose(time_s[exact], series.time_s)
+            on_grid[matched & ~np.isfinite(values[exact])] = np.nan
+            readings[name] = on_grid
+    return readings
+
+
+class SensorScreen:
+    """Sensor faults of one record (module docstring).
+
+    Parameters
+    ----------
+    data : MeasurementData, pandas.DataFrame, path or MeasuredSeries
+        The record as given to diagnose.
+    series : MeasuredSeries
+        Its model outputs on the diagnosis grid.
+    interface : MachineInterface
+        The machine's interface (sensor schema, phase currents).
+
+    Attributes
+    ----------
+    found : list of SensorHypothesis
+        Sensor faults claimed so far.
+    alternative : SensorHypothesis or None
+        The best single-sensor fault tried against the model, claimed or not.
+    """
+
+    def __init__(self, data, series: MeasuredSeries, interface):
+        self.output_names = list(interface.output_names)
+        self.columns = sensor_columns(interface)
+        self.series = series
+        self.elapsed_s = series.time_s - series.time_s[0]
+        self.readings = record_readings(data, series, interface)
+        self.found: list[SensorHypothesis] = []
+        self.alternative: SensorHypothesis | None = None
+        self.model_round_done = False
+        phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
+        self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
+        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, self.columns)
+        self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
+
+    def corrected_series(self) -> MeasuredSeries:
+        """The series with the claimed sensor faults removed from its outputs."""
+        if not self.found:
+            return self.series
+        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names, self.columns)
+        return dataclasses.replace(self.series, outputs=outputs)
+
+    def against_model(self, search, ranked, noise: float, outputs=None, onsets=None,
+                      on_top: bool = False) -> SensorHypothesis | None:
+        """Claim the best single-sensor fault if it beats the physical effects (module docstring).
+
+        Parameters
+        ----------
+        search : EffectSearch
+            The first round's search (its ``predicted_before`` is the model fitted to the record).
+        ranked : list of Candidate
+            The physical effects of that round, best first.
+        noise : float
+            Estimated sensor noise, K.
+        outputs, onsets : optional
+            Restrict the faults tried to the sensors of these outputs and to these onset samples
+            (:func:`~genthermal.diagnose.sensor_faults.screen_against_model`).
+        on_top : bool
+            Also claim a fault that, fitted on top of the best physical effect, passes the four
+            tests against that effect alone. Only where a detector has already said which sensor
+            moved and when (in flight): on a record searched blind, a second physical effect that
+            moves one sensor most (an iron loss after a blockage) passes it too.
+        """
+        from .discover import passes_tests
+
+        self.model_round_done = True
+        exclude = {h.fault.sensor for h in self.found}
+        candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
+                                         self.elapsed_s, self.output_names, self.columns, exclude,
+                                         outputs, onsets)
+        self.alternative = candidate
+        if candidate is None:
+            return None
+        best_physical = ranked[0] if ranked else None
+        alone = passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)
+        if best_physical is None:
+            claimed = alone
+        else:
+            candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
+            claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
+            if not claimed and on_top:  # the record may hold a machine effect (or model error) and a sensor fault
+                on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
+                                              self.elapsed_s, self.output_names, self.columns, exclude,
+                                              outputs, onsets)
+                if on_top is not None and on_top.fault.sensor == candidate.fault.sensor and passes_tests(
+                        on_top.rmse_before, on_top.rmse_after, on_top.delta_bic, noise):
+                    on_top.alternative = (f"on top of {best_physical.effect}: RMSE {on_top.rmse_before:.3f} → "
+                                          f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
+                    candidate, claimed = on_top, True
+        if not claimed:
+            return None
+        self.found.append(candidate)
+        return candidate
+
+    def text(self, machine_verdict: str) -> str:
+        """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""
+        if not self.found:
+            return ""
+        faults = "; ".join(h.fault.describe() for h in self.found)
+        machine = ("the machine is healthy" if machine_verdict == "none"
+                   else f"on the corrected record the machine shows {machine_verdict}")
+        return f"Sensor fault: {faults}; {machine}."
+
+    def to_list(self) -> list:
+        """JSON list of the claimed sensor faults."""
+        return [h.to_dict() for h in self.found]

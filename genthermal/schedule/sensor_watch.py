@@ -1,0 +1,387 @@
+r"""Sensor faults in flight: inject them from the scenario, tell them from machine faults, mask them.
+
+Scenario key (top level of a mission YAML)::
+
+    sensor_faults:
+      - {generator: 1, sensor: T_iron, kind: drift, onset_min: 90, value: 1.5}    # K/h
+      - {generator: gen2, sensor: T_winding, kind: bias, onset_min: 60, value: 4}  # K
+      - {generator: 1, sensor: T_winding, kind: stuck, onset_min: 60}             # holds its reading
+
+``sensor`` is an output of the flown machine's sensor schema (``T_winding``, ``T_iron`` for the
+thesis generator); ``kind`` and ``value`` as
+:class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
+is held). The faulty readings go to the filter and to the manager's record, as on a real aircraft.
+
+**Telling them apart.** After each measurement update, the normalised innovation of every sensor,
+taken relative to the median of the other generators (what the units share is the model's error,
+as in :mod:`~genthermal.schedule.monitor`), feeds a two-sided CUSUM per generator and sensor
+(:data:`SensorWatchSettings`). When one sensor alone alarms, it is held out of the filter for one
+cycle and the generator's record since the mission start, now a cycle past the change, goes to
+:func:`genthermal.diagnose.diagnose` on the manager's model, which fits the single-sensor faults
+(:mod:`genthermal.diagnose.sensor_faults`) against the heating faults the manager watches for on one
+criterion: a machine fault moves both sensors as the model couples them, a sensor fault moves one in
+a way no heat flow can. Only a claimed sensor fault is acted on here; machine faults stay with the
+fault monitor.
+
+**Acting on it.** From the fitted onset on, the faulty sensor is masked: the filter updates with the
+other sensor only and the sensor is NaN in the manager's record. Masking, not subtracting the fitted
+fault: on a flight record calibrated for a few parameters, a fitted bias is off by some tenths of a
+kelvin (the model's remaining error), and a corrected reading that far off makes the fault monitor's
+differential test, whose threshold is 0.2 K, alarm on the *other* units. The claim's own cycle is
+redone: the filter goes back to its prediction and updates without the sensor; that cycle's
+innovation is withheld from every test and the fault monitor's CUSUM of that generator restarts, so
+the fault monitor never sees the faulty reading as heat. When the fault monitor changes a unit's
+believed machine first (its test alarmed before this one), the unit's record is checked for a fault
+of either sensor at once; a claim undoes the new belief, and any claim drops the effects identified
+on that unit after the fault's fitted onset. The believed machine, hence the load plan, is not
+changed by a sensor fault. The price: with the winding sensor of a unit masked, the fault monitor's
+differential winding test has no reading of that unit (with two units, no test at all) for the rest
+of the flight.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..conditions import checked_number, reject_unknown_keys
+from ..errors import InputError
+from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
+from .monitor import Cusum
+
+SCENARIO_KEY = "sensor_faults"
+
+
+@dataclasses.dataclass(frozen=True)
+class SensorWatchSettings:
+    """Sensor-fault detection in flight.
+
+    Attributes
+    ----------
+    drift, threshold : float
+        :math:`\\nu, h` of the two-sided CUSUM on the differential normalised innovation (units of
+        the innovation's standard deviation). A step of 5 σ alarms within one cycle; healthy
+        differential innovations (standard deviation about :math:`\\sqrt 2`) rarely stay above
+        1 σ: no check on the healthy Fig. 7.7 flight nor on the blockage_large flight. A drift is
+        absorbed by the filter's disturbance states faster than it builds an innovation: it is not
+        seen at these settings.
+    min_check_interval_s : float
+        Shortest time between two record checks of one generator, s.
+    max_checks : int
+        Record checks per generator and flight.
+    identify_dt_s : float
+        Sample period of the record handed to the check, s.
+    lookback_s : float
+        The fault's onset is searched this long before the alarm (a drift alarms late), s.
+    min_calibration_s : float
+        With at least this much record before the onset window, s, the manager's uncertain
+        parameters (:attr:`DetectionSettings.calibrate_parameters`) are first calibrated on it, so
+        the model's error is not taken for the fault.
+    check_delay_s : float
+        The check runs this long after the alarm (one management cycle), s.
+    enabled : bool
+        False: faults are injected but not looked for (the comparison case).
+    """
+
+    drift: float = 1.0
+    threshold: float = 4.0
+    min_check_interval_s: float = 900.0
+    max_checks: int = 6
+    identify_dt_s: float = 60.0
+    lookback_s: float = 1800.0
+    min_calibration_s: float = 1200.0
+    check_delay_s: float = 300.0
+    enabled: bool = True
+
+
+@dataclasses.dataclass(frozen=True)
+class FlightSensorFault:
+    """A sensor fault of one generator: ``fault.onset_s`` is the time since the mission start."""
+
+    generator: int
+    fault: SensorFault
+    row: int
+
+
+def parse_sensor_faults(entries, names, outputs) -> tuple[FlightSensorFault, ...]:
+    """The ``sensor_faults`` scenario key (module docstring); InputError names the bad field.
+
+    Parameters
+    ----------
+    entries : list or None
+    names : sequence of str
+        Generator names.
+    outputs : sequence of str
+        The flown model's outputs (the measurement vector's rows).
+    """
+    if entries is None:
+        return ()
+    if not isinstance(entries, list):
+        raise InputError(SCENARIO_KEY, entries, "must be a list of sensor faults")
+    faults = []
+    for i, entry in enumerate(entries):
+        path = f"{SCENARIO_KEY}[{i}]"
+        if not isinstance(entry, dict):
+            raise InputError(path, entry, "must be a mapping with generator, sensor, kind, onset_min, value")
+        reject_unknown_keys(entry, ("generator", "sensor", "kind", "onset_min", "value"), prefix=f"{path}.")
+        generator = entry.get("generator")
+        if isinstance(generator, int) and not isinstance(generator, bool) and 1 <= generator <= len(names):
+            index = generator - 1
+        elif isinstance(generator, str) and generator in names:
+            index = names.index(generator)
+        else:
+            raise InputError(f"{path}.generator", generator,
+                             f"must be a generator number 1..{len(names)} or a name among {', '.join(names)}")
+        sensor = entry.get("sensor")
+        if sensor not in outputs:
+            raise InputError(f"{path}.sensor", sensor, f"must be one of {', '.join(outputs)}")
+        kind = entry.get("kind")
+        if kind not in SENSOR_FAULT_KINDS:
+            raise InputError(f"{path}.kind", kind, f"must be one of {', '.join(SENSOR_FAULT_KINDS)}")
+        if "onset_min" not in entry:
+            raise InputError(f"{path}.onset_min", None, "missing: give the onset (min since the mission start)")
+        onset = checked_number(entry["onset_min"], f"{path}.onset_min", "a number of minutes")
+        if not (math.isfinite(onset) and onset >= 0):
+            raise InputError(f"{path}.onset_min", entry["onset_min"], "must be >= 0 min")
+        if "value" not in entry and kind != "stuck":
+            raise InputError(f"{path}.value", None, f"missing: give the size of the {kind} "
+                             f"({SENSOR_FAULT_KINDS[kind]})")
+        value = checked_number(entry.get("value", 0.0), f"{path}.value", f"a number ({SENSOR_FAULT_KINDS[kind]})")
+        if kind == "noise" and not value >= 1.0:
+            raise InputError(f"{path}.value", entry["value"], "is the factor on the noise standard deviation: >= 1")
+        faults.append(FlightSensorFault(index, SensorFault(sensor, kind, float(value), 60.0 * float(onset)),
+                                        list(outputs).index(sensor)))
+    return tuple(faults)
+
+
+class SensorFaultInjector:
+    """Applies the scenario's sensor faults to the sensed outputs, cycle after cycle.
+
+    Parameters
+    ----------
+    faults : sequence of FlightSensorFault
+    noise_std_K : array_like
+        Usual noise standard deviation of (winding, iron), K.
+    seed : int
+    """
+
+    def __init__(self, faults, noise_std_K, seed: int = 0):
+        self.faults, self.noise_std_K = tuple(faults), np.asarray(noise_std_K, dtype=float)
+        self._rng = np.random.default_rng(seed + 7919)
+        self._held: dict[int, float] = {}
+
+    def apply(self, sample_times_s, sensed) -> np.ndarray:
+        """``sensed`` (n_gen, 2, n) at ``sample_times_s`` (n,), s since the mission start, as read."""
+        read = np.array(sensed, dtype=float, copy=True)
+        times = np.asarray(sample_times_s, dtype=float)
+        for k, item in enumerate(self.faults):
+            fault, g, row = item.fault, item.generator, item.row
+            if fault.kind == "stuck" and fault.value == 0.0:
+                after = times >= fault.onset_s
+                if after.any() and k not in self._held:
+                    self._held[k] = float(read[g, row, int(np.flatnonzero(after)[0])])
+                if k in self._held:
+                    read[g, row, after] = self._held[k]
+                continue
+            read[g, row] = fault.reading(times, read[g, row], float(self.noise_std_K[row]), self._rng)
+        return read
+
+
+class SensorWatch:
+    """Detects, identifies and corrects sensor faults in flight (module docstring).
+
+    Parameters
+    ----------
+    system : PowerSystem
+    settings : SensorWatchSettings
+    detection : DetectionSettings
+        The fault monitor's settings (candidate heating faults of the check).
+    injected : sequence of FlightSensorFault
+        The scenario's sensor faults (reported, never read by the detection).
+
+    Attributes
+    ----------
+    claims : list of dict
+        Per claimed sensor fault: ``generator``, ``claimed_at_s``, the fault (onset since the
+        mission start) and the check's evidence.
+    checks : list of dict
+        Every record check: ``time_s``, ``generator``, ``sensor`` alarmed, ``claimed`` and
+        ``solve_s``.
+    """
+
+    def __init__(self, system, settings: SensorWatchSettings, detection, injected=()):
+        self.system, self.settings, self.detection = system, settings, detection
+        self.injected = tuple(injected)
+        interface = system.planning_model.spec.interface
+        self.outputs = tuple(interface.output_names)
+        self._output_of = {column: s.output for s in interface.sensors for column in s.columns}
+        n = system.n_generators
+        self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
+                      for _ in range(n)]
+        self.corrections: dict[tuple[int, int], SensorFault] = {}
+        self.claims, self.checks = [], []
+        self.suspects: dict[int, int] = {}
+        self._last_check = [-math.inf] * n
+
+    def correct(self, sample_times_s, sensed, only=None) -> np.ndarray:
+        """``sensed`` (n_gen, 2, n) with the claimed faulty sensors (or those of ``only``, keys
+        ``(generator, row)``) masked (NaN) from their fitted onsets."""
+        corrected = np.array(sensed, dtype=float, copy=True)
+        times = np.asarray(sample_times_s, dtype=float)
+        for (g, row), fault in self.corrections.items():
+            if only is None or (g, row) in only:
+                corrected[g, row, times >= fault.onset_s] = np.nan
+        return corrected
+
+    def cycle(self, t_s: float, estimators, measured, before, monitor) -> list:
+        """Run the tests on the cycle's innovations; check alarmed generators' records; act on claims.
+
+        Parameters
+        ----------
+        t_s : float
+            Time of the measurement, s.
+        estimators : list of StateEstimator
+            Just updated with ``measured``.
+        measured : numpy.ndarray
+            (n_gen, 2) readings of this update (corrected for earlier claims), °C.
+        before : list of (numpy.ndarray, numpy.ndarray)
+            Each estimator's predicted state and covariance before the update.
+        monitor : FaultMonitor
+            Its record is checked; its fault test of a generator restarts on a claim.
+
+        Returns
+        -------
+        list of int
+            Generators with a new claim this cycle.
+        """
+        if not self.settings.enabled:
+            return []
+        z = np.array([[e.innovation[r] / e.innovation_std[r] for r in range(len(self.outputs))] for e in estimators])
+        claimed, known = [], set(self.corrections)
+        for g in range(len(estimators)):
+            alarmed = []
+            for r in range(len(self.outputs)):
+                others = np.delete(z[:, r], g)
+                others = others[np.isfinite(others)]
+                d = z[g, r] - (float(np.median(others)) if others.size else 0.0)
+                if self.tests[g][r].update(d):
+                    alarmed.append(self.outputs[r])
+            if g in self.suspects:  # alarmed a cycle ago: the record now holds a cycle after the change
+                if self._check(g, t_s, [self.outputs[self.suspects.pop(g)]], monitor):
+                    claimed.append(g)
+            elif len(alarmed) == 1 and self._may_check(g, t_s):
+                self.suspects[g] = self.outputs.index(alarmed[0])
+        for g in range(len(estimators)):
+            new = set(self.corrections) - known
+            if g not in claimed and g not in self.suspects:
+                continue
+            z_pred, P_pred = before[g]
+            estimators[g].z, estimators[g].P = z_pred, P_pred
+            y = self.correct([t_s], np.asarray(measured)[:, :, None], new)[g, :, 0]
+            if g in self.suspects:  # one sensor alone moved: hold it out of the filter until checked
+                y[self.suspects[g]] = np.nan
+            else:  # a claim: the fault monitor restarts its test of this unit
+                monitor.fault_tests[g] = Cusum(monitor.settings.fault_drift, monitor.settings.fault_threshold)
+                for test in self.tests[g]:
+                    test.high = test.low = 0.0
+            estimators[g].update(y)
+            # this cycle's innovation mixes the fault and its correction: no test compares against it
+            estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
+        return claimed
+
+    @staticmethod
+    def _undo_beliefs_since(g: int, onset_s: float, monitor) -> None:
+        """Back to the machine believed before ``onset_s``: effects identified on generator ``g``
+        from a record the faulty sensor had already spoilt are dropped."""
+        kept = [i for i in monitor.identifications if i.generator == g and i.effect and i.detected_at_s < onset_s]
+        monitor.beliefs = list(monitor.beliefs)
+        monitor.beliefs[g] = kept[-1].effects if kept else ()
+
+    def review(self, t_s: float, previous_beliefs, estimators, monitor) -> list:
+        """After the fault monitor's cycle: a unit whose believed machine just changed is checked
+        for a sensor fault of either sensor first; a claim undoes the new belief (the change of
+        the reading was the sensor's, not the machine's) and masks the sensor.
+
+        Returns
+        -------
+        list of int
+            Generators whose new belief was undone.
+        """
+        if not self.settings.enabled:
+            return []
+        undone = []
+        for g, (before, now) in enumerate(zip(previous_beliefs, monitor.beliefs)):
+            if now == before or not self._may_check(g, t_s):
+                continue
+            beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
+            monitor.beliefs[g] = before  # the record is checked on the machine as believed before
+            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0):
+                undone.append(g)
+                estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
+            else:
+                monitor.beliefs = beliefs
+        return undone
+
+    def _may_check(self, g: int, t_s: float) -> bool:
+        done = sum(1 for c in self.checks if c["generator"] == g)
+        return done < self.settings.max_checks and t_s - self._last_check[g] >= self.settings.min_check_interval_s
+
+    def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None) -> bool:
+        """Fit the alarmed sensor's faults (onset within :attr:`SensorWatchSettings.lookback_s` of
+        the alarm) against the heating faults on generator ``g``'s record, the model first
+        calibrated on the record before that window; claim and correct."""
+        import time
+
+        from ..diagnose.calibrate import calibrate
+        from ..diagnose.discover import series_for
+        from ..diagnose.search import EffectSearch
+        from ..diagnose.sensor_screen import SensorScreen
+
+        self._last_check[g] = t_s
+        started = time.perf_counter()
+        record = monitor.frame(g)
+        model = monitor.flown_model(g)
+        alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
+        before = record[record["time_s"] < alarm_s - self.settings.lookback_s]
+        span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
+        if span_s >= self.settings.min_calibration_s:
+            model = calibrate(model, before, [p for p in self.detection.calibrate_parameters if p in model.parameters],
+                              self.settings.identify_dt_s).model  # the model as this unit was before the change
+        series = series_for(model, record, self.settings.identify_dt_s)
+        screen = SensorScreen(record, series, model.spec.interface)
+        search = EffectSearch(model, series).fit_found()
+        names = [n for n in search.candidates() if n in self.detection.fault_effects]
+        ranked = search.rank(names) if names else []
+        onsets = np.flatnonzero((series.time_s >= alarm_s - self.settings.lookback_s)
+                                & (series.time_s <= alarm_s + self.settings.identify_dt_s))
+        onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
+        masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
+        outputs = [a for a in alarmed if a not in masked]
+        found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True)
+                 if outputs and onsets.size else None)
+        noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
+        new = [found] if found is not None else noisy[:1]
+        start_s = float(series.time_s[0])
+        self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": bool(new),
+                            "best_machine_fault": ranked[0].effect if ranked else None,
+                            "solve_s": time.perf_counter() - started})
+        for hypothesis in new:
+            fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
+                                        onset_s=start_s + hypothesis.fault.onset_s)
+            self.corrections[(g, self.outputs.index(fault.sensor))] = fault
+            self._undo_beliefs_since(g, fault.onset_s, monitor)
+            self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
+                                "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
+                                "action": "masked"})
+        return bool(new)
+
+    def to_dict(self, names) -> dict:
+        """The flight JSON ``sensor_faults`` entry: injected, claimed (with the action) and checks."""
+        return {"injected": [{"generator": names[f.generator], **f.fault.to_dict()} for f in self.injected],
+                "claimed": [{"generator": names[c["generator"]], "claimed_at_s": c["claimed_at_s"],
+                             **c["fault"].to_dict(), "delta_ic": c["delta_bic"], "alternative": c["alternative"],
+                             "action": c["action"]} for c in self.claims],
+                "checks": [{**c, "generator": names[c["generator"]]} for c in self.checks],
+                "load_plan": "unchanged by sensor faults: the believed machine is not changed by a claim"}

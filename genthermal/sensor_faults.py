@@ -1,0 +1,154 @@
+r"""Sensor faults: what a misbehaving sensor does to its reading (the measurement, not the machine).
+
+A sensor fault changes what a sensor reports from its true temperature :math:`T(t)`, from an onset
+:math:`t_0` (s from the start of the record; :math:`H` the unit step):
+
+=========  ===============================================  =========================  ============
+kind       reading :math:`y(t)`                             ``value``                  unit
+=========  ===============================================  =========================  ============
+bias       :math:`T + b\,H(t-t_0)`                          :math:`b`                  K
+drift      :math:`T + a\,(t-t_0)\,H(t-t_0)`                 :math:`a`                  K/h
+stuck      :math:`T` before, :math:`c` from :math:`t_0`     :math:`c` (0: the reading  °C
+                                                            at the onset is held)
+gain       :math:`T\,(1 + g\,H(t-t_0))` (PT100 scale error  :math:`g`                  (relative)
+           about 0 °C)
+noise      :math:`T + (k-1)\,\sigma\,\varepsilon(t)\,H(t-t_0)`  :math:`k`: noise std       (factor)
+           with :math:`\sigma` the sensor's noise std and     multiplied by :math:`k`
+           :math:`\varepsilon \sim N(0, 1)`
+=========  ===============================================  =========================  ============
+
+These five are the common failure modes of resistance thermometers in service (IEC 60751 drift and
+ageing of the element; a broken or shorted lead or a frozen logger channel reading a constant; a
+bad connection adding noise; a wrong transmitter span giving a gain error).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pandas as pd
+
+from .errors import InputError
+
+#: Kinds of sensor fault and the unit of their ``value``.
+SENSOR_FAULT_KINDS = {"bias": "K", "drift": "K/h", "stuck": "°C", "gain": "(relative)", "noise": "(factor)"}
+
+
+@dataclasses.dataclass(frozen=True)
+class SensorFault:
+    """One sensor fault (module docstring).
+
+    Attributes
+    ----------
+    sensor : str
+        Record column of the sensor (``"T_iron"``, ``"T_winding_u"``, ...) or model output it
+        feeds (``"T_winding"`` in flight).
+    kind : str
+        A key of :data:`SENSOR_FAULT_KINDS`.
+    value : float
+        Size of the fault in the unit of its kind (bias K, drift K/h, stuck °C, gain relative,
+        noise factor).
+    onset_s : float
+        Time of the onset from the start of the record, s.
+    """
+
+    sensor: str
+    kind: str
+    value: float
+    onset_s: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in SENSOR_FAULT_KINDS:
+            raise InputError("sensor fault kind", self.kind, f"must be one of {', '.join(SENSOR_FAULT_KINDS)}")
+        if not (isinstance(self.value, (int, float)) and math.isfinite(self.value)):
+            raise InputError(f"sensor fault {self.sensor}.{self.kind} value", self.value, "must be a finite number")
+        if not (math.isfinite(self.onset_s) and self.onset_s >= 0.0):
+            raise InputError(f"sensor fault {self.sensor}.{self.kind} onset_s", self.onset_s, "must be >= 0 s")
+        if self.kind == "noise" and self.value < 1.0:
+            raise InputError(f"sensor fault {self.sensor}.noise value", self.value,
+                             "is the factor on the noise standard deviation: must be >= 1")
+
+    @property
+    def unit(self) -> str:
+        """Unit of :attr:`value`."""
+        return SENSOR_FAULT_KINDS[self.kind]
+
+    def reading(self, elapsed_s, true_C, noise_std_K: float = 0.0,
+                rng: np.random.Generator | None = None) -> np.ndarray:
+        """What the faulty sensor reports.
+
+        Parameters
+        ----------
+        elapsed_s : array_like
+            Time of each sample from the start of the record, s.
+        true_C : array_like
+            The healthy sensor's reading (true temperature plus its usual noise), °C.
+        noise_std_K : float
+            The sensor's usual noise standard deviation, K (``noise`` kind only).
+        rng : numpy.random.Generator, optional
+            Random numbers of the ``noise`` kind (default seeded by 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            The reading, °C.
+        """
+        elapsed = np.asarray(elapsed_s, dtype=float)
+        reading = np.array(true_C, dtype=float, copy=True)
+        after = elapsed >= self.onset_s
+        if not after.any():
+            return reading
+        if self.kind == "bias":
+            reading[after] += self.value
+        elif self.kind == "drift":
+            reading[after] += self.value * (elapsed[after] - self.onset_s) / 3600.0
+        elif self.kind == "stuck":
+            first = int(np.flatnonzero(after)[0])
+            reading[after] = self.value if self.value != 0.0 else reading[first]
+        elif self.kind == "gain":
+            reading[after] *= 1.0 + self.value
+        else:
+            rng = np.random.default_rng(0) if rng is None else rng
+            reading[after] += (self.value - 1.0) * noise_std_K * rng.standard_normal(int(after.sum()))
+        return reading
+
+    def describe(self) -> str:
+        """Plain language: ``"the T_iron sensor drifts by 1.40 K/h from 1.60 h"``."""
+        when = f"from {self.onset_s / 3600:.2f} h" if self.onset_s > 0 else "from the start"
+        what = {"bias": f"reads {abs(self.value):.2f} K {'high' if self.value > 0 else 'low'}",
+                "drift": f"drifts by {self.value:+.2f} K/h",
+                "stuck": f"is stuck at {self.value:.2f} °C" if self.value != 0.0 else "is stuck at its reading",
+                "gain": f"reads {100 * abs(self.value):.1f} % {'high' if self.value > 0 else 'low'} (gain error)",
+                "noise": f"is {self.value:.1f}× noisier than its usual noise"}[self.kind]
+        return f"the {self.sensor} sensor {what} {when}"
+
+    def to_dict(self) -> dict:
+        """JSON entry."""
+        return {"sensor": self.sensor, "kind": self.kind, "value": self.value, "unit": self.unit,
+                "onset_s": self.onset_s, "text": self.describe()}
+
+
+def inject_sensor_faults(record: pd.DataFrame, faults, noise_std_K: float = 0.1, seed: int = 0) -> pd.DataFrame:
+    """A copy of ``record`` (measurement CSV schema) with ``faults`` applied to their sensor columns.
+
+    Parameters
+    ----------
+    record : pandas.DataFrame
+        With ``time_s`` and the faulty sensors' columns.
+    faults : sequence of SensorFault
+    noise_std_K : float
+        Usual noise standard deviation of the sensors, K (``noise`` kind).
+    seed : int
+        Seeds the extra noise.
+    """
+    changed = record.copy()
+    elapsed = record["time_s"].to_numpy(dtype=float) - float(record["time_s"].iloc[0])
+    rng = np.random.default_rng(seed)
+    for fault in faults:
+        if fault.sensor not in changed:
+            raise InputError("sensor fault sensor", fault.sensor,
+                             f"is not a column of the record: {', '.join(c for c in changed if c.startswith('T_'))}")
+        changed[fault.sensor] = fault.reading(elapsed, changed[fault.sensor].to_numpy(dtype=float), noise_std_K, rng)
+    return changed
