@@ -52,6 +52,40 @@ def _affine_parts(model: ThermalModel, p, x, u):
     return J, ca.substitute(f, x, ca.SX.zeros(x.numel()))
 
 
+def _chunked_outputs(step: ca.Function, n_samples: int, x0: ca.MX, series: ca.MX, constants) -> ca.MX:
+    r"""Outputs of ``n_samples`` steps of ``step`` ``(x, v, *constants) -> (x_next, y)`` from ``x0``,
+    ``v`` the columns of ``series``, in chunks of about :math:`\sqrt N` steps.
+
+    ``mapaccum`` repeats every input that is the same at each step (the parameter-only
+    quantities, a few hundred numbers) once per step when the function is built and called; in
+    chunks they are repeated about :math:`2\sqrt N` times instead of :math:`N`, which keeps the
+    build time, the work memory and the derivatives' cost of a long trajectory from growing with
+    them. The steps and their order are unchanged, so the outputs are the same.
+
+    Returns
+    -------
+    tuple of casadi.MX
+        The outputs (n_outputs × N) and the states at the chunk boundaries: column j is the state at
+        sample ``(j + 1) * chunk_length(N)``.
+    """
+    chunk_length = _chunk_length(n_samples)
+    n_chunks, tail = divmod(n_samples, chunk_length)
+    x, v = ca.MX.sym("x", x0.numel()), ca.MX.sym("v", series.size1(), chunk_length)
+    symbols = [ca.MX.sym(f"constant_{i}", c.sparsity()) for i, c in enumerate(constants)]
+    states, outputs = step.mapaccum("chunk", chunk_length, [0], [0])(x, v, *symbols)
+    chunk = ca.Function("chunk", [x, v, *symbols], [states[:, -1], outputs])
+    states, Y = chunk.mapaccum("chunks", n_chunks, [0], [0])(x0, series[:, :n_chunks * chunk_length], *constants)
+    if not tail:
+        return Y, states
+    _, Y_tail = step.mapaccum("tail", tail, [0], [0])(states[:, -1], series[:, n_chunks * chunk_length:], *constants)
+    return ca.horzcat(Y, Y_tail), states
+
+
+def _chunk_length(n_samples: int) -> int:
+    """Steps per chunk of :func:`_chunked_outputs` for ``n_samples`` steps."""
+    return max(1, math.isqrt(n_samples))
+
+
 class ParametricSimulator:
     """Sensor trajectories of ``model`` on a fixed input series, exact in chosen parameters.
 
@@ -124,9 +158,15 @@ class ParametricSimulator:
         x0 = ac[1] + ac[0] * (steady(U[:, 0], th) - U[model.input_names.index(model.spec.interface.coolant_input), 0])
         exponentials = ca.vertcat(*[ca.vec(m) for regime, L in zip(regime_steps, state_matrices.call([th]))
                                     for m in regime.exponential(L)])[used]  # the entries the step uses
-        _, Y = step.mapaccum("trajectory", self.n_samples, [0], [0])(x0, ca.vertcat(U, S), hoisted(th), exponentials)
+        constants = ca.Function("constants", [th], [hoisted(th), exponentials])
+        Y, boundary_states = _chunked_outputs(step, self.n_samples, x0, ca.vertcat(U, S), constants.call([th]))
         args = [th, ac, S, U]
         self._trajectory = ca.Function("trajectory", args, [Y], ["theta", "x0_coefficients", "indicator", "inputs"], ["y"])
+        self._trajectory_and_states = ca.Function("trajectory_and_states", args, [Y, boundary_states])
+        self._suffix_parts = (step, constants)
+        self._suffixes: dict = {}  # suffix simulators per start sample, built on first use, shared by with_inputs
+        self._last_run = None  # (x0_coefficients, indicator, theta-free samples, outputs, boundary states)
+        self._theta_regimes = np.array([ca.depends_on(p, theta) for p in parameters], dtype=bool)
         self._jacobian_of = (args, Y, {"decision": ca.vertcat(th, ac), "theta": th})
         self._jacobians: dict = {}  # built on first use (most callers need one or none), shared by with_inputs
         self._steady = steady
@@ -138,13 +178,32 @@ class ParametricSimulator:
             self._jacobians[wrt] = ca.Function(f"trajectory_jac_{wrt}", args, [Y, ca.jacobian(ca.vec(Y), variables[wrt])])
         return self._jacobians[wrt]
 
+    def _suffix_function(self, start: int) -> ca.Function:
+        """``(theta, x_start, indicator, inputs) -> y`` for the samples from ``start`` on."""
+        if start not in self._suffixes:
+            step, constants = self._suffix_parts
+            n, nu = self.n_samples - start, len(self.model.input_names)
+            th, x_start = ca.MX.sym("theta", len(self.fitted)), ca.MX.sym("x_start", self.model.n_states)
+            S, U = ca.MX.sym("indicator", len(self.regimes), n), ca.MX.sym("inputs", nu, n)
+            Y, _ = _chunked_outputs(step, n, x_start, ca.vertcat(U, S), constants.call([th]))
+            self._suffixes[start] = ca.Function(f"trajectory_from_{start}", [th, x_start, S, U], [Y])
+        return self._suffixes[start]
+
+    def theta_free_samples(self, indicator) -> int:
+        """How many leading samples have outputs independent of ``theta`` under ``indicator``: those
+        before the first sample of a regime that depends on it (none when the initial state does)."""
+        if self._theta_regimes[0]:
+            return 0
+        depends = np.any(np.asarray(indicator)[self._theta_regimes] != 0, axis=0)
+        return int(np.argmax(depends)) if depends.any() else self.n_samples
+
     def with_inputs(self, inputs: np.ndarray) -> "ParametricSimulator":
         """The same simulator (same model, parameters, regimes, period, length) on other inputs."""
         inputs = np.asarray(inputs, dtype=float)
         if inputs.shape != self.inputs.shape:
             raise InputError("inputs", inputs.shape, f"must have the shape {self.inputs.shape}")
         other = copy.copy(self)
-        other.inputs = inputs
+        other.inputs, other._last_run = inputs, None
         return other
 
     def symbolic(self, theta, x0_coefficients, indicator):
@@ -164,9 +223,35 @@ class ParametricSimulator:
         S[current, np.arange(self.n_samples)] = 1.0
         return S
 
+    def _prefix_reusable(self, last, start: int, x0_coefficients: np.ndarray, indicator: np.ndarray) -> bool:
+        """Whether ``last`` (the previous :meth:`outputs` call) holds this call's outputs and state up
+        to sample ``start``: ``theta`` did not act there in either call, and both had the same
+        initial state and regimes there."""
+        return (last is not None and 0 < start < self.n_samples and start <= last[2]
+                and np.array_equal(last[0], x0_coefficients) and np.array_equal(last[1][:, :start], indicator[:, :start]))
+
     def outputs(self, theta, x0_coefficients, indicator) -> np.ndarray:
-        """Sensor temperatures (°C), shape (n_outputs, N)."""
-        return np.asarray(self._trajectory(theta, x0_coefficients, indicator, self.inputs))
+        """Sensor temperatures (°C), shape (n_outputs, N).
+
+        The samples before the first regime that depends on ``theta`` do not depend on it: when the
+        previous call had the same initial state and the same regimes over them, its outputs there
+        and its state at the last chunk boundary before them are reused, and only the rest of the
+        horizon is simulated (the same steps from the same state, so the same numbers). An onset
+        search fits the parameters at each trial onset with many calls that differ in ``theta`` only.
+        """
+        x0_coefficients = np.asarray(x0_coefficients, dtype=float).ravel()
+        indicator = np.asarray(indicator, dtype=float)
+        free = self.theta_free_samples(indicator)
+        chunk = _chunk_length(self.n_samples)
+        start = free // chunk * chunk
+        last = self._last_run
+        if self._prefix_reusable(last, start, x0_coefficients, indicator):
+            suffix = self._suffix_function(start)(theta, last[4][:, start // chunk - 1],
+                                                  indicator[:, start:], self.inputs[:, start:])
+            return np.hstack([last[3][:, :start], np.asarray(suffix)])
+        Y, states = (np.asarray(m) for m in self._trajectory_and_states(theta, x0_coefficients, indicator, self.inputs))
+        self._last_run = (x0_coefficients, indicator.copy(), free, Y, states)
+        return Y.copy()
 
     def outputs_and_jacobian(self, theta, x0_coefficients, indicator) -> tuple[np.ndarray, np.ndarray]:
         """Outputs and the exact Jacobian of ``vec(Y)`` (column-major: samples of output 0 and 1
