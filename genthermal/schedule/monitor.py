@@ -478,15 +478,27 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
                    settings: DetectionSettings) -> Identification:
     """Identify the effect behind an alarm from the record (module docstring): the best-ranked
     significant effect of diagnose's search whose onset is at most ``max_onset_lead_s`` before
-    the alarm, with the effects equivalent to it."""
+    the alarm and that makes the machine run hotter than the model, with the effects equivalent
+    to it. An effect fitted on the cooling side of its neutral value (e.g. a "blockage" with
+    ``k_flow`` > 1, more coolant than designed) is the model's error, not a fault: believing it
+    made the planner load a healthy generator that had taken over shed load 1.7 K past θmax
+    (``tests/test_closed_loop_shed.py``). Sensor faults are the sensor watch's
+    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen."""
     from ..diagnose import diagnose
 
     started = time.perf_counter()
     diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects),
-                         pairs=False, design_experiment=False)  # one fault at a time, no rig test in flight
-    ranked = diagnosis.iterations[0].ranked
+                         pairs=False, design_experiment=False,  # one fault at a time, no rig test in flight
+                         sensor_faults=False)
+    first = diagnosis.iterations[0]
+    ranked = first.ranked
     earliest = detected_at_s - settings.max_onset_lead_s
-    admissible = [c for c in ranked if c.onset_s >= earliest]
+
+    def heats(candidate) -> bool:
+        after = slice(candidate.onset_index, None)
+        return bool(np.nanmean(candidate.predicted[:, after] - first.predicted_before[:, after]) > 0.0)
+
+    admissible = [c for c in ranked if c.onset_s >= earliest and heats(c)]
     best = admissible[0] if admissible and admissible[0].significant else None
     others = [c for c in admissible if c is not best]
     runner_up = (f"{others[0].effect} (ΔBIC +{others[0].delta_bic - admissible[0].delta_bic:.0f})"
