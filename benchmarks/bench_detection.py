@@ -59,7 +59,7 @@ from genthermal.mission import Mission
 from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sweep import MISMATCH_PARAMETERS
+from genthermal.schedule.sweep import MISMATCH_PARAMETERS, random_actions
 
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
 #: Fault parameter ranges: the robustness grid's (``genthermal.schedule.sweep.robustness_case``).
@@ -73,14 +73,7 @@ def detection_case(index: int, kind: str | None, seed: int = 0) -> dict:
     mismatch and, unless ``kind`` is None, one fault of that kind at a random onset."""
     rng = np.random.default_rng([seed, index])
     hours = rng.uniform(2.0, 4.0)
-    actions = [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 4)]
-    remaining = hours * 60.0 - 60.0 - 20.0
-    while remaining >= 15.0:
-        minutes = round(float(rng.uniform(20.0, 60.0)), 1)
-        minutes = remaining if remaining - minutes < 15.0 else minutes
-        actions.append({"condition": int(rng.choice([5, 6])), "duration_min": round(minutes, 1)})
-        remaining -= round(minutes, 1)
-    actions.append({"condition": 7, "duration_min": 20})
+    actions = random_actions(rng, hours)
     count = int(rng.integers(2, 4))
     mismatch = {name: float(1.0 + rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 0.3)) for name in MISMATCH_PARAMETERS}
     onset = float(round(rng.uniform(40.0, hours * 60.0 - 50.0), 1))

@@ -25,10 +25,9 @@ MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss", "healthy")
 
 
-def robustness_case(index: int, seed: int = 0) -> dict:
-    """The mission document (with ``generators`` and ``faults``) of case ``index``."""
-    rng = np.random.default_rng([seed, index])
-    hours = rng.uniform(2.0, 8.0)
+def random_actions(rng: np.random.Generator, hours: float) -> list:
+    """Mission actions of ``hours`` (h): the thesis's four 15-min start-up conditions, cruise
+    (condition 5) or cruise/combat (6) legs of 20-60 min drawn from ``rng``, and a 20-min landing."""
     actions = [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 4)]
     remaining = hours * 60.0 - 60.0 - 20.0
     while remaining >= 15.0:
@@ -37,6 +36,14 @@ def robustness_case(index: int, seed: int = 0) -> dict:
         actions.append({"condition": int(rng.choice([5, 6])), "duration_min": round(minutes, 1)})
         remaining -= round(minutes, 1)
     actions.append({"condition": 7, "duration_min": 20})
+    return actions
+
+
+def robustness_case(index: int, seed: int = 0) -> dict:
+    """The mission document (with ``generators`` and ``faults``) of case ``index``."""
+    rng = np.random.default_rng([seed, index])
+    hours = rng.uniform(2.0, 8.0)
+    actions = random_actions(rng, hours)
     count = int(rng.integers(2, 5))
     mismatch = {name: float(1.0 + rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 0.3)) for name in MISMATCH_PARAMETERS}
     kind = FAULT_TYPES[index % len(FAULT_TYPES)]
