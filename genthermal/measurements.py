@@ -60,8 +60,6 @@ from .sizes import check_grid
 DEFAULT_INTERFACE = MACHINES[DEFAULT_MACHINE].interface
 #: The default machine's sensor columns of its first (limited) sensor: the winding PT100s.
 WINDING_SENSORS = DEFAULT_INTERFACE.sensors[0].columns
-SENSOR_COLUMNS = DEFAULT_INTERFACE.sensor_columns
-OPTIONAL_SENSOR_COLUMNS = DEFAULT_INTERFACE.optional_columns
 
 
 def required_columns(interface: MachineInterface) -> tuple:

@@ -222,7 +222,6 @@ class SensorWatch:
         self.injected = tuple(injected)
         interface = system.planning_model.spec.interface
         self.outputs = tuple(interface.output_names)
-        self._output_of = {column: s.output for s in interface.sensors for column in s.columns}
         n = system.n_generators
         self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
                       for _ in range(n)]
