@@ -15,15 +15,8 @@ from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.schedule.shed import not_served, shed_plan
 
-SHORT = """name: short_blockage
-generators: {count: 2}
-faults:
-  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
-actions:
-  - {condition: taxi, duration_min: 15}
-  - {condition: cruise_combat, duration_min: 30}
-  - {condition: landing, duration_min: 15}
-"""
+from flight_scenarios import SHORT
+
 # gen1's coolant nearly stops and its inlet rises to 80 °C: above θmax = 85 °C even at rest in landing,
 # while the healthy gen2 peaks near 80 °C on its own load
 HOT_AT_REST = (SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 85}")

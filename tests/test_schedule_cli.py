@@ -10,17 +10,10 @@ from genthermal.schedule.closed_loop import fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 
+from flight_scenarios import SHORT
+
 FLY_KEYS = {"mission_time_s", "added_rest_s", "max_T_winding", "max_T_iron", "breach_s", "replans",
             "median_solve_s", "displaced_Ah"}
-SHORT = """name: short_blockage
-generators: {count: 2}
-faults:
-  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
-actions:
-  - {condition: taxi, duration_min: 15}
-  - {condition: cruise_combat, duration_min: 30}
-  - {condition: landing, duration_min: 15}
-"""
 
 
 def test_closed_loop_keeps_the_true_plant_below_the_limit_on_the_large_blockage():

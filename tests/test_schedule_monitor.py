@@ -10,15 +10,9 @@ from genthermal.schedule.linearise import planning_design_model
 from genthermal.schedule.monitor import Cusum
 from genthermal.schedule.power_system import AffineGenerator
 
-SHORT = """name: short_blockage
-generators: {count: 2, plant_mismatch: {h_end_air: 0.8, R0: 1.2}}
-faults:
-  - {generator: 1, kind: coolant_blockage, onset_min: 10, k_flow: 0.2, n_flow: 0.0, inlet_rise_C: 31}
-actions:
-  - {condition: taxi, duration_min: 15}
-  - {condition: cruise_combat, duration_min: 30}
-  - {condition: landing, duration_min: 15}
-"""
+from flight_scenarios import SHORT as BLOCKAGE
+
+SHORT = BLOCKAGE.replace("generators: {count: 2}", "generators: {count: 2, plant_mismatch: {h_end_air: 0.8, R0: 1.2}}")
 
 
 def test_cusum_is_one_sided_accumulates_and_restarts():
