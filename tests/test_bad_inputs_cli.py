@@ -60,6 +60,12 @@ BAD_OPTIONS = [
     ("a data file as the scenario", ["simulate", "{rig}", "--out", "{out}/x.csv"], "characters)"),
     ("--dt beyond a double", ["simulate", "step_rated", "--out", "{out}/x.csv", "--dt", "1e400"], "--dt"),
     ("parameter beyond a double", ["describe", "--param", "R0=1e999"], "finite"),
+    ("diagnose with no worker", ["diagnose", "{rig}", "--workers", "0"], "workers"),
+    ("diagnose workers as text", ["diagnose", "{rig}", "--workers", "two"], "--workers"),
+    ("diagnose phases unknown", ["diagnose", "{rig}", "--phases", "split"], "--phases"),
+    ("rest budget negative", ["fly", "blockage_large", "--rest-budget-min", "-3"], "--rest-budget-min"),
+    ("rest budget nan", ["fly", "blockage_large", "--rest-budget-min", "nan"], "--rest-budget-min"),
+    ("model file that does not exist", ["describe", "--model", "{out}/machine.py"], "machine.py"),
 ]
 
 

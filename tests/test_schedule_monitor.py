@@ -106,3 +106,24 @@ def test_planner_state_maps_nodes_by_name_and_names_missing_nodes(plant_model, d
     assert [names[int(v)] for v in mapped] == list(design_model.state_names)
     with pytest.raises(InputError, match="design_model"):
         planner_state(state[1:], names[1:], design_model)
+
+
+@pytest.mark.parametrize("k_flow, expected", [(1.5, None), (0.5, "coolant_flow_reduction")])
+def test_identification_admits_only_effects_that_heat_the_machine(k_flow, expected):
+    """More coolant than designed from 1 h (k_flow 1.5) is the model's error, not a fault: it is
+    not identified (the fit alone names a 'blockage' with k_flow 1.5); a real blockage still is."""
+    from genthermal.machines import build_model
+    from genthermal.mission import load_mission
+    from genthermal.resources import SCENARIO_DIR
+    from genthermal.schedule.monitor import DetectionSettings, identify_fault
+    from genthermal.synth import synthesize
+
+    model = build_model()
+    mission = load_mission(str(SCENARIO_DIR / "thesis_fig_7_7.yaml"))
+    changed = model.with_effect("coolant_flow_reduction", k_flow=k_flow)
+    record = synthesize(model, mission, dt_s=10.0, seed=1, switches=[(3600.0, changed)])
+    record = record[record["time_s"] <= 7200.0]
+    identification = identify_fault(model, record, 0, 7200.0, DetectionSettings())
+    assert identification.effect == expected
+    if expected:
+        assert identification.values["k_flow"] == pytest.approx(k_flow, abs=0.1)
