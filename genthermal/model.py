@@ -295,6 +295,15 @@ class ThermalModel:
         symbols = [self.parameters[n].symbol for n in self.parameter_names]
         return labelled, sympy.lambdify(symbols, [expr for _, expr in labelled], modules=["numpy"])
 
+    def heat_capacities(self) -> np.ndarray:
+        """Heat capacity (J/K) of every state node, in ``state_names`` order, from the compiled
+        element values (substituting the parameters into the sympy expressions takes about 1 s)."""
+        labelled, evaluate = self._shared_value("elements", self._element_values)
+        values = np.asarray(evaluate(*self.p0), dtype=float)
+        by_node = {what[len("capacitance of node "):]: value for (what, _), value in zip(labelled, values)
+                   if what.startswith("capacitance of node ")}
+        return np.array([by_node[name] for name in self.state_names])
+
     def _check_physical(self) -> None:
         labelled, evaluate = self._shared_value("elements", self._element_values)
         values = np.asarray(evaluate(*self.p0), dtype=float)

@@ -199,3 +199,9 @@ def test_equal_networks_built_again_share_compiled_functions_not_values(plant_mo
     assert (cache.hits, cache.misses) == (1, 3)
     with pytest.raises(Exception, match="structure cache size"):
         StructureCache(size=0)
+
+
+def test_heat_capacities_are_the_capacitance_expressions_evaluated(plant_model):
+    values = {plant_model.parameters[n].symbol: plant_model.parameters.value(n) for n in plant_model.parameter_names}
+    expected = [float(plant_model.network.node(n).capacitance.subs(values)) for n in plant_model.state_names]
+    np.testing.assert_allclose(plant_model.heat_capacities(), expected, rtol=1e-12)
