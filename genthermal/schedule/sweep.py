@@ -28,7 +28,9 @@ Keys of :func:`summarise` (benchmark JSON):
 ``detect_delay_s``                   median and max over the faulty flights detected, how many were
                                      detected, and the faulty flights not detected (case, scheduler)
 ``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
-``wall_s``                           per flight: median and max wall-clock time, s
+``wall_s``                           per flight: median and max wall-clock time, s; ``total_flight_cpu``: the
+                                     flights' processor time added up, s (over the workers: the sweep's
+                                     wall-clock time on an otherwise idle machine, less the Dask overhead)
 """
 
 from __future__ import annotations
@@ -104,7 +106,8 @@ def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFA
     Returns
     -------
     dict
-        ``case``, ``scheduler``, ``status`` (``ok``, ``timeout`` or ``error``), ``wall_s`` and either
+        ``case``, ``scheduler``, ``status`` (``ok``, ``timeout`` or ``error``), ``wall_s``, ``cpu_s``
+        (processor time of the worker process: what the flight costs without other load) and either
         ``summary`` (:func:`~genthermal.schedule.report.flight_summary` without its warnings) or
         ``error`` (what went wrong and, for an error, the last lines of its traceback).
     """
@@ -112,7 +115,7 @@ def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFA
     from .power_system import PowerSystem
     from .report import flight_summary
 
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     record = {"case": document["name"], "scheduler": scheduler}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
@@ -124,7 +127,7 @@ def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFA
     except Exception as error:  # noqa: BLE001 - a sweep records every failure of a flight and goes on
         record.update(status="error", error=f"{type(error).__name__}: {error}",
                       traceback=traceback.format_exc(limit=-4).splitlines()[-12:])
-    record["wall_s"] = time.perf_counter() - started
+    record.update(wall_s=time.perf_counter() - started, cpu_s=time.process_time() - cpu_started)
     return record
 
 
@@ -139,7 +142,8 @@ def case_records(documents, flights: list, schedulers) -> list:
             flight = by_key.get((document["name"], scheduler),
                                 {"status": "unfinished", "error": "not flown: the sweep's timeout passed", "wall_s": None})
             if flight["status"] == "ok":
-                runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], **flight["summary"]}
+                runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], "cpu_s": flight.get("cpu_s"),
+                                   **flight["summary"]}
             else:
                 runs[scheduler] = {k: v for k, v in flight.items() if k not in ("case", "scheduler", "summary")}
         records.append({"name": document["name"], "faulty": bool(document["faults"]),
@@ -246,6 +250,7 @@ def summarise(records: list, schedulers) -> dict:
     missed = [{"case": r["name"], "scheduler": s} for r in faulty for s in schedulers
               if _ok(r["runs"][s]) and r["runs"][s].get("detect_delay_s") is None]
     walls = [r["runs"][s]["wall_s"] for r in records for s in schedulers if r["runs"][s].get("wall_s") is not None]
+    cpus = [r["runs"][s]["cpu_s"] for r in records for s in schedulers if r["runs"][s].get("cpu_s") is not None]
 
     def alarms(cases):
         return int(sum(r["runs"][s]["false_alarms"] for r in cases for s in schedulers if _ok(r["runs"][s])))
@@ -268,7 +273,8 @@ def summarise(records: list, schedulers) -> dict:
         "false_alarms": {"total": alarms(records), "on_healthy_flights": alarms(healthy),
                          "healthy_flights": sum(_ok(r["runs"][s]) for r in healthy for s in schedulers)},
         "wall_s": {"median_flight": float(np.median(walls)) if walls else None,
-                   "max_flight": float(max(walls)) if walls else None},
+                   "max_flight": float(max(walls)) if walls else None,
+                   "total_flight_cpu": float(sum(cpus)) if cpus else None},
     }
     if {"heuristic", "engineer", "optimal"} <= set(schedulers):
         summary["rest_vs_best_baseline"] = rest_versus_best_baseline(records)
