@@ -99,3 +99,19 @@ def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsy
     assert json.loads(target.read_text())["cases"] == records
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target)]) == 2  # no --force
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target), "--force"]) == 0
+
+
+def test_a_flight_without_a_re_plan_is_every_schedulers_flight():
+    """The scheduler is called only to re-plan: a flight that never re-planned, flown again with
+    another scheduler, is the same flight (the sweep then reuses it)."""
+    import genthermal.schedule.sweep as sweep
+
+    document = {"name": "case900:healthy:2gen:1.0h", "actions": [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 5)],
+                "generators": {"count": 2, "plant_mismatch": {"h_end_air": 1.2, "R0": 0.8}}, "faults": []}
+    first, second = sweep.fly_case(document, ("heuristic", "engineer"))
+    assert first["status"] == "ok" and first["summary"]["replans"] == 0
+    assert second["same_flight_as"] == "heuristic" and second["summary"]["scheduler"] == "engineer"
+    flown = sweep.fly_flight(document, "engineer")
+    assert flown["summary"] == second["summary"]
+    runs = sweep.case_records([document], [first, second], ("heuristic", "engineer"))[0]["runs"]
+    assert runs["engineer"]["same_flight_as"] == "heuristic" and "same_flight_as" not in runs["heuristic"]

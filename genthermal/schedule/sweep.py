@@ -5,8 +5,13 @@ Each case draws (seeded) a mission of 2-8 h, 2-4 generators, plant parameters of
 fault the manager is not told, at a random onset on a random generator: a coolant blockage (flow
 factor 0.15-0.6 and an inlet rise), a shorted turn, an end-winding stray loss or an excitation
 iron loss; a share of the cases are healthy (for the false-alarm rate). Every case is flown with
-every scheduler, one Dask task per flight (the longest expected first, so that the long flights
-do not finish last on an otherwise idle cluster). A flight that raises is recorded with
+every scheduler, one Dask task per case (the longest expected first, so that the long cases do
+not finish last on an otherwise idle cluster). The closed loop calls the scheduler only to
+re-plan (:func:`~genthermal.schedule.closed_loop.fly`); a flight that never re-planned is
+therefore the flight of every scheduler (same plant, same seeded noise, same detector), and the
+other schedulers' records are that flight's, marked ``same_flight_as`` (most cases of the grid:
+a fault the manager finds in time or a plant that stays cool needs no re-plan), which saves
+flying it again. A flight that raises is recorded with
 ``status`` ``error`` and the error; one that runs past ``flight_wall_limit_s`` with ``timeout``
 (:class:`~genthermal.schedule.closed_loop.FlightTimeout`, checked every management cycle); one
 still running when the whole sweep passes ``timeout_s`` with ``unfinished``: none is lost.
@@ -100,6 +105,24 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
+def fly_case(document: dict, schedulers, wall_limit_s: float | None = DEFAULT_FLIGHT_WALL_LIMIT_S) -> list:
+    """Fly case ``document`` with each of ``schedulers`` (:func:`fly_flight`); once a flight ends
+    without a re-plan, the remaining schedulers get its record (module docstring) with
+    ``same_flight_as`` naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
+    flights, shared = [], None
+    for scheduler in schedulers:
+        if shared is not None:
+            summary = dict(shared["summary"], scheduler=scheduler)
+            flights.append({**shared, "scheduler": scheduler, "summary": summary, "same_flight_as": shared["scheduler"],
+                            "wall_s": 0.0, "cpu_s": 0.0})
+            continue
+        flight = fly_flight(document, scheduler, wall_limit_s)
+        flights.append(flight)
+        if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
+            shared = flight
+    return flights
+
+
 def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFAULT_FLIGHT_WALL_LIMIT_S) -> dict:
     """Fly case ``document`` with ``scheduler``; never raises.
 
@@ -143,6 +166,7 @@ def case_records(documents, flights: list, schedulers) -> list:
                                 {"status": "unfinished", "error": "not flown: the sweep's timeout passed", "wall_s": None})
             if flight["status"] == "ok":
                 runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], "cpu_s": flight.get("cpu_s"),
+                                   **({"same_flight_as": flight["same_flight_as"]} if "same_flight_as" in flight else {}),
                                    **flight["summary"]}
             else:
                 runs[scheduler] = {k: v for k, v in flight.items() if k not in ("case", "scheduler", "summary")}
@@ -188,13 +212,12 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     flights = []
     try:
         order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
-        futures = [client.submit(fly_flight, documents[i], scheduler, flight_wall_limit_s, pure=False,
-                                 priority=len(documents) - rank, key=f"flight-{i}-{scheduler}")
-                   for rank, i in enumerate(order) for scheduler in schedulers]
-        bar = tqdm(total=len(futures), disable=not progress, desc="flights")
+        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_wall_limit_s, pure=False,
+                                 priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
+        bar = tqdm(total=len(futures), disable=not progress, desc="cases")
         try:
             for future in as_completed(futures, timeout=timeout_s):
-                flights.append(future.result())
+                flights += future.result()
                 bar.update()
         except (TimeoutError, DaskTimeoutError):
             client.cancel([f for f in futures if not f.done()])
