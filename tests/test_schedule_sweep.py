@@ -61,7 +61,7 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
     failed = sweep.fly_flight(document, "engineer")
     assert failed["status"] == "error" and "ZeroDivisionError" in failed["error"] and failed["wall_s"] >= 0
     monkeypatch.undo()
-    stopped = sweep.fly_flight(document, "engineer", wall_limit_s=1e-3)
+    stopped = sweep.fly_flight(document, "engineer", cpu_limit_s=1e-3)
     assert stopped["status"] == "timeout" and "limit 0.001 s" in stopped["error"]
     records = sweep.case_records([document, robustness_case(9)], [failed, stopped], ("engineer", "optimal"))
     runs = records[0]["runs"]
@@ -72,11 +72,11 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
         (document["name"], "engineer", "timeout"), (document["name"], "optimal", "unfinished")}
 
 
-def test_wall_limit_must_be_positive():
+def test_cpu_limit_must_be_positive():
     from genthermal.schedule.closed_loop import ManagerSettings
 
-    with pytest.raises(ValueError, match="wall_limit_s"):
-        ManagerSettings(wall_limit_s=0.0)
+    with pytest.raises(ValueError, match="cpu_limit_s"):
+        ManagerSettings(cpu_limit_s=0.0)
 
 
 def test_sweep_rejects_an_unknown_scheduler(tmp_path, capsys):

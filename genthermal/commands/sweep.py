@@ -17,7 +17,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..outputs import finite_document, report_json
 from ..schedule.closed_loop import SCHEDULERS
-from ..schedule.sweep import DEFAULT_FLIGHT_WALL_LIMIT_S
+from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S
 
 
 def register(subparsers) -> None:
@@ -33,9 +33,9 @@ def register(subparsers) -> None:
     parser.add_argument("--json", metavar="FILE", help="write the summary and every case to FILE as well "
                         "(default: the whole document goes to standard output)")
     parser.add_argument("--force", action="store_true", help="replace the --json file if it exists")
-    parser.add_argument("--flight-limit-s", default=DEFAULT_FLIGHT_WALL_LIMIT_S, type=float,
-                        help="wall-clock limit of one flight, s: a flight past it is recorded as a timeout "
-                             f"(default {DEFAULT_FLIGHT_WALL_LIMIT_S:g})")
+    parser.add_argument("--flight-limit-s", default=DEFAULT_FLIGHT_CPU_LIMIT_S, type=float,
+                        help="processor-time limit of one flight, s: a flight past it is recorded as a timeout "
+                             f"(default {DEFAULT_FLIGHT_CPU_LIMIT_S:g})")
     parser.add_argument("--timeout-s", type=float, help="wall-clock limit of the whole sweep, s: flights not "
                         "done by then are recorded as unfinished (default: none)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -12,8 +12,10 @@ therefore the flight of every scheduler (same plant, same seeded noise, same det
 other schedulers' records are that flight's, marked ``same_flight_as`` (most cases of the grid:
 a fault the manager finds in time or a plant that stays cool needs no re-plan), which saves
 flying it again. A flight that raises is recorded with
-``status`` ``error`` and the error; one that runs past ``flight_wall_limit_s`` with ``timeout``
-(:class:`~genthermal.schedule.closed_loop.FlightTimeout`, checked every management cycle); one
+``status`` ``error`` and the error; one that runs past ``flight_cpu_limit_s`` of processor time
+with ``timeout`` (:class:`~genthermal.schedule.closed_loop.FlightTimeout`, checked every
+management cycle; processor time, so that a machine busy with other work does not turn slow
+flights into timeouts); one
 still running when the whole sweep passes ``timeout_s`` with ``unfinished``: none is lost.
 
 Keys of :func:`summarise` (benchmark JSON):
@@ -49,11 +51,11 @@ from ..mission import Mission
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss", "healthy")
-#: Default wall-clock limit of one flight in a sweep, s. Choice of this project: the slowest
+#: Default processor-time limit of one flight in a sweep, s. Choice of this project: the slowest
 #: flights of the 60-case grid (a severe blockage that keeps a generator above θmax at rest, so
-#: the manager re-plans and sheds every cycle) take a few minutes on one core of a 2-core machine;
-#: three times that still marks a flight that does not end.
-DEFAULT_FLIGHT_WALL_LIMIT_S = 900.0
+#: the manager re-plans and sheds every cycle) take one to two minutes of processor time; ten
+#: times that still marks a flight that does not end.
+DEFAULT_FLIGHT_CPU_LIMIT_S = 900.0
 #: Added rests closer than this to zero are rounding of the last step, not rest, s (the 10-s step
 #: of the closed loop).
 REST_RESOLUTION_S = 10.0
@@ -105,7 +107,7 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
-def fly_case(document: dict, schedulers, wall_limit_s: float | None = DEFAULT_FLIGHT_WALL_LIMIT_S) -> list:
+def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> list:
     """Fly case ``document`` with each of ``schedulers`` (:func:`fly_flight`); once a flight ends
     without a re-plan, the remaining schedulers get its record (module docstring) with
     ``same_flight_as`` naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
@@ -116,14 +118,14 @@ def fly_case(document: dict, schedulers, wall_limit_s: float | None = DEFAULT_FL
             flights.append({**shared, "scheduler": scheduler, "summary": summary, "same_flight_as": shared["scheduler"],
                             "wall_s": 0.0, "cpu_s": 0.0})
             continue
-        flight = fly_flight(document, scheduler, wall_limit_s)
+        flight = fly_flight(document, scheduler, cpu_limit_s)
         flights.append(flight)
         if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
             shared = flight
     return flights
 
 
-def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFAULT_FLIGHT_WALL_LIMIT_S) -> dict:
+def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> dict:
     """Fly case ``document`` with ``scheduler``; never raises.
 
     Returns
@@ -142,7 +144,7 @@ def fly_flight(document: dict, scheduler: str, wall_limit_s: float | None = DEFA
     record = {"case": document["name"], "scheduler": scheduler}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
-        summary = flight_summary(fly(system, scheduler, ManagerSettings(wall_limit_s=wall_limit_s)))
+        summary = flight_summary(fly(system, scheduler, ManagerSettings(cpu_limit_s=cpu_limit_s)))
         summary.pop("warnings")
         record.update(status="ok", summary=summary)
     except FlightTimeout as stopped:
@@ -177,7 +179,7 @@ def case_records(documents, flights: list, schedulers) -> list:
 
 
 def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True,
-              flight_wall_limit_s: float | None = DEFAULT_FLIGHT_WALL_LIMIT_S, timeout_s: float | None = None) -> list:
+              flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None) -> list:
     """Fly every case with every scheduler on Dask: a :class:`distributed.LocalCluster` of
     ``workers`` single-threaded processes, or the scheduler at ``cluster`` (``tcp://host:8786``);
     a tqdm bar when ``progress``.
@@ -190,8 +192,8 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     cluster : str, optional
     workers : int
     progress : bool
-    flight_wall_limit_s : float or None
-        Wall-clock limit of one flight, s (:func:`fly_flight`).
+    flight_cpu_limit_s : float or None
+        Processor-time limit of one flight, s (:func:`fly_flight`).
     timeout_s : float or None
         Wall-clock limit of the whole sweep, s: flights not done by then are recorded as
         ``unfinished`` and cancelled.
@@ -212,7 +214,7 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     flights = []
     try:
         order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
-        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_wall_limit_s, pure=False,
+        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s, pure=False,
                                  priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
         bar = tqdm(total=len(futures), disable=not progress, desc="cases")
         try:
