@@ -38,6 +38,7 @@ reproducible. JSON keys:
 ``median_flight_s``              median wall-clock time of one flight, s
 ``scheduler``                    the scheduler (``none``: no re-planning)
 ``wall_s``                       wall-clock time of the benchmark, s
+``provenance``                   the command line and the git commit it ran at
 ``baseline``                     the same flights judged by the detector the disturbance detector replaced
                                  (:mod:`genthermal.schedule.innovation_detector`, a CUSUM on the linear
                                  Kalman filter's differential winding innovations, run on each flight's
@@ -64,6 +65,7 @@ import time
 import numpy as np
 
 from genthermal.mission import Mission
+from genthermal.commands.sweep import source_commit
 from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
 from genthermal.schedule.innovation_detector import innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
@@ -260,6 +262,8 @@ def main(argv=None) -> int:
     faulty = [fly_case(detection_case(args.healthy + i, FAULT_TYPES[i % len(FAULT_TYPES)], args.seed),
                        args.k_flow_tolerance, args.scheduler) for i in range(args.faulty)]
     report = summarise(healthy, faulty, args.scheduler, time.perf_counter() - started)
+    report["provenance"] = {"command": " ".join(["python", "benchmarks/bench_detection.py", *sys.argv[1:]]),
+                            "commit": source_commit()}
     text = json.dumps(report, indent=2)
     print(text)
     if args.json:
