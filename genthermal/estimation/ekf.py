@@ -59,6 +59,7 @@ import scipy.linalg
 from ..discretise import check_step_accuracy
 from ..errors import InputError
 from ..model import ThermalModel
+from .change_detection import InnovationChangeDetector
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
@@ -72,12 +73,31 @@ from .kalman import (
 #: Standard deviation of the unmodelled heat flow at every node, W (held over a step).
 DEFAULT_NODE_HEAT_NOISE_W = 5.0
 #: How far each disturbance heat flow may drift in one hour (1 sigma of the random walk), W.
-DEFAULT_DISTURBANCE_DRIFT_W = 8.0
+DEFAULT_DISTURBANCE_DRIFT_W = 1.0
 #: How far each load-scaled disturbance (W at rated current, scaled by the load squared) may drift
 #: in one hour, W; 0 leaves those states out.
-DEFAULT_LOAD_SCALED_DRIFT_W = 15.0
+DEFAULT_LOAD_SCALED_DRIFT_W = 2.0
 #: Initial standard deviation of each disturbance heat flow, W.
 DEFAULT_INITIAL_DISTURBANCE_W = 10.0
+#: How far each coolant-scaled disturbance (W at COOLANT_REFERENCE_RISE_K above the coolant inlet)
+#: may drift in one hour, W; 0 leaves those states out.
+DEFAULT_COOLANT_DRIFT_W = 1.0
+#: Temperature rise above the coolant inlet at which a coolant-scaled disturbance is quoted, K.
+COOLANT_REFERENCE_RISE_K = 50.0
+#: How far the coolant inlet offset may drift in one hour, K; 0 leaves it out.
+DEFAULT_INLET_DRIFT_K = 0.2
+#: Initial standard deviation of the coolant inlet offset, K.
+DEFAULT_INITIAL_INLET_K = 2.0
+#: Alarm level of the innovation change test (chi-square, n_y dof); None: no change detection.
+DEFAULT_CHANGE_THRESHOLD = 20.0
+#: Window of the innovation change test, min.
+DEFAULT_CHANGE_WINDOW_MIN = 5.0
+#: Standard deviation added to each disturbance when a change is detected (W; inlet K).
+DEFAULT_JUMP_STD = {"constant": 10.0, "load": 10.0, "coolant": 40.0, "inlet": 20.0}
+#: The disturbance bases, in state order.
+DISTURBANCE_BASES = ("constant", "load", "coolant")
+#: State name prefix of each basis (then the node name).
+BASIS_PREFIX = {"constant": "q_", "load": "q_load_", "coolant": "q_coolant_"}
 
 
 def node_heat_capacities(model: ThermalModel) -> np.ndarray:
@@ -121,9 +141,13 @@ class ExtendedKalmanFilter(RecursiveFilter):
                  load_scaled_drift_W: float = DEFAULT_LOAD_SCALED_DRIFT_W,
                  node_heat_noise_W: float = DEFAULT_NODE_HEAT_NOISE_W,
                  disturbance_drift_W: float = DEFAULT_DISTURBANCE_DRIFT_W,
-                 initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None):
+                 initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None,
+                 coolant_drift_W: float = DEFAULT_COOLANT_DRIFT_W,
+                 inlet_drift_K: float = DEFAULT_INLET_DRIFT_K, initial_inlet_K: float = DEFAULT_INITIAL_INLET_K,
+                 change_threshold: float | None = DEFAULT_CHANGE_THRESHOLD,
+                 change_window_min: float = DEFAULT_CHANGE_WINDOW_MIN, jump_std=None):
         for name, value in (("node_heat_noise_W", node_heat_noise_W), ("disturbance_drift_W", disturbance_drift_W),
-                            ("load_scaled_drift_W", load_scaled_drift_W),
+                            ("load_scaled_drift_W", load_scaled_drift_W), ("coolant_drift_W", coolant_drift_W),
                             ("initial_disturbance_W", initial_disturbance_W)):
             if not (np.isfinite(value) and value >= 0):
                 raise InputError(name, value, "must be a heat flow in W >= 0")
@@ -136,13 +160,19 @@ class ExtendedKalmanFilter(RecursiveFilter):
             raise InputError("disturbance_nodes", unknown or nodes,
                              f"must be capacitive nodes of {model.name}: {', '.join(model.state_names)}")
         self.disturbance_nodes = nodes
-        self.load_scaled = load_scaled_drift_W > 0
-        self.disturbance_names = tuple(f"q_{node}" for node in nodes) + \
-            (tuple(f"q_load_{node}" for node in nodes) if self.load_scaled else ())
+        drifts = {"constant": disturbance_drift_W, "load": load_scaled_drift_W, "coolant": coolant_drift_W}
+        #: The bases in use, in state order: ``"constant"`` always, ``"load"`` and ``"coolant"``
+        #: when their drift is > 0 (module docstring).
+        self.bases = tuple(b for b in DISTURBANCE_BASES if b == "constant" or drifts[b] > 0)
+        self.load_scaled = "load" in self.bases
+        self.inlet_offset = inlet_drift_K > 0
+        self.disturbance_names = tuple(f"{BASIS_PREFIX[b]}{node}" for b in self.bases for node in nodes) + \
+            (("dT_inlet",) if self.inlet_offset else ())
         self.output_names = list(model.output_names)
         self.state_names = [*model.state_names, *self.disturbance_names]
         nx, nd, ny = model.n_states, len(self.disturbance_names), len(self.output_names)
         self.rated_current_A = float(model.spec.rated_current_A)
+        self.coolant_input = model.spec.interface.coolant_input
         capacity = node_heat_capacities(model)
         self.M = np.zeros((nx, len(nodes)))
         for j, node in enumerate(nodes):
@@ -152,29 +182,64 @@ class ExtendedKalmanFilter(RecursiveFilter):
         self.C = C
         self.H = np.hstack([C, np.zeros((ny, nd))])
         self.transition, self.state_step = self._transition_functions(discrete)
-        drift = np.repeat([disturbance_drift_W, load_scaled_drift_W][:1 + self.load_scaled], len(nodes))
+        drift = np.concatenate([np.repeat([drifts[b] for b in self.bases], len(nodes)),
+                                [inlet_drift_K] if self.inlet_offset else []])
         self.Q = scipy.linalg.block_diag(heat_flow_process_noise(model, dt_s, node_heat_noise_W),
                                          np.diag(drift**2 * self.dt_s / 3600.0))
         self.R = _covariance("R", model.spec.interface.noise_variances_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
-        default_P0 = np.concatenate([np.full(nx, DEFAULT_INITIAL_STD_K**2), np.full(nd, initial_disturbance_W**2)])
+        default_P0 = np.concatenate([np.full(nx, DEFAULT_INITIAL_STD_K**2),
+                                     np.full(len(self.bases) * len(nodes), initial_disturbance_W**2),
+                                     [initial_inlet_K**2] if self.inlet_offset else []])
         self.P0 = _covariance("P0", default_P0 if P0 is None else P0, nx + nd)
         self._forecasters: dict = {}
+        jump = dict(DEFAULT_JUMP_STD, **(jump_std or {}))
+        self.change_threshold, self.change_window_min = change_threshold, float(change_window_min)
+        self.jump_covariance = np.diag(np.concatenate([
+            np.zeros(nx), np.repeat([jump[b] for b in self.bases], len(nodes)),
+            [jump["inlet"]] if self.inlet_offset else []]) ** 2)
+
+    def change_detector(self):
+        """The jump detector of :mod:`~genthermal.estimation.change_detection` with this filter's
+        settings, or None when ``change_threshold`` is None."""
+        if self.change_threshold is None:
+            return None
+        return InnovationChangeDetector(max(1, int(round(self.change_window_min * 60.0 / self.dt_s))),
+                                        self.change_threshold, self.jump_covariance)
+
+    def basis_values(self, x_nodes, u):
+        """:math:`\\phi_b(x, u)` of every disturbance state (state order): 1 for ``constant``,
+        :math:`\\ell(u)` for ``load``, :math:`(x_j - T_{in})/\\Delta T_{ref}` for ``coolant``.
+        Works on numbers and on CasADi symbols."""
+        values = []
+        for basis in self.bases:
+            for node in self.disturbance_nodes:
+                if basis == "constant":
+                    values.append(1.0)
+                elif basis == "load":
+                    phases = [u[self.model.input_names.index(name)]
+                              for name in self.model.spec.interface.load_currents]
+                    values.append(sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2))
+                else:
+                    inlet = u[self.model.input_names.index(self.coolant_input)]
+                    values.append((x_nodes[self.model.state_names.index(node)] - inlet) / COOLANT_REFERENCE_RISE_K)
+        return values
 
     def _transition_functions(self, discrete) -> tuple[ca.Function, ca.Function]:
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
         nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
-        z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
-        heat = z[nx:nx + n_nodes]
-        if self.load_scaled:
-            phases = [u[self.model.input_names.index(name)] for name in self.model.spec.interface.load_currents]
-            load_squared = sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2)
-            heat = heat + load_squared * z[nx + n_nodes:]
+        z, u_in = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
+        u = u_in
+        phi = self.basis_values(z[:nx], u)
+        heat = ca.vertcat(*[sum(z[nx + b * n_nodes + j] * phi[b * n_nodes + j] for b in range(len(self.bases)))
+                            for j in range(n_nodes)])
+        if self.inlet_offset:
+            u = u + z[-1] * ca.DM([float(name == self.coolant_input) for name in self.model.input_names])
         z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
-        return (ca.Function("ekf_transition", [z, u], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
-                ca.Function("ekf_state_step", [z, u], [z_next], ["z", "u"], ["z_next"]))
+        return (ca.Function("ekf_transition", [z, u_in], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
+                ca.Function("ekf_state_step", [z, u_in], [z_next], ["z", "u"], ["z_next"]))
 
     # --- one step --------------------------------------------------------------------------
     def update(self, x_pred, P, y) -> Update:
