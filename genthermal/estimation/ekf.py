@@ -89,7 +89,7 @@ DEFAULT_INLET_DRIFT_K = 0.2
 #: Initial standard deviation of the coolant inlet offset, K.
 DEFAULT_INITIAL_INLET_K = 2.0
 #: Alarm level of the innovation change test (chi-square, n_y dof); None: no change detection.
-DEFAULT_CHANGE_THRESHOLD = 20.0
+DEFAULT_CHANGE_THRESHOLD = 13.8
 #: Window of the innovation change test, min.
 DEFAULT_CHANGE_WINDOW_MIN = 5.0
 #: Standard deviation added to each disturbance when a change is detected (W; inlet K).

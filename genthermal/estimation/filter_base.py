@@ -74,7 +74,8 @@ class RecursiveFilter:
         nx = self.n_nodes
         return FilterResult(self.model, time_s, U, Z[:, :nx], Z_pred[:, :nx], Y, innovations, np.array(gains),
                             self.C, self.e, bool(steady_state), disturbances=Z[:, nx:],
-                            disturbance_names=tuple(self.disturbance_names))
+                            disturbance_names=tuple(self.disturbance_names),
+                            change_alarm_times_s=tuple(float(time_s[k]) for k in (detector.alarms if detector else ())))
 
     def _record(self, inputs_df, sensors_df):
         time_s = inputs_df["time_s"].to_numpy(dtype=float) if "time_s" in inputs_df else None
