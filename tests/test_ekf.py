@@ -74,6 +74,14 @@ def test_bad_inputs_name_the_field(plant_model, ekf):
         ExtendedKalmanFilter(plant_model, DT_S, disturbance_nodes=["no_such_node"])
     with pytest.raises(InputError, match="disturbance_drift_W"):
         ExtendedKalmanFilter(plant_model, DT_S, disturbance_drift_W=-1.0)
+    with pytest.raises(InputError, match="inlet_drift_K"):
+        ExtendedKalmanFilter(plant_model, DT_S, inlet_drift_K=float("nan"))
+    with pytest.raises(InputError, match="change_threshold"):
+        ExtendedKalmanFilter(plant_model, DT_S, change_threshold=0.0)
+    with pytest.raises(InputError, match="change_window_min"):
+        ExtendedKalmanFilter(plant_model, DT_S, change_window_min=0.05)  # shorter than one 10-s step
+    with pytest.raises(InputError, match="jump_std"):
+        ExtendedKalmanFilter(plant_model, DT_S, jump_std={"blockage": 5.0})
     with pytest.raises(InputError, match="P"):
         ekf.update(np.zeros(10), None, [20.0, 20.0])
     # a model of another machine: its sensors are not in the data

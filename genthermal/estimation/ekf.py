@@ -1,53 +1,80 @@
 r"""Extended Kalman filter on the nonlinear model, with disturbance states (offset-free prediction).
 
-The filter state is :math:`z = (x, d, m)`: the node temperatures :math:`x` (°C), one unknown
-heat flow :math:`d_j` (W) into each sensor node (for the thesis generator: into the stator winding
-and into the stator iron) and, for the same nodes, one unknown loss :math:`m_j` (W at rated
-current) that scales with the load squared, :math:`\ell(u) = \overline{I^2}/I_{rated}^2` (mean
-over the phases). They stand for what the model lacks: :math:`d` for a blockage or a wrong
-convection coefficient, :math:`m` for a wrong copper or load-dependent iron loss, which a
-constant heat flow cannot carry from one load to another. They enter the nodes as
-:math:`\dot x_i \mathrel{+}= (d_j + \ell(u) m_j)/C_i` and drift as random walks,
+The filter state is :math:`z = (x, \theta, \delta)`: the node temperatures :math:`x` (°C), for
+each sensor node j (for the thesis generator: the stator winding and the stator iron) the
+coefficients :math:`\theta_{bj}` of an unknown heat flow on three bases :math:`b`, and an offset
+:math:`\delta` (K) of the coolant inlet temperature. They stand for what a calibrated model
+typically lacks, each scaled so its coefficient is a heat flow in W at a stated condition:
+
+* ``constant`` (:math:`\phi = 1`, state ``q_<node>``, W): a heat flow the model does not remove or
+  add at any load (a convection coefficient off at the operating point, a stray loss);
+* ``load`` (:math:`\phi = \ell(u) = \overline{I^2}/I_{rated}^2`, mean over the phases,
+  ``q_load_<node>``, W at rated current): a wrong copper or load-dependent iron loss, which a
+  constant heat flow cannot carry from one load to another;
+* ``coolant`` (:math:`\phi = (x_j - T_{in})/\Delta T_{ref}`, :math:`\Delta T_{ref}` =
+  :data:`COOLANT_REFERENCE_RISE_K`, ``q_coolant_<node>``, W at 50 K above the inlet): a wrong
+  conductance to the coolant. A cooling fault (a blockage) removes less heat the hotter the
+  machine gets, which neither a constant nor a load-scaled flow carries into the future;
+* ``dT_inlet`` (K): the coolant reaches the machine hotter than measured (less flow heats the
+  air more on its way), acting through every convective link of the model.
+
+They enter as :math:`\dot x_j \mathrel{+}= \sum_b \theta_{bj}\phi_b(x, u)/C_j` and
+:math:`T_{in} \to T_{in} + \delta`, and drift as random walks:
 
 .. math::
-    x_{k+1} = \Phi(x_k, u_k, M (d_k + \ell(u_k) m_k)) + w_k, \qquad
-    (d, m)_{k+1} = (d, m)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
+    x_{k+1} = \Phi(x_k, u_k + \delta_k e_{in}, M q(x_k, u_k, \theta_k)) + w_k, \qquad
+    (\theta, \delta)_{k+1} = (\theta, \delta)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
 
 :math:`\Phi` the *same* discrete step that simulation uses (:attr:`DiscreteModel.forced_step` of
-:mod:`genthermal.discretise`, with the forcing :math:`w = M(d + \ell(u) m)`, :math:`M_{ij} = 1/C_i`
-for node i of disturbance j), so filter and simulation cannot drift apart. The Jacobian
-:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact
-(CasADi automatic differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`.
-Update and prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place
-of :math:`A` (Joseph-form covariance update; missing sensors drop their rows).
+:mod:`genthermal.discretise`, forcing :math:`M q`, :math:`M_{ij} = 1/C_i` for node i of
+disturbance node j), so filter and simulation cannot drift apart. The Jacobian
+:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact (CasADi automatic
+differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`. Update and
+prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place of
+:math:`A` (Joseph-form covariance update; missing sensors drop their rows).
 
-Process noise, in K² and W² per step:
+Two time scales. What a calibrated model lacks on a healthy machine is a few W that change little
+from one flight to the next; a random walk fast enough to follow a fault would chase the sensor
+noise the rest of the time, and the disturbances it learns from a few noisy minutes cost more
+than they gain. So the walks are slow (an online calibration) and a fault is announced by the
+innovation change test of :mod:`genthermal.estimation.change_detection`, which adds
+:data:`DEFAULT_JUMP_STD` ² to the disturbance covariance when the whitened innovations of the
+last :data:`DEFAULT_CHANGE_WINDOW_MIN` minutes are biased beyond :data:`DEFAULT_CHANGE_THRESHOLD`
+(:meth:`RecursiveFilter.run`; the per-step update of the C library is the update without it).
+
+Process noise, in K² and W² (K² for :math:`\delta`) per step:
 
 * nodes: :math:`Q_x = \mathrm{diag}((T_s\sigma_P/C_i)^2)` with :math:`\sigma_P` =
   :data:`DEFAULT_NODE_HEAT_NOISE_W` (an unmodelled heat flow at every node, as the linear filter,
-  but smaller because the systematic part now has its own states);
-* disturbances: :math:`Q_d = \sigma_d^2\,T_s/3600\,I`, a random walk that moves by
-  :math:`\sigma_d` = :data:`DEFAULT_DISTURBANCE_DRIFT_W` (W) in one hour, and the same for
-  :math:`m` with :data:`DEFAULT_LOAD_SCALED_DRIFT_W`; initial standard deviation
-  :data:`DEFAULT_INITIAL_DISTURBANCE_W` for both. The scale: the winding's copper loss at rated
-  current is about 180 W; a model calibrated on a healthy record is typically a few W to a few
-  tens of W off at a load it was not fitted at, and the thesis's large blockage removes some tens
-  of W of cooling.
+  but smaller because the systematic part has its own states);
+* each basis: :math:`\sigma_b^2\,T_s/3600`, a walk that moves by :math:`\sigma_b` in one hour:
+  :data:`DEFAULT_DISTURBANCE_DRIFT_W` (1 W), :data:`DEFAULT_LOAD_SCALED_DRIFT_W` (2 W),
+  :data:`DEFAULT_COOLANT_DRIFT_W` (1 W), :data:`DEFAULT_INLET_DRIFT_K` (0.2 K); initial standard
+  deviation :data:`DEFAULT_INITIAL_DISTURBANCE_W` (10 W) and :data:`DEFAULT_INITIAL_INLET_K` (2 K).
+  Scale: the winding's copper loss at rated current is about 180 W; a model calibrated on one
+  healthy record is a few W off at a load it was not fitted at.
+* a change: :data:`DEFAULT_JUMP_STD`, 10 W on the constant and load-scaled flows, 40 W (at 50 K)
+  on the coolant-scaled flows and 20 K on the inlet: the thesis's large blockage (flow to 20 %,
+  inlet +31 K) removes some tens of W of cooling and heats the air by tens of K.
 
-The values were chosen by measurement on the plants of ``benchmarks/bench_prediction.py``
-(calibrated model, three records it was not fitted on; winding RMS at 15/30/60 min). With the
-constant heat flows alone (15 W/h, initial 30 W) the varying-load record gave 0.48/1.06/1.03 K,
-worse than the open loop's 0.57/0.48/0.49 K at 30-60 min: the heat flow learnt at one load was
-carried to the next. Adding :math:`m` (15 W/h) with initial 10 W and the constant walk at 8 W/h
-gives 0.41/0.68/0.55 K there, 0.17/0.34/0.43 K (was 0.19/0.39/0.57) on the Fig. 3.2 flight and
-an unchanged 1.0/2.6/6.3 K on the large blockage. A larger node noise (10 W) brings the
-varying-load record to 0.39/0.53/0.48 K but the blockage to 1.2/2.8/6.5 K; an initial 30 W on
-:math:`m` lets it wander (30 min: 1.2 K). A disturbance that decays (first-order Markov, 10-30
-min) loses the blockage (30 min: 6.6-9.6 K); unknown conductances to the coolant were worse on
-the Fig. 3.2 flight (60 min: 0.7-1.3 K). Both are left out.
+Provenance: measured with ``benchmarks/bench_prediction.py`` on two plants (parameters off by
+15-30 % in opposite directions, each with a different effect the model lacks), a model calibrated
+on one healthy record of each and scored on three others (winding RMS at 15/30/60 min). With the
+earlier fast walks (8 and 15 W per hour on constant and load-scaled flows, no coolant states, no
+change test; kept for the flight filter, ``schedule.monitor.FLIGHT_EKF_SETTINGS``) the filter was
+worse than the open loop at 30-60 min on both healthy rig records (varying load 0.68/0.55 K
+against 0.48/0.49 K). Slowing the walks alone (1-2 W per hour) fixed that (0.46/0.43 K) but lost
+the blockage (30 min: 4.1 K, open loop 13.5 K); coolant-scaled flows with a fast walk (30 W per
+hour) followed the blockage (1.9 K) but chased noise on healthy records (varying load 0.76 K at
+30 min). Slow walks on all bases with the change test give both (module
+``benchmarks/bench_prediction.py`` figures in the README). The change threshold is a
+:math:`\chi^2_2` quantile at 1e-3 (13.8); on the benchmark's healthy records the statistic
+reached at most 8.7, on the blockages 20-38. The unmeasured inlet offset alone, without the
+coolant-scaled flows, barely helped (blockage 30 min: 2.5 K at 5 K per hour).
 
-Predictions hold the disturbance at its last estimate (:meth:`ExtendedKalmanFilter.forecast`):
-a constant model error is carried into the future, which is what makes them offset-free.
+Predictions hold the disturbances at their last estimate (:meth:`ExtendedKalmanFilter.forecast`):
+a constant model error is carried into the future, which is what makes them offset-free, and a
+coolant-scaled one grows with the temperature it multiplies.
 """
 
 from __future__ import annotations
@@ -124,12 +151,23 @@ class ExtendedKalmanFilter(RecursiveFilter):
     disturbance_nodes : sequence of str, optional
         Nodes that receive an unknown heat flow; default the sensor nodes
         (``model.spec.sensors``), one per measured output, so the disturbances are observable.
-    load_scaled_drift_W : float
-        Hourly drift of each load-scaled loss :math:`m_j`, W at rated current; 0 leaves those
-        states out.
+    load_scaled_drift_W, coolant_drift_W : float
+        Hourly drift of each load-scaled flow (W at rated current) and each coolant-scaled flow (W
+        at :data:`COOLANT_REFERENCE_RISE_K` above the inlet); 0 leaves those states out.
     node_heat_noise_W, disturbance_drift_W, initial_disturbance_W : float
-        :math:`\\sigma_P`, :math:`\\sigma_d` and the initial standard deviation of :math:`d`
-        and :math:`m`, W.
+        :math:`\\sigma_P`, the hourly drift of each constant heat flow and the initial standard
+        deviation of every heat-flow coefficient, W.
+    inlet_drift_K, initial_inlet_K : float
+        Hourly drift and initial standard deviation of the coolant inlet offset ``dT_inlet``, K;
+        a drift of 0 leaves it out.
+    change_threshold : float or None
+        Alarm level of the innovation change test (:mod:`~genthermal.estimation.change_detection`),
+        a :math:`\\chi^2_{n_y}` value; None: no test (the disturbances only drift).
+    change_window_min : float
+        Window of that test, min.
+    jump_std : dict, optional
+        Standard deviation added on an alarm per basis (``constant``, ``load``, ``coolant``: W;
+        ``inlet``: K); missing keys take :data:`DEFAULT_JUMP_STD`.
     R : array_like, optional
         Measurement noise covariance, K², output order; default thesis eq. 6.10.
     P0 : array_like, optional
@@ -148,9 +186,10 @@ class ExtendedKalmanFilter(RecursiveFilter):
                  change_window_min: float = DEFAULT_CHANGE_WINDOW_MIN, jump_std=None):
         for name, value in (("node_heat_noise_W", node_heat_noise_W), ("disturbance_drift_W", disturbance_drift_W),
                             ("load_scaled_drift_W", load_scaled_drift_W), ("coolant_drift_W", coolant_drift_W),
-                            ("initial_disturbance_W", initial_disturbance_W)):
+                            ("initial_disturbance_W", initial_disturbance_W), ("inlet_drift_K", inlet_drift_K),
+                            ("initial_inlet_K", initial_inlet_K)):
             if not (np.isfinite(value) and value >= 0):
-                raise InputError(name, value, "must be a heat flow in W >= 0")
+                raise InputError(name, value, "must be >= 0 (a heat flow in W; the inlet offset in K)")
         check_step_accuracy(model, dt_s)
         discrete = model.discretise(dt_s)
         self.model, self.dt_s = model, float(dt_s)
@@ -194,7 +233,16 @@ class ExtendedKalmanFilter(RecursiveFilter):
                                      [initial_inlet_K**2] if self.inlet_offset else []])
         self.P0 = _covariance("P0", default_P0 if P0 is None else P0, nx + nd)
         self._forecasters: dict = {}
+        if change_threshold is not None and not (np.isfinite(change_threshold) and change_threshold > 0):
+            raise InputError("change_threshold", change_threshold, "must be a positive chi-square value or None")
+        if not (np.isfinite(change_window_min) and change_window_min * 60.0 >= dt_s):
+            raise InputError("change_window_min", change_window_min, f"must be at least one step ({dt_s:g} s)")
+        unknown_bases = sorted(set(jump_std or {}) - set(DEFAULT_JUMP_STD))
+        if unknown_bases:
+            raise InputError("jump_std", unknown_bases[0], f"unknown basis; use {', '.join(DEFAULT_JUMP_STD)}")
         jump = dict(DEFAULT_JUMP_STD, **(jump_std or {}))
+        if not all(np.isfinite(v) and v >= 0 for v in jump.values()):
+            raise InputError("jump_std", jump, "each must be >= 0 (W; inlet K)")
         self.change_threshold, self.change_window_min = change_threshold, float(change_window_min)
         self.jump_covariance = np.diag(np.concatenate([
             np.zeros(nx), np.repeat([jump[b] for b in self.bases], len(nodes)),
