@@ -99,6 +99,7 @@ def test_bad_inputs_name_the_field(plant_model, ekf):
 def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
     from genthermal.codegen import model_library
     from genthermal.errors import CompilerNotFoundError
+    from genthermal.estimation.change_detection import change_step
     from genthermal.estimation.ekf import embedded_functions
 
     functions = embedded_functions(plant_model, DT_S, predict_steps=30)
@@ -110,12 +111,20 @@ def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
     z = np.concatenate([np.linspace(40.0, 90.0, plant_model.n_states), disturbances])
     P = ekf.P0 * 0.3 + 0.01
     u = plant_model.input_vector(6.0, 6.0, 6.0, 0.93, 22.0, 21.0)
-    y = np.array([85.0, 60.0])
-    for measured in ([1.0, 1.0], [1.0, 0.0]):  # the iron sensor missing at this sample
-        compiled = library.call("ekf_update", z, P, u, y, np.array(measured))
+    S = ekf.H @ P @ ekf.H.T + ekf.R
+    close = ekf.H @ z + ekf.e + np.array([0.05, -0.03])  # a reading the filter expects
+    far, biased = np.array([85.0, 60.0]), np.array([3.0, -2.0])  # a biased one after a biased history
+    cases = (([1.0, 1.0], close, np.zeros(2), False), ([1.0, 0.0], far, np.zeros(2), False),
+             ([1.0, 1.0], far, biased, True), ([0.0, 1.0], far, biased, False))  # a missing sensor: no test
+    for measured, y, mean, fires in cases:
+        compiled = library.call("ekf_update", z, P, u, y, np.array(measured), mean)
         step = ekf.update(z, P, np.where(np.array(measured) == 1, y, np.nan))
-        z_next, P_next = ekf.predict(step.x, step.P, u)
-        for c_value, python in zip(compiled, (step.x, step.P, z_next, P_next)):
+        mean_next, statistic, alarm = change_step(mean, step.innovation, S, ekf.change_window_samples,
+                                                  ekf.change_threshold)
+        P_filtered = step.P + ekf.jump_covariance if alarm else step.P
+        z_next, P_next = ekf.predict(step.x, P_filtered, u)
+        assert alarm == fires
+        for c_value, python in zip(compiled, (step.x, P_filtered, z_next, P_next, mean_next, np.array(statistic))):
             assert np.max(np.abs(np.asarray(c_value).reshape(python.shape) - python)) < 1e-9
     U = np.tile(u[:, None], (1, 30))
     expected = ekf.forecast(z_next, np.hstack([U, U[:, :1]]))[1:].T  # outputs after each step

@@ -8,18 +8,25 @@ and large. A random walk fast enough to follow it would chase noise the rest of 
 filter is told about a change when its innovations show one (a jump detector in the spirit of
 Willsky & Jones 1976, with a covariance reset instead of a state jump).
 
-Test. With :math:`S_k = H P_k^- H^T + R` and its Cholesky factor :math:`S_k = L_k L_k^T`, the
-whitened innovation :math:`\varepsilon_k = L_k^{-1}\nu_k` is :math:`N(0, I)` and white while the
-filter's model holds. Over the last :math:`W` samples,
+Test. While the filter's model holds, the innovations :math:`\nu_k` are white with covariance
+:math:`S_k = H P_k^- H^T + R`. Their exponentially weighted mean
 
 .. math::
-    T_k = \frac{1}{W}\Big\lVert \sum_{i=k-W+1}^{k} \varepsilon_i \Big\rVert^2 \sim \chi^2_{n_y},
+    m_k = \lambda m_{k-1} + (1 - \lambda)\,\nu_k, \qquad \lambda = \frac{W - 1}{W + 1},
 
-a persistent bias of the innovations (what a missed heat flow leaves) makes :math:`T_k` grow with
-:math:`W`. When :math:`T_k` exceeds ``threshold`` the disturbance block of the filtered covariance
-gets ``jump_covariance`` added (the size of change to expect) and the window starts again, so one
-change opens the covariance once. Only past innovations are used: the rule is causal.
-Samples with a missing sensor are left out of the window.
+has covariance :math:`\frac{1-\lambda}{1+\lambda} S` in the steady state, so
+
+.. math::
+    T_k = \frac{1+\lambda}{1-\lambda}\, m_k^T S_k^{-1} m_k \;\sim\; \chi^2_{n_y}.
+
+:math:`W` (samples) is the length of the window with the same variance reduction; a persistent
+bias :math:`b` of the innovations (what a missed heat flow leaves) gives
+:math:`T \to W\,b^T S^{-1} b`. When :math:`T_k` exceeds ``threshold`` the filtered covariance
+gets ``jump_covariance`` added (the size of change to expect, on the disturbance states) and
+:math:`m` restarts from zero, so one change opens the covariance once. Only past innovations are
+used: the rule is causal, and :math:`m` is the whole memory, so the generated C update carries it
+as one more vector (:meth:`ExtendedKalmanFilter.update_function`). A sample with a missing
+sensor leaves :math:`m` unchanged and cannot raise an alarm.
 """
 
 from __future__ import annotations
@@ -29,8 +36,27 @@ import numpy as np
 from ..errors import InputError
 
 
+def forgetting_factor(window_samples: int) -> float:
+    """:math:`\\lambda = (W - 1)/(W + 1)` of a window of ``window_samples`` samples."""
+    return (window_samples - 1.0) / (window_samples + 1.0)
+
+
+def change_step(mean: np.ndarray, innovation: np.ndarray, S: np.ndarray, window_samples: int,
+                threshold: float) -> tuple[np.ndarray, float, bool]:
+    """One step of the test: ``(m_k, T_k, alarm)`` from ``m_{k-1}`` (K), the innovation (K, NaN =
+    missing) and its covariance ``S`` (K²); after an alarm the returned mean is zero."""
+    if not np.all(np.isfinite(innovation)):
+        return mean, 0.0, False
+    lam = forgetting_factor(window_samples)
+    mean = lam * mean + (1.0 - lam) * innovation
+    statistic = float((1.0 + lam) / (1.0 - lam) * mean @ np.linalg.solve(S, mean))
+    if statistic > threshold:
+        return np.zeros_like(mean), statistic, True
+    return mean, statistic, False
+
+
 class InnovationChangeDetector:
-    """Windowed test on the whitened innovations (module docstring).
+    """The test of the module docstring over one record, with its alarms.
 
     Parameters
     ----------
@@ -51,29 +77,21 @@ class InnovationChangeDetector:
         self.window_samples = int(window_samples)
         self.threshold = float(threshold)
         self.jump_covariance = np.asarray(jump_covariance, dtype=float)
-        self.reset()
-
-    def reset(self) -> None:
-        """Forget the window (start of a record)."""
-        self._window: list[np.ndarray] = []
+        self.mean: np.ndarray | None = None
         #: Samples (indices of :meth:`step` calls) at which the test fired.
         self.alarms: list[int] = []
-        self._count = 0
+        #: :math:`T_k` of every sample (0 where a sensor was missing).
+        self.statistics: list[float] = []
 
     def step(self, innovation: np.ndarray, S: np.ndarray, P_filtered: np.ndarray) -> np.ndarray:
         """Add one sample's innovation (K, NaN = missing) with its covariance ``S`` (K²) and
         return the filtered covariance, opened by ``jump_covariance`` if the test fires."""
-        index, self._count = self._count, self._count + 1
-        if not np.all(np.isfinite(innovation)):
+        if self.mean is None:
+            self.mean = np.zeros(len(innovation))
+        self.mean, statistic, alarm = change_step(self.mean, np.asarray(innovation, dtype=float), S,
+                                                  self.window_samples, self.threshold)
+        self.statistics.append(statistic)
+        if not alarm:
             return P_filtered
-        self._window.append(np.linalg.solve(np.linalg.cholesky(S), innovation))
-        if len(self._window) > self.window_samples:
-            self._window.pop(0)
-        if len(self._window) < self.window_samples:
-            return P_filtered
-        statistic = float(np.sum(np.sum(self._window, axis=0) ** 2)) / self.window_samples
-        if statistic <= self.threshold:
-            return P_filtered
-        self.alarms.append(index)
-        self._window.clear()
+        self.alarms.append(len(self.statistics) - 1)
         return P_filtered + self.jump_covariance

@@ -86,7 +86,7 @@ import scipy.linalg
 from ..discretise import check_step_accuracy
 from ..errors import InputError
 from ..model import ThermalModel
-from .change_detection import InnovationChangeDetector
+from .change_detection import InnovationChangeDetector, forgetting_factor
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
@@ -253,8 +253,12 @@ class ExtendedKalmanFilter(RecursiveFilter):
         settings, or None when ``change_threshold`` is None."""
         if self.change_threshold is None:
             return None
-        return InnovationChangeDetector(max(1, int(round(self.change_window_min * 60.0 / self.dt_s))),
-                                        self.change_threshold, self.jump_covariance)
+        return InnovationChangeDetector(self.change_window_samples, self.change_threshold, self.jump_covariance)
+
+    @property
+    def change_window_samples(self) -> int:
+        """:math:`W` of the change test, samples."""
+        return max(1, int(round(self.change_window_min * 60.0 / self.dt_s)))
 
     def basis_values(self, x_nodes, u):
         """:math:`\\phi_b(x, u)` of every disturbance state (state order): 1 for ``constant``,
@@ -331,30 +335,50 @@ class ExtendedKalmanFilter(RecursiveFilter):
 
     # --- CasADi functions for code generation ----------------------------------------------
     def update_function(self) -> ca.Function:
-        """``(z_pred, P_pred, u, y, measured) -> (z, P, z_next_pred, P_next_pred)``: one update
-        with the measurement and the prediction to the next sample, as :meth:`update` then
-        :meth:`predict`.
+        """``(z_pred, P_pred, u, y, measured, change_mean) -> (z, P, z_next_pred, P_next_pred,
+        change_mean_next, change_statistic)``: one update with the measurement, the innovation
+        change test, and the prediction to the next sample, as :meth:`run` does with
+        :meth:`update`, :meth:`change_detector` and :meth:`predict`.
 
         ``measured`` holds 1 for each sensor read at this sample and 0 for a missing one (its
         ``y`` is then ignored): the sensor's row of :math:`H` and its innovation are zeroed and its
         row and column of :math:`R` replaced by the identity's, which gives exactly the update
-        without that sensor.
+        without that sensor. ``change_mean`` is the test's memory :math:`m` (K, one per sensor;
+        zeros at the start of a record), ``change_statistic`` its :math:`T_k`
+        (:mod:`~genthermal.estimation.change_detection`); on an alarm (:math:`T_k` above
+        ``change_threshold``, every sensor read) ``P`` is the covariance already opened by the
+        jump covariance and ``change_mean_next`` is zero. Without a threshold the test is computed
+        but never fires.
         """
         nz, ny = len(self.state_names), len(self.output_names)
         z, P = ca.SX.sym("z_pred", nz), ca.SX.sym("P_pred", nz, nz)
         u, y, measured = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
+        mean = ca.SX.sym("change_mean", ny)
         mask = ca.diag(measured)
         H = mask @ ca.DM(self.H)
         R = mask @ ca.DM(self.R) @ mask + ca.diag(1 - measured)
-        innovation = measured * (y - ca.DM(self.H) @ z - ca.DM(self.e))
+        full_innovation = y - ca.DM(self.H) @ z - ca.DM(self.e)
+        innovation = measured * full_innovation
         K = ca.solve(H @ P @ H.T + R, H @ P).T
         z_filtered = z + K @ innovation
         I_KH = ca.DM.eye(nz) - K @ H
         P_filtered = I_KH @ P @ I_KH.T + K @ R @ K.T
+        # the change test on every sensor: skipped (memory held, no alarm) when one is missing
+        all_measured = ca.mmin(measured)
+        lam = forgetting_factor(self.change_window_samples)
+        candidate = lam * mean + (1.0 - lam) * full_innovation
+        S = ca.DM(self.H) @ P @ ca.DM(self.H).T + ca.DM(self.R)
+        statistic = all_measured * (1.0 + lam) / (1.0 - lam) * ca.dot(candidate, ca.solve(S, candidate))
+        threshold = np.inf if self.change_threshold is None else self.change_threshold
+        alarm = all_measured * ca.if_else(statistic > threshold, 1.0, 0.0) if np.isfinite(threshold) else 0.0
+        mean_next = ca.if_else(all_measured > 0, (1.0 - alarm) * candidate, mean)
+        P_filtered = P_filtered + alarm * ca.DM(self.jump_covariance)
         z_next, F = self.transition(z_filtered, u)
         P_next = F @ P_filtered @ F.T + ca.DM(self.Q)
-        return ca.Function("ekf_update", [z, P, u, y, measured], [z_filtered, P_filtered, z_next, P_next],
-                           ["z_pred", "P_pred", "u", "y", "measured"], ["z", "P", "z_next_pred", "P_next_pred"])
+        return ca.Function("ekf_update", [z, P, u, y, measured, mean],
+                           [z_filtered, P_filtered, z_next, P_next, mean_next, statistic],
+                           ["z_pred", "P_pred", "u", "y", "measured", "change_mean"],
+                           ["z", "P", "z_next_pred", "P_next_pred", "change_mean_next", "change_statistic"])
 
     def predict_function(self, n_steps: int) -> ca.Function:
         """``(z, U) -> Y``: outputs after each of ``n_steps`` steps from the filter state ``z``, the
