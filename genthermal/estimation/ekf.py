@@ -38,9 +38,10 @@ from one flight to the next; a random walk fast enough to follow a fault would c
 noise the rest of the time, and the disturbances it learns from a few noisy minutes cost more
 than they gain. So the walks are slow (an online calibration) and a fault is announced by the
 innovation change test of :mod:`genthermal.estimation.change_detection`, which adds
-:data:`DEFAULT_JUMP_STD` ² to the disturbance covariance when the whitened innovations of the
-last :data:`DEFAULT_CHANGE_WINDOW_MIN` minutes are biased beyond :data:`DEFAULT_CHANGE_THRESHOLD`
-(:meth:`RecursiveFilter.run`; the per-step update of the C library is the update without it).
+:data:`DEFAULT_JUMP_STD` ² to the disturbance covariance when the exponentially weighted mean
+of the innovations (over about :data:`DEFAULT_CHANGE_WINDOW_MIN` minutes), normalised by its
+covariance, exceeds :data:`DEFAULT_CHANGE_THRESHOLD` (:meth:`RecursiveFilter.run`, and in the
+generated C update, :meth:`ExtendedKalmanFilter.update_function`).
 
 Process noise, in K² and W² (K² for :math:`\delta`) per step:
 
@@ -117,7 +118,7 @@ DEFAULT_INLET_DRIFT_K = 0.2
 DEFAULT_INITIAL_INLET_K = 2.0
 #: Alarm level of the innovation change test (chi-square, n_y dof); None: no change detection.
 DEFAULT_CHANGE_THRESHOLD = 13.8
-#: Window of the innovation change test, min.
+#: Window of the innovation change test (the window with the same variance as its weighted mean), min.
 DEFAULT_CHANGE_WINDOW_MIN = 5.0
 #: Standard deviation added to each disturbance when a change is detected (W; inlet K).
 DEFAULT_JUMP_STD = {"constant": 10.0, "load": 10.0, "coolant": 40.0, "inlet": 20.0}
