@@ -173,7 +173,8 @@ class ExtendedKalmanFilter(RecursiveFilter):
         Measurement noise covariance, K², output order; default thesis eq. 6.10.
     P0 : array_like, optional
         Initial covariance of the whole state; default :data:`DEFAULT_INITIAL_STD_K` ² on the
-        nodes and ``initial_disturbance_W`` ² on the disturbances.
+        nodes, ``initial_disturbance_W`` ² on the heat-flow coefficients and ``initial_inlet_K`` ²
+        on the inlet offset.
     """
 
     def __init__(self, model: ThermalModel, dt_s: float = 10.0, disturbance_nodes=None,
@@ -283,16 +284,16 @@ class ExtendedKalmanFilter(RecursiveFilter):
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
         nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
-        z, u_in = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
-        u = u_in
-        phi = self.basis_values(z[:nx], u)
+        z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
+        phi = self.basis_values(z[:nx], u)  # the coolant basis uses the measured inlet
         heat = ca.vertcat(*[sum(z[nx + b * n_nodes + j] * phi[b * n_nodes + j] for b in range(len(self.bases)))
                             for j in range(n_nodes)])
+        u_model = u  # the inputs the model sees: the inlet raised by the offset state, if any
         if self.inlet_offset:
-            u = u + z[-1] * ca.DM([float(name == self.coolant_input) for name in self.model.input_names])
-        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
-        return (ca.Function("ekf_transition", [z, u_in], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
-                ca.Function("ekf_state_step", [z, u_in], [z_next], ["z", "u"], ["z_next"]))
+            u_model = u + z[-1] * ca.DM([float(name == self.coolant_input) for name in self.model.input_names])
+        z_next = ca.vertcat(discrete.forced_step(z[:nx], u_model, ca.DM(self.M) @ heat), z[nx:])
+        return (ca.Function("ekf_transition", [z, u], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
+                ca.Function("ekf_state_step", [z, u], [z_next], ["z", "u"], ["z_next"]))
 
     # --- one step --------------------------------------------------------------------------
     def update(self, x_pred, P, y) -> Update:
