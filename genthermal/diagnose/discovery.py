@@ -276,6 +276,11 @@ class Discovery:
                                   viewed.spec.interface)
         self._report(residual["summary"])
         experiment, other = None, rival(iterations[0])
+        if other is not None and not residual["level_ok"]:
+            # neither explanation accounts for the data: separating them would tell nothing
+            self._report(f"{' + '.join(_explanations(other))} fits about as well, but neither explains the data: "
+                         "no look-alike test")
+            other = None
         if other is not None and self._can_resolve_phases(model, measured, view):
             separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other)
             if separated is not None:

@@ -46,6 +46,7 @@ from ..errors import InputError
 from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
 from .parallel import map_in_workers
+from .residual import LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR
 from .trajectory import ParametricSimulator
 
 #: Single effects (best ΔBIC first) whose pairs are fitted.
@@ -56,8 +57,13 @@ PARTNER_RANKS = 8
 PAIR_GRID = 5
 #: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
 _GRID_ITERATIONS = 2
+#: Pairs (least RSS at their best starting point first) whose onsets are refined by the descent of
+#: step 3; the others keep their best starting point (the grid and the onsets fitted alone).
+DESCENDED_PAIRS = 3
 #: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
 POLISHED_PAIRS = 3
+#: Replacements tried for each member of the best pair when it is near the answer (:meth:`PairSearch.swaps`).
+SWAPS_PER_MEMBER = 2
 #: Rounds of coordinate descent over the two onsets (the first over the whole record).
 _DESCENT_ROUNDS = 3
 #: Starting points of the descent kept (least RSS first) among the best grid point, both onsets
@@ -120,6 +126,69 @@ def _start(scaling, value: float, parameter) -> float:
     return float(np.clip(value, scaling.lower, scaling.upper))
 
 
+def _coarse_rows(search: EffectSearch, full: np.ndarray) -> np.ndarray:
+    """``full`` (n_outputs, N) on the full series at the samples of the decimated series."""
+    factor = int(round(search.coarse.dt_s / search.series.dt_s))
+    return full[:, ::factor][:, :search.coarse.time_s.size]
+
+
+def screen(residual: np.ndarray, candidates: Sequence[Candidate], directions: Sequence[np.ndarray] = ()) -> list:
+    r"""``candidates`` ordered by how much of ``residual`` each removes to first order: orthogonal
+    matching pursuit over their onset responses.
+
+    With :math:`d_j` the change a candidate makes switched on at grid onset :math:`j`
+    (:attr:`~genthermal.diagnose.search.Candidate.onset_responses`), made orthogonal to
+    ``directions`` (what a refit of the effects already chosen absorbs), its score is
+    :math:`\max_j (r\cdot d_j)^2 / (d_j\cdot d_j)`, the share of :math:`\lVert r\rVert^2` it
+    removes. Effects alike in shape to a chosen one score high alone but low here. Candidates
+    without onset responses come last, in their order.
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        Measured minus modelled outputs on the decimated series, K, (n_outputs, N); NaN where a
+        sensor has no sample.
+    candidates : sequence of Candidate
+    directions : sequence of numpy.ndarray
+        Output changes (n_outputs, N) on the decimated series to make the responses orthogonal to.
+    """
+    valid = np.isfinite(residual)
+    r = np.where(valid, residual, 0.0).ravel()
+    basis = []
+    for direction in directions:
+        v = np.where(valid, np.nan_to_num(direction), 0.0).ravel()
+        for u in basis:
+            v = v - (v @ u) * u
+        if np.linalg.norm(v) > 1e-12:
+            basis.append(v / np.linalg.norm(v))
+
+    def score(candidate: Candidate) -> float:
+        if candidate.onset_responses is None:
+            return -math.inf
+        changes = np.where(valid[None], np.nan_to_num(candidate.onset_responses.changes), 0.0)
+        changes = changes.reshape(changes.shape[0], -1)
+        for u in basis:
+            changes = changes - np.outer(changes @ u, u)
+        norms = np.einsum("ij,ij->i", changes, changes)
+        useful = norms > 1e-12 * max(float(norms.max()), 1e-300)
+        return float(np.max(np.where(useful, (changes @ r) ** 2 / np.where(useful, norms, 1.0), 0.0)))
+
+    return sorted(candidates, key=score, reverse=True)
+
+
+def residual_partners(search: EffectSearch, best: Candidate, others: Sequence[Candidate], count: int) -> list:
+    """The ``count`` effects of ``others`` that explain most of what ``best`` leaves (:func:`screen`
+    on the decimated series, orthogonal to the change ``best`` makes from its nearest grid onset:
+    a refit of ``best`` absorbs what lies along it): a forward-stepwise choice of its partners."""
+    residual = _coarse_rows(search, search.series.outputs - best.predicted)
+    directions = []
+    if best.onset_responses is not None:
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        nearest = int(np.argmin(np.abs(best.onset_responses.onsets - best.onset_index // factor)))
+        directions.append(best.onset_responses.changes[nearest])
+    return screen(residual, others, directions)[:count]
+
+
 class PairSearch:
     """Fit pairs of catalogue effects jointly on the series of a first-round :class:`EffectSearch`.
 
@@ -163,15 +232,14 @@ class PairSearch:
         """(value fitted alone, EffectParameter) of each parameter of ``single``."""
         return [(single.values[p.name], p) for p in self.search.effect(single.effect).parameters]
 
-    def _coarse_fit(self, first: Candidate, second: Candidate):
-        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
+    def _starting_points(self, first: Candidate, second: Candidate) -> list:
+        """Step 2 on the decimated series: the starting points of the descent, least RSS first, as
+        (coarse onset indices, z, coarse RSS)."""
         search = self.search
         coarse = self._structure((first.effect, second.effect), search.coarse)
         z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
                       zip(coarse.problem.scalings, [*self._starts(first), *self._starts(second)])])
-        n = search.coarse.time_s.size
-        last = n - max(3, int(0.05 * n))
-        grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
+        grid = self._onset_grid()
         best, z_alone = (math.inf, None, z), z
         for i, a in enumerate(grid):
             z_row = z
@@ -185,10 +253,24 @@ class PairSearch:
         alone = (first.onset_index // factor, second.onset_index // factor)
         for onsets in {alone, (alone[0], 0), (0, alone[1])} - {starts[0][0]}:
             starts.append((onsets, *coarse.fit(list(onsets), z_alone, search.x0_coefficients)))
-        starts.sort(key=lambda start: start[2])
+        return sorted(starts, key=lambda start: start[2])
+
+    def _onset_grid(self) -> np.ndarray:
+        """Coarse onset indices of the pair grid (:data:`PAIR_GRID` per effect)."""
+        n = self.search.coarse.time_s.size
+        return np.unique(np.linspace(0, n - max(3, int(0.05 * n)), PAIR_GRID).round().astype(int))
+
+    def _descents(self, pair: tuple, starts: Sequence) -> tuple:
+        """Step 3 from the :data:`_DESCENTS` best ``starts``: (coarse onsets, z, coarse RSS) of least RSS."""
+        coarse = self._structure(pair, self.search.coarse)
+        grid = self._onset_grid()
         step = int(grid[1] - grid[0])
         return min((self._descend(coarse, list(onsets), z_start, step) for onsets, z_start, _ in starts[:_DESCENTS]),
                    key=lambda result: result[2])
+
+    def _coarse_fit(self, first: Candidate, second: Candidate):
+        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
+        return self._descents((first.effect, second.effect), self._starting_points(first, second))
 
     def _descend(self, coarse: _Structure, onsets: list, z, step: int):
         """Coordinate descent from ``onsets``: each onset searched over the whole record (grid, then
@@ -240,31 +322,100 @@ class PairSearch:
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
+    def member_changes(self, pair: JointCandidate) -> dict:
+        """Effect → what it changes in the outputs of ``pair`` (the full series, K, at the pair's
+        values and onsets; the initial state of the search)."""
+        search = self.search
+        full = self._structure(pair.effects, search.series)
+        simulator = full.problem.simulator
+        indicator = _indicator(search.series.time_s.size, [pair.onset_indices[e] for e in pair.effects])
+        theta = [v for e in pair.effects for v in pair.values[e].values()]
+        both = simulator.outputs(np.array(theta), search.x0_coefficients, indicator)
+        changes, position = {}, 0
+        for effect in pair.effects:
+            without = list(theta)
+            for i, parameter in enumerate(search.effect(effect).parameters):
+                without[position + i] = parameter.neutral
+            position += len(search.effect(effect).parameters)
+            changes[effect] = both - simulator.outputs(np.array(without), search.x0_coefficients, indicator)
+        return changes
+
+    def swaps(self, pair: JointCandidate, singles: Sequence[Candidate], count: int = SWAPS_PER_MEMBER) -> list:
+        """Pairs with one member of ``pair`` replaced: for each member, the ``count`` other effects
+        that best explain what it explained plus what the pair leaves (:func:`screen`, orthogonal to
+        the kept member's change); a list of (kept single, new single)."""
+        search = self.search
+        by_name = {c.effect: c for c in singles}
+        changes = self.member_changes(pair)
+        others = [c for c in singles if c.effect not in pair.effects]
+        swapped = []
+        for member, kept in (pair.effects, pair.effects[::-1]):
+            residual = _coarse_rows(search, search.series.outputs - pair.predicted + changes[member])
+            swapped += [(by_name[kept], c) for c in
+                        screen(residual, others, [_coarse_rows(search, changes[kept])])[:count]]
+        return swapped
+
+    def _fit(self, pairs: Sequence[tuple], workers: int, progress, stage: str = "") -> list[JointCandidate]:
+        """Steps 2-4 for ``pairs`` of single candidates: every starting point, the descent for the
+        :data:`DESCENDED_PAIRS` of least RSS there, the :data:`POLISHED_PAIRS` best polished."""
+
+        def start_pair(pair):
+            starts = self._starting_points(*pair)[:_DESCENTS]
+            onsets, z, rss = starts[0]
+            names = (pair[0].effect, pair[1].effect)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return starts, (list(onsets), z, rss, scored)
+
+        def descend_pair(item):
+            names, starts = item
+            onsets, z, rss = self._descents(names, starts)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return onsets, z, rss, scored
+
+        started = map_in_workers(start_pair, pairs, workers, progress and (
+            lambda done, total, pair: progress(done, total, f"{stage}{pair[0].effect} + {pair[1].effect} "
+                                                            "(onset grid)")))
+        order = sorted(range(len(pairs)), key=lambda m: started[m][1][2])[:DESCENDED_PAIRS]
+        refined = map_in_workers(descend_pair, [((pairs[m][0].effect, pairs[m][1].effect), started[m][0])
+                                                for m in order], workers, progress and (
+            lambda done, total, item: progress(done, total, f"{stage}{' + '.join(item[0])} (onsets refined)")))
+        descended = dict(zip(order, refined))
+        coarse = []
+        for m, (first, second) in enumerate(pairs):
+            onsets, z, rss, scored = descended.get(m, started[m][1])
+            coarse.append(((first.effect, second.effect), onsets, z, rss, scored))
+        coarse.sort(key=lambda item: item[3])
+        return [scored if rank >= POLISHED_PAIRS and scored is not None else
+                self._finish(names, onsets, z, rank < POLISHED_PAIRS)
+                for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
+
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
              workers: int = 1) -> list[JointCandidate]:
         """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
-        each next one up to rank :data:`PARTNER_RANKS` on the decimated series,
-        polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
-        there at their coarse values; best ΔBIC first.
+        the :data:`PARTNER_RANKS` − ``pool`` others that explain most of its residual
+        (:func:`residual_partners`) on the decimated series, refine the onsets of the
+        :data:`DESCENDED_PAIRS` most promising, polish the :data:`POLISHED_PAIRS` of least coarse
+        RSS on the full series and score the others there at their coarse values. When the best
+        pair leaves more than :data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` but at
+        most :data:`~genthermal.diagnose.residual.LEVEL_FACTOR` times the noise (near the answer,
+        not at it), its members are swapped for the effects that explain their part better
+        (:meth:`swaps`) and those pairs fitted too. Best ΔBIC first.
 
         ``progress(done, total, label)`` is called after each pair when given. With ``workers`` > 1
         the pairs are fitted in forked processes (:mod:`genthermal.diagnose.parallel`); the result
         is the same."""
         ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
-        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:max(pool, PARTNER_RANKS)]]
-
-        def fit_pair(pair):
-            first, second = pair
-            onsets, z, rss = self._coarse_fit(first, second)
-            names = (first.effect, second.effect)
-            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
-            return names, onsets, z, rss, scored
-
-        coarse = map_in_workers(fit_pair, pairs, workers, progress and (
-            lambda done, total, pair: progress(done, total, f"{pair[0].effect} + {pair[1].effect}")))
-        coarse.sort(key=lambda item: item[3])
-        ranked = [scored if rank >= POLISHED_PAIRS and scored is not None else
-                  self._finish(names, onsets, z, rank < POLISHED_PAIRS)
-                  for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
-        return sorted(ranked, key=lambda c: c.delta_bic)
+        partners = residual_partners(self.search, ranked_singles[0], ranked_singles[pool:],
+                                     max(PARTNER_RANKS - pool, 0))
+        pairs += [(ranked_singles[0], other) for other in partners]
+        ranked = sorted(self._fit(pairs, workers, progress), key=lambda c: c.delta_bic)
+        noise = self.search.noise
+        if ranked and STRUCTURE_LEVEL_FACTOR * noise < ranked[0].rmse_after <= LEVEL_FACTOR * noise:
+            tried = {frozenset((a.effect, b.effect)) for a, b in pairs}
+            swapped = [p for p in self.swaps(ranked[0], ranked_singles)
+                       if frozenset((p[0].effect, p[1].effect)) not in tried]
+            swapped = list({frozenset((a.effect, b.effect)): (a, b) for a, b in swapped}.values())
+            if swapped:
+                ranked = sorted(ranked + self._fit(swapped, workers, progress, "swap: "), key=lambda c: c.delta_bic)
+        return ranked
