@@ -6,26 +6,37 @@ an end-winding loss present from the start warms the winding too), and the secon
 undo it. Here every pair of the best single effects is fitted as one model:
 
 1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
-   effect with each of the next ones up to rank :data:`PARTNER_RANKS` (pruning: an effect that
-   explains little alone belongs to the answer mostly next to the effect that dominates the
-   record, as a slow insulation change under a strong excitation-dependent iron loss does; the
-   bound keeps a library of twenty terms at a dozen pairs);
+   effect with the :data:`PARTNER_RANKS` − :data:`PAIR_POOL` others that explain most of what it
+   leaves (:func:`residual_partners`: a forward-stepwise screen, orthogonal matching pursuit over
+   what each effect does from each onset, made orthogonal to the best effect's own change). An
+   effect that explains little alone belongs to the answer mostly next to the effect that
+   dominates the record, as a slow insulation change under a strong excitation-dependent iron loss
+   does; in a library of twenty terms the next ranks alone are look-alikes of the best (the same
+   form into a neighbouring node group), and the screen passes over them;
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
    effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
-   neighbour: the grid only has to find the basin);
-3. coordinate descent over the two onsets, each searched over the whole record (grid, then golden
-   section) with both effects' values refitted, then within one grid step until neither moves;
-   started from the :data:`_DESCENTS` best of: the best grid point, both onsets where each effect
-   was fitted alone, and each of those with the other effect present from the start. The onset
-   landscape of a pair has valleys: fitted alone, a blockage from 80 min takes an onset that lets
-   it absorb a stray loss present from the start, and from there, descent over one onset at a
-   time cannot reach the truth; starting from "this onset, the other effect from the start"
-   does;
+   neighbour: the grid only has to find the basin), and at both onsets where each effect was
+   fitted alone and each of those with the other effect present from the start;
+3. for the :data:`DESCENDED_PAIRS` pairs of least RSS at their best starting point: coordinate
+   descent over the two onsets, each searched over the whole record (grid, then golden section)
+   with both effects' values refitted, then within one grid step until neither moves; started
+   from the :data:`_DESCENTS` best starting points. The onset landscape of a pair has valleys:
+   fitted alone, a blockage from 80 min takes an onset that lets it absorb a stray loss present
+   from the start, and from there, descent over one onset at a time cannot reach the truth;
+   starting from "this onset, the other effect from the start" does. The other pairs keep their
+   best starting point (the descent costs about four times the grid);
 4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
    the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
    stay on the decimated grid, a resolution of one minute); the others are scored on the full
-   series at their values from the decimated fit.
+   series at their values from the decimated fit;
+5. when the best pair is near the answer but not at it (between
+   :data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` and
+   :data:`~genthermal.diagnose.residual.LEVEL_FACTOR` times the noise), each member is swapped for
+   the :data:`SWAPS_PER_MEMBER` effects that best explain its own part plus what the pair leaves
+   (:meth:`PairSearch.swaps`), and those pairs go through steps 2-4: of the heat flows into the
+   iron, ΣI² may fit best alone where the truth is I_exc², and only next to the second term does
+   the difference show.
 
 The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
 effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
@@ -272,15 +283,15 @@ class PairSearch:
         """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
         return self._descents((first.effect, second.effect), self._starting_points(first, second))
 
-    def _descend(self, coarse: _Structure, onsets: list, z, step: int):
+    def _descend(self, coarse: _Structure, onsets: list, z, step: int, whole_record: bool = True):
         """Coordinate descent from ``onsets``: each onset searched over the whole record (grid, then
-        golden section) with the values refitted, then within ± ``step`` samples until a round moves
-        neither; returns (onsets, z, RSS)."""
+        golden section; not with ``whole_record`` False) with the values refitted, then within
+        ± ``step`` samples until a round moves neither; returns (onsets, z, RSS)."""
         n, rss = coarse.series.time_s.size, math.inf
         for round_ in range(_DESCENT_ROUNDS):
             before = list(onsets)
             for position in range(2):
-                bounds = ((None, None) if round_ == 0 else
+                bounds = ((None, None) if round_ == 0 and whole_record else
                           (max(onsets[position] - step, 0), min(onsets[position] + step, n - 1)))
                 onsets[position], z, rss = coarse.search_onset(onsets, position, z, self.search.x0_coefficients,
                                                                *bounds)
@@ -321,6 +332,29 @@ class PairSearch:
         """Fit the effects of two single candidates jointly (started from their single fits)."""
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
+
+    def refit(self, singles: Sequence[Candidate], starts: Sequence[tuple]) -> list[JointCandidate]:
+        """Pairs fitted from known onsets (warm starts): for each ``(effect, onset s, effect, onset s)``
+        of ``starts`` (e.g. a pair fitted to the same record on other sensors), the values of both
+        effects fitted at those onsets from their single fits, the onsets refined within one grid
+        step of the pair grid by coordinate descent (step 3 without the search over the whole
+        record), then step 4; best ΔBIC first. Pairs of an effect not among ``singles`` are skipped."""
+        search, by_name = self.search, {c.effect: c for c in singles}
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        grid = self._onset_grid()
+        ranked = []
+        for first, first_onset_s, second, second_onset_s in starts:
+            if first not in by_name or second not in by_name:
+                continue
+            coarse = self._structure((first, second), search.coarse)
+            z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
+                          zip(coarse.problem.scalings, [*self._starts(by_name[first]), *self._starts(by_name[second])])])
+            onsets = [int(np.argmin(np.abs(search.series.time_s - search.series.time_s[0] - t))) // factor
+                      for t in (first_onset_s, second_onset_s)]
+            z, _ = coarse.fit(onsets, z, search.x0_coefficients)
+            onsets, z, _ = self._descend(coarse, onsets, z, int(grid[1] - grid[0]), whole_record=False)
+            ranked.append(self._finish((first, second), onsets, z, polish=True))
+        return sorted(ranked, key=lambda c: c.delta_bic)
 
     def member_changes(self, pair: JointCandidate) -> dict:
         """Effect → what it changes in the outputs of ``pair`` (the full series, K, at the pair's
