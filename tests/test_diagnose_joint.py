@@ -11,6 +11,7 @@ from genthermal.diagnose.catalogue import Catalogue
 from genthermal.diagnose.discover import diagnose
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.experiment import separating_experiment
+from genthermal.diagnose.fitter import OnsetFitter
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
 from genthermal.diagnose.open_search import (conductance_effect, effect_code, heat_flow_effect, heat_flow_library,
                                              node_groups)
@@ -169,6 +170,9 @@ def test_residual_screen_prefers_the_missing_shape_over_a_look_alike():
     (lambda model: heat_flow_effect("rotor", ("rotor",), "I_cubed"), "form"),
     (lambda model: conductance_effect("shaft_bearing"), "conductance"),
     (lambda model: diagnose(model, None, effects=["no_such_effect"]), "effects"),
+    (lambda model: OnsetFitter(pair_starts=(("coolant_flow_reduction", -60.0, "end_winding_stray_loss", 0.0),)),
+     "pair_starts"),
+    (lambda model: make_hidden_effect_case([Injection("heat_I2_rotor", {}, 0.0)], catalogue={}), "effect"),
 ])
 def test_bad_inputs_name_the_field(call, field, plant_model):
     with pytest.raises(InputError) as error:
