@@ -77,7 +77,9 @@ class ManagerSettings:
     dt_s : float
         Plant and design-model step, s.
     margin_K : float
-        Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K.
+        Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K. A scenario that
+        gives ``generators.margin_K`` (``PowerSystem.margin_K``) flies with that instead
+        (:func:`planning_margin_K`).
     rise_backoff : float
         :math:`\\kappa` of the robust constraint on temperature rises within one cycle (see
         :class:`~genthermal.schedule.plan.PlanningProblem`).
@@ -203,6 +205,13 @@ class FlightResult:
     sensor_watch: object = None
 
 
+def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
+    """The back-off margin a flight plans with, K: the scenario's (``generators.margin_K``, e.g. 0 in
+    the thesis-reproduction scenarios, whose heuristic checks θmax itself) when it gives one, else
+    ``settings.margin_K``."""
+    return settings.margin_K if system.margin_K is None else float(system.margin_K)
+
+
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
               previous=None, switched_off=None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
@@ -235,7 +244,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     """
     if switched_off is not None and np.any(switched_off):
         off = np.array(switched_off, dtype=bool)
-        return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
+        return _shed(problem, off, off, names, limit_C, "", max(limit_C - problem.limit_C, 0.0))
 
     def run(p):
         if scheduler == "heuristic":
@@ -256,7 +265,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
                  lowest_peak_action=segment.action_index + 1)
     if lowest.peak_C > limit_C:
         nobody = np.zeros(problem.n_generators, dtype=bool)
-        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, max(limit_C - problem.limit_C, 0.0))
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
@@ -335,7 +344,8 @@ def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: 
     budget = max(float(rest_budget_s), 0.0)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
-                           system.limit_C - settings.margin_K, min(settings.max_rest_s, budget), settings.dt_s,
+                           system.limit_C - planning_margin_K(system, settings), min(settings.max_rest_s, budget),
+                           settings.dt_s,
                            settings.rise_backoff, settings.cycle_s, budget, float(rest_taken_s))
 
 
