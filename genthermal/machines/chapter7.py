@@ -65,16 +65,23 @@ SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/fit_chapter7.py; gentherma
 PLANNING_LIMIT_C = 110.0
 #: Fault onset of every chapter-7 case, s (1.1 h, just after take-off).
 ONSET_S = 66 * 60.0
-#: Physical bounds of the fitted values (plant values), with the reason.
+#: Physical bounds of the fitted values, with the reason and its source. Convection ranges: Incropera
+#: & DeWitt, Fundamentals of Heat and Mass Transfer, Table 1.1 (free convection of gases 2-25,
+#: forced 25-250 W/(m² K)); end windings: Mellor, Roberts & Turner, IEE Proc. B 138 (1991),
+#: h = 15.5 (0.29 v + 1) W/(m² K) at air speed v m/s (as reviewed by Boglietti et al., IEEE Trans.
+#: Ind. Electron. 56 (2009)).
 FIT_BOUNDS = {
-    "h_top_air": (4.0, 40.0, "W/(m^2 K)", "low-velocity forced convection in a duct, 1-3 m/s"),
-    "h_end_air": (4.0, 40.0, "W/(m^2 K)", "end-region convection of a small enclosed machine"),
+    "h_top_air": (4.0, 40.0, "W/(m^2 K)", "top-air duct: from free convection (Incropera Table 1.1, gases 2-25) "
+                  "to low-velocity forced convection at 1-3 m/s"),
+    "h_end_air": (4.0, 40.0, "W/(m^2 K)", "end region: from free convection (Incropera Table 1.1) to Mellor's "
+                  "end-winding 15.5 (0.29 v + 1) at v up to 5 m/s"),
     "R0": (0.9, 2.0, "ohm", "phase resistance at 0 °C: 0.03-0.06 per unit of the 34 ohm base"),
     "h_air_gap": (20.0, 120.0, "W/(m^2 K)", "rotating air gap at 1500 rpm"),
     "P_iron": (20.0, 120.0, "W", "iron loss: ~10 kg of stator steel at 2-10 W/kg (50 Hz, 1.5 T)"),
-    "h_ambient": (5.0, 25.0, "W/(m^2 K)", "natural convection outside the frame"),
+    "h_ambient": (5.0, 25.0, "W/(m^2 K)", "free convection outside the frame (Incropera Table 1.1, gases 2-25)"),
     "m_dot_fan": (0.01, 0.04, "kg/s", "internal fan: 4-17 m/s mean velocity in the 50 mm outlet duct"),
-    "n_flow": (0.5, 1.0, "1", "forced-convection exponent: 0.5 laminar, 0.8 turbulent"),
+    "n_flow": (0.5, 1.0, "1", "exponent of Nu in Re: 0.5 laminar (flat plate, Nu = 0.664 Re^0.5 Pr^1/3), "
+               "0.8 turbulent (Dittus-Boelter)"),
     "k_flow": (0.056, 0.6, "1", "flow through the 10 mm plate by the orifice relation (genthermal.coolant) "
                "for an open-outlet loss share beta of 0.5 to 0.003 of the circuit: the small shares for a fan "
                "whose pressure falls steeply with its flow"),

@@ -45,8 +45,8 @@ from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
-from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evaluate, generator_inputs,
-                   mission_segments, predict, remaining_after)
+from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
+                   generator_inputs, mission_segments, predict, remaining_after)
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .shed import shed_plan
@@ -314,7 +314,9 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
     ``feasible``."""
     off = off.copy()
     result = shed_plan(problem, off, receiver_margin_K)
-    while result.peak_C > limit_C and not off[result.peak_generator]:
+    # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
+    # θmax, and a strict comparison switched the healthy receiver off for a 3e-14 K excess
+    while result.peak_C > limit_C + LIMIT_TOLERANCE_K and not off[result.peak_generator]:
         off[result.peak_generator] = True
         result = shed_plan(problem, off, receiver_margin_K)
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
