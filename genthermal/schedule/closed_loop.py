@@ -244,7 +244,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     """
     if switched_off is not None and np.any(switched_off):
         off = np.array(switched_off, dtype=bool)
-        return _shed(problem, off, off, names, limit_C, "", max(limit_C - problem.limit_C, 0.0))
+        return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
 
     def run(p):
         if scheduler == "heuristic":
@@ -265,7 +265,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
                  lowest_peak_action=segment.action_index + 1)
     if lowest.peak_C > limit_C:
         nobody = np.zeros(problem.n_generators, dtype=bool)
-        shed = _shed(problem, nobody, nobody, names, limit_C, where, max(limit_C - problem.limit_C, 0.0))
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
