@@ -7,7 +7,7 @@ Each entry: ``section`` (thesis section / figure), ``outcome``, ``thesis`` (the 
 qualitative / contradicted / not checkable) and ``reason`` (for contradictions and qualitative
 matches). Rig measurements are not available, so every "measured" input is synthetic rig data from a
 plant whose parameters differ from the model's. ``--quick`` leaves out the closed-loop flights
-(chapter 7.3.3), about a minute each.
+(chapter 7.3.3), a few seconds each (the large blockage about 15 s).
 
 Two calibrations are used: the default (chapters 3-5: normal operation near 70 °C) and
 ``genco_rf201a:chapter7`` (fitted to the chapter-7 outcomes, :mod:`genthermal.machines.chapter7`).
@@ -189,7 +189,11 @@ def _blockage_reason(outcome, displaced: bool, rested: bool) -> str:
     return (f"from {first['at_min']:.0f} min the manager finds no schedule within θmax 110 °C (lowest reachable peak "
             f"{first['lowest_reachable_peak_C']:.1f} °C, in action {first['lowest_peak_action']}): the healthy "
             "generator has too little spare capacity to take gen1's load, so the manager sheds load rather than "
-            "plan the thesis's displacement and rest, which breach 110 °C (110.7 and 111 °C)")
+            "plan the thesis's displacement and rest, which breach 110 °C (110.7 and 111 °C); the healthy generator, "
+            f"loaded to θmax on the design model (whose rise at 6-7 A is ~30 % short), reaches "
+            f"{outcome['peak_gen2_C']:.1f} °C"
+            + (f" and is switched off at {outcome['shed'][-1]['at_min']:.0f} min" if outcome["shed"][-1]["switched_off"]
+               else ""))
 
 
 def _actions_text(outcome, first: int = 0) -> str:
