@@ -255,7 +255,7 @@ def chapter_7(default, chapter7, quick):
     rows.append(entry("7.3.3, Figs 7.9-7.10", "inlet +4 K: short rest and load adjust before landing",
                       "rest + displacement before landing",
                       f"landing: {landing4['rest_before_min']:.0f}-min rest before it, {landing4['shed_A']:.2f} A "
-                      f"displaced; nothing earlier: {quiet}; peak {f4['peak_C']:.1f} °C",
+                      f"displaced; {'nothing earlier' if quiet else 'action earlier too'}; peak {f4['peak_C']:.1f} °C",
                       "reproduced" if rested and quiet else ("qualitative" if quiet else "contradicted"),
                       "" if rested and quiet else "the manager does not rest before landing"))
     combat = f16["actions"][5]["shed_A"] > 0.01

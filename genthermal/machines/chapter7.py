@@ -275,7 +275,8 @@ def fit_chapter7(base: ThermalModel, names=FITTED, prior_weight: float = 0.01, r
         target, before, after), ``lags`` (the final model's, :func:`manager_lags`: the manager's
         highest predicted peak should be at θmax), ``converged``.
     """
-    tau_s, lags, first = 60.0 * np.mean(INLET_TAU_BOUNDS_MIN), {p.name: 0.0 for p in PROXIES if p.manager_threshold}, None
+    tau_s, first = 60.0 * np.mean(INLET_TAU_BOUNDS_MIN), None
+    lags = {p.name: 0.0 for p in PROXIES if p.manager_threshold}
     for _ in range(rounds):
         proxies = with_lags(tuple(dataclasses.replace(p, inlet_rise_tau_s=tau_s) if p.blockage_outlet_mm else p
                                   for p in PROXIES), lags)

@@ -91,7 +91,8 @@ def manager_prediction_lag(model: ThermalModel, inlet_rise_C: float, window_s: t
                                   window_s=settings.cycle_s)
         prediction = predict(problem, schedule)
         outputs = prediction.outputs[0, winding_row]
-        robust = np.maximum(outputs[1:], robust_outputs(outputs, prediction.timeline.window_start, problem.rise_backoff))
+        robust = np.maximum(outputs[1:], robust_outputs(outputs, prediction.timeline.window_start,
+                                                        problem.rise_backoff))
         at = cycle_s + prediction.time_s[1:]
         mask = (at >= window_s[0] - 1e-9) & (at <= window_s[1] + 1e-9)
         if mask.any() and robust[mask].max() > best[0]:
