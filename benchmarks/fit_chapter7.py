@@ -38,7 +38,7 @@ def main() -> None:
     k_flow = result["values"]["k_flow"]
     ratio = (OUTLET_DIAMETER_MM / 10.0) ** 4
     result["outlet_loss_share_implied"] = (1 - k_flow**2) / (k_flow**2 * ratio - 1)
-    result["at_bound"] = [n for n, v in result["plant_values"].items()
+    result["at_bound"] = [n for n, v in result["values"].items()
                           if min(abs(v - FIT_BOUNDS[n][0]), abs(v - FIT_BOUNDS[n][1])) < 1e-6 * max(1.0, abs(v))]
     result["defaults"] = {n: base.parameters.value(n) for n in MACHINE_PARAMETERS}
     text = json.dumps(result, indent=2)

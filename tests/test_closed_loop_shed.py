@@ -147,6 +147,30 @@ def test_a_generator_too_hot_even_carrying_nothing_is_switched_off(tmp_path):
     assert predict(problem, result.schedule).outputs[1].max() <= system.limit_C
 
 
+def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(tmp_path, monkeypatch):
+    """The chapter-7 scenarios plan to θmax itself (margin 0): a receiver then takes load up to θmax,
+    where its predicted peak lands a few 1e-14 K above it (measured in the large-blockage flight:
+    110.00000000000003 °C). That is not "too hot even carrying nothing": it stays on."""
+    from genthermal.schedule import closed_loop
+    from genthermal.schedule.plan import PlanResult
+
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    problem = PlanningProblem(segments, generators, x0, np.array([100.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, system.limit_C, rise_backoff=0.3, rest_budget_s=600.0)
+
+    def receiver_on_the_limit(problem, off, receiver_margin_K):
+        return PlanResult(Schedule.nominal(2, len(problem.segments), off), False, system.limit_C + 3e-14, 1, 0, 0.0,
+                          "shed", details={"shedding": [0]})
+    monkeypatch.setattr(closed_loop, "shed_plan", receiver_on_the_limit)
+    result = closed_loop._shed(problem, np.zeros(2, bool), np.zeros(2, bool), system.generator_names,
+                               system.limit_C, "", 0.0)
+    assert not result.schedule.switched_off.any()
+    assert "switch off" not in result.details.get("response", "")
+
+
 def test_fly_command_rest_budget_option(tmp_path, capsys):
     scenario = tmp_path / "hot.yaml"
     scenario.write_text(HOT_AT_REST)

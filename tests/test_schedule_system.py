@@ -47,11 +47,32 @@ def test_large_blockage_scenario_states_its_flow_and_exponent():
     ({"generators": {"rest_percent": 150}}, "generators.rest_percent"),
     ({"generators": {"colour": "red"}}, "generators.colour"),
     ({"generators": {"plant_mismatch": {"h_end_air": -1}}}, "generators.plant_mismatch.h_end_air"),
+    ({"generators": {"margin_K": -1}}, "generators.margin_K"),
+    ({"generators": {"margin_K": "none"}}, "generators.margin_K"),
 ])
 def test_bad_fields_name_the_field(extras, field):
     with pytest.raises(InputError) as error:
         system_from(**extras)
     assert error.value.field == field
+
+
+def test_a_scenario_margin_is_what_the_manager_plans_to_unless_the_option_overrides_it():
+    """``generators.margin_K`` (the chapter-7 scenarios: 0, the thesis heuristic checks θmax itself)
+    sets the planning limit; without it the manager's own margin applies; ``--margin`` overrides it."""
+    import argparse
+
+    from genthermal.commands.plan import add_schedule_arguments, settings_from_args
+    from genthermal.schedule.closed_loop import DEFAULT_MARGIN_K, ManagerSettings, planning_margin_K
+
+    assert planning_margin_K(system_from(generators={"margin_K": 0}), ManagerSettings()) == 0.0
+    assert planning_margin_K(system_from(), ManagerSettings()) == DEFAULT_MARGIN_K
+    parser = argparse.ArgumentParser()
+    add_schedule_arguments(parser)
+    system, settings = settings_from_args(parser.parse_args(["chapter7_inlet_3C", "--scheduler", "heuristic"]))
+    assert planning_margin_K(system, settings) == 0.0
+    system, settings = settings_from_args(parser.parse_args(["chapter7_inlet_3C", "--scheduler", "heuristic",
+                                                             "--margin", "1.5"]))
+    assert planning_margin_K(system, settings) == 1.5
 
 
 def test_effect_fault_and_named_generators():

@@ -26,8 +26,9 @@ def add_schedule_arguments(parser) -> None:
     parser.add_argument("--scheduler", default="optimal", help=f"{' | '.join(SCHEDULERS)} (default optimal)")
     parser.add_argument("--json", help="write the summary as JSON to this file")
     parser.add_argument("--plot", help="PNG file for currents and temperatures")
-    parser.add_argument("--margin", default=str(ManagerSettings.margin_K),
-                        help=f"back-off margin below the limit, K (default {ManagerSettings.margin_K:g})")
+    parser.add_argument("--margin", default=None,
+                        help="back-off margin below the limit, K (default: the scenario's generators.margin_K, "
+                        f"else {ManagerSettings.margin_K:g})")
     parser.add_argument("--rise-backoff", default=str(ManagerSettings.rise_backoff),
                         help="plans tolerate a design model that underestimates a temperature rise within one "
                         f"cycle by this fraction (default {ManagerSettings.rise_backoff:g}; 0 = margin only)")
@@ -57,7 +58,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     """The power system and settings the arguments describe; InputError names a bad option."""
     if args.scheduler not in SCHEDULERS:
         raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
-    margin = _number_in("--margin", args.margin, 0.0, 50.0, "a number of kelvin")
+    margin = ManagerSettings.margin_K if args.margin is None else _number_in("--margin", args.margin, 0.0, 50.0,
+                                                                              "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
     cycle_min = _number_in("--cycle-min", args.cycle_min, 1.0, 60.0, "a number of minutes")  # 1 plan per cycle
     budget_min = None
@@ -74,6 +76,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
             raise InputError("--filter", args.filter, f"must be one of {', '.join(FLIGHT_FILTERS)}")
         settings = dataclasses.replace(settings, filter=args.filter, tell_fault=bool(args.tell_fault))
     system = PowerSystem.from_mission(load_mission(args.scenario))
+    if args.margin is not None:  # the option overrides the scenario's margin
+        system = dataclasses.replace(system, margin_K=None)
     models = {}
     for option in ("model", "plant"):
         if getattr(args, option, None):

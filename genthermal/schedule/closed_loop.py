@@ -46,8 +46,8 @@ from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
-from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evaluate, generator_inputs,
-                   mission_segments, predict, remaining_after)
+from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
+                   generator_inputs, mission_segments, predict, remaining_after)
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .shed import shed_plan
@@ -78,7 +78,9 @@ class ManagerSettings:
     dt_s : float
         Plant and design-model step, s.
     margin_K : float
-        Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K.
+        Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K. A scenario that
+        gives ``generators.margin_K`` (``PowerSystem.margin_K``) flies with that instead
+        (:func:`planning_margin_K`).
     rise_backoff : float
         :math:`\\kappa` of the robust constraint on temperature rises within one cycle (see
         :class:`~genthermal.schedule.plan.PlanningProblem`).
@@ -231,6 +233,13 @@ class FlightResult:
     sensor_watch: object = None
 
 
+def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
+    """The back-off margin a flight plans with, K: the scenario's (``generators.margin_K``, e.g. 0 in
+    the thesis-reproduction scenarios, whose heuristic checks θmax itself) when it gives one, else
+    ``settings.margin_K``."""
+    return settings.margin_K if system.margin_K is None else float(system.margin_K)
+
+
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
               previous=None, switched_off=None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
@@ -333,7 +342,9 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
     ``feasible``."""
     off = off.copy()
     result = shed_plan(problem, off, receiver_margin_K)
-    while result.peak_C > limit_C and not off[result.peak_generator]:
+    # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
+    # θmax, and a strict comparison switched the healthy receiver off for a 3e-14 K excess
+    while result.peak_C > limit_C + LIMIT_TOLERANCE_K and not off[result.peak_generator]:
         off[result.peak_generator] = True
         result = shed_plan(problem, off, receiver_margin_K)
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
@@ -363,7 +374,8 @@ def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: 
     budget = max(float(rest_budget_s), 0.0)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
-                           system.limit_C - settings.margin_K, min(settings.max_rest_s, budget), settings.dt_s,
+                           system.limit_C - planning_margin_K(system, settings), min(settings.max_rest_s, budget),
+                           settings.dt_s,
                            settings.rise_backoff, settings.cycle_s, budget, float(rest_taken_s))
 
 

@@ -14,6 +14,9 @@ validated here)::
       limit_C: 110                 # temperature limit theta_max, degC (default: the machine's limit of its
                                    # protected sensor; the thesis generator's 110, thesis 7.3.1)
       current_limit_percent: 100   # highest phase current a generator may carry, % of rated
+      margin_K: 0                  # the load manager's back-off margin below limit_C, K (default: the
+                                   # manager's, 2.5 K; 0: plan to theta_max itself, as the thesis
+                                   # heuristic does, eqs. 7.1-7.5); --margin overrides it
       plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
       machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration), or any machine
                                    # with the generator role (a plug-in name or a .py machine file)
@@ -55,7 +58,7 @@ DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
-_GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent",
+_GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent", "margin_K",
                    "plant_mismatch", "machine")
 _FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C", "inlet_rise_tau_min"),
                "inlet_rise": ("inlet_rise_C", "inlet_rise_tau_min"),
@@ -287,6 +290,9 @@ class PowerSystem:
     plant : ThermalModel, optional
         The true plant of every generator before its faults (``--plant``); default the planning
         model with ``plant_mismatch`` applied.
+    margin_K : float, optional
+        The scenario's back-off margin of the load manager below ``limit_C``, K; None (default):
+        the manager's own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.margin_K`).
     """
 
     mission: Mission
@@ -299,6 +305,7 @@ class PowerSystem:
     machine: str = DEFAULT_MACHINE
     model: Any = None
     plant: Any = None
+    margin_K: float | None = None
 
     def __post_init__(self):
         if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
@@ -364,7 +371,8 @@ class PowerSystem:
                    if "limit_C" in config else None,
                    current_limit_percent=_number(config, "current_limit_percent", "generators", 50.0, 150.0,
                                                  "%", 100.0),
-                   plant_mismatch=factors, machine=machine)
+                   plant_mismatch=factors, machine=machine,
+                   margin_K=_number(config, "margin_K", "generators", 0.0, 50.0, "K") if "margin_K" in config else None)
 
     # --- quantities -------------------------------------------------------------------------
     @property
