@@ -5,7 +5,12 @@ innovations, and identification of the fault from the in-flight record.
 manager believes: the flown (planning) model with the effects identified so far. The default
 ``ekf`` is the extended Kalman filter of :mod:`genthermal.estimation.ekf` on that nonlinear model,
 with disturbance heat flows; ``kf`` is the thesis linear filter on its design model. The planner
-always plans on the design model; :func:`planner_state` hands it the filter's node temperatures.
+always plans on the design model; :func:`planner_state` hands it the filter's node temperatures
+and :func:`planning_generator` the extended Kalman filter's disturbance heat flows (constant and
+load-scaled), held over the whole plan as the filter's own forecasts hold them, so that every
+prediction of every scheduler is offset-free for every generator, healthy ones included: a
+model whose cooling is 10 % short no longer lets the planner load a healthy generator past
+θmax (``tests/test_closed_loop_shed.py``, the plant hot at rest).
 
 **Detection.** Faults are detected on the extended Kalman filter's disturbance heat flows, not
 on its innovations: the disturbance states absorb a fault within a cycle or two, so the
@@ -120,8 +125,8 @@ def planner_state(filter_state, filter_state_names, design_model) -> np.ndarray:
 
     The extended Kalman filter's state is the flown model's nodes (°C) followed by its disturbance
     heat flows (W); the planner's design model has the same nodes. Each design-model node takes the
-    filter's estimate of the node of the same name; the disturbances are not handed over (the plan
-    is made on the design model as it is).
+    filter's estimate of the node of the same name; the disturbances are handed over separately,
+    as forcing of the design model (:func:`planning_generator`).
 
     Parameters
     ----------
@@ -143,6 +148,47 @@ def planner_state(filter_state, filter_state_names, design_model) -> np.ndarray:
                          f"has nodes the filter does not estimate: {', '.join(missing)}")
     state = np.asarray(filter_state, dtype=float)
     return np.array([state[index[name]] for name in design_model.state_names])
+
+
+def planning_generator(generator, filter_, filter_state):
+    """The design generator the planner predicts with: ``generator`` with the filter's estimated
+    disturbance heat flows (:meth:`AffineGenerator.with_disturbances
+    <genthermal.schedule.power_system.AffineGenerator.with_disturbances>`).
+
+    Each disturbance node's constant heat flow :math:`d_j` (W) and load-scaled loss :math:`m_j`
+    (W at rated current) of the extended Kalman filter (:mod:`genthermal.estimation.ekf`) go to
+    the design-model node of the same name, so the plan carries the model error the filter has
+    learnt into the future (held constant, as :meth:`ExtendedKalmanFilter.forecast` does). A
+    filter without disturbance states (the linear ``kf``) gives ``generator`` unchanged.
+
+    Parameters
+    ----------
+    generator : AffineGenerator
+        Design model of the generator as the manager believes it.
+    filter_ : RecursiveFilter
+        The generator's filter.
+    filter_state : array_like
+        The filter's state (nodes °C, then disturbances W).
+
+    Returns
+    -------
+    AffineGenerator
+    """
+    if not isinstance(filter_, ExtendedKalmanFilter):
+        return generator
+    model = generator.model
+    state = np.asarray(filter_state, dtype=float)
+    nx, n_nodes = filter_.model.n_states, len(filter_.disturbance_nodes)
+    heat, load_heat = np.zeros(model.n_states), np.zeros(model.n_states)
+    for j, node in enumerate(filter_.disturbance_nodes):
+        if node not in model.state_names:
+            raise InputError("design_model", model.name, f"has no node {node}, where the filter estimates a "
+                             "disturbance heat flow")
+        i = model.state_names.index(node)
+        heat[i] = state[nx + j]
+        if filter_.load_scaled:
+            load_heat[i] = state[nx + n_nodes + j]
+    return generator.with_disturbances(heat, load_heat, filter_.rated_current_A)
 
 
 class StateEstimator:
@@ -178,6 +224,11 @@ class StateEstimator:
     def x(self) -> np.ndarray:
         """Node temperatures of the current design model, °C (:func:`planner_state`)."""
         return planner_state(self.z, self.filter.state_names, self.generator.model)
+
+    @property
+    def planning_generator(self):
+        """The design model with the filter's disturbance heat flows (:func:`planning_generator`)."""
+        return planning_generator(self.generator, self.filter, self.z)
 
     def use(self, generator, flown_model) -> None:
         """Continue on ``generator``'s model (``flown_model()`` builds the nonlinear one if needed).
