@@ -83,15 +83,12 @@ def _fly_mismatched(plant_model, generator, filter_name, hours=1.5, dt=10.0, see
     return plant, x_true, estimator
 
 
-@pytest.mark.parametrize("fraction", [0.9, 0.6])
-def test_plan_prediction_with_the_filter_disturbances_is_closer_to_a_mismatched_plant(plant_model, generator,
-                                                                                      fraction):
-    """The planner predicts one hour ahead at the load flown and at a lower one: with the EKF's
-    heat flows the winding error is a fraction of the design model's alone."""
+def _hour_ahead_winding_errors(plant_model, generator, fraction, dt=10.0, n=360):
+    """After :func:`_fly_mismatched`, the planner's winding prediction one hour ahead at
+    ``fraction`` of rated current minus the plant's, K, with the design model alone and with the
+    filter's disturbance heat flows."""
     plant, x_true, estimator = _fly_mismatched(plant_model, generator, "ekf")
-    dt, n = 10.0, 360
-    current = fraction * plant_model.spec.rated_current_A
-    u = generator.input(current, 20.0, 20.0)
+    u = generator.input(fraction * plant_model.spec.rated_current_A, 20.0, 20.0)
     step = plant.discretise(dt).step
     truth = x_true
     for _ in range(n):
@@ -102,9 +99,27 @@ def test_plan_prediction_with_the_filter_disturbances_is_closer_to_a_mismatched_
         x = estimator.x
         for _ in range(n):
             x = E @ x + G @ model.forcing(u)
-        errors[name] = abs(model.outputs(x, u)[0] - plant.outputs(truth, u)[0])
-    assert errors["offset_free"] < 0.5 * errors["alone"], errors
-    assert errors["alone"] > 2.0  # the mismatch matters: the design model alone is degrees off
+        errors[name] = float(model.outputs(x, u)[0] - plant.outputs(truth, u)[0])
+    return errors
+
+
+@pytest.mark.parametrize("fraction", [0.9, 0.273])
+def test_plan_prediction_with_the_filter_disturbances_is_closer_to_a_mismatched_plant(plant_model, generator,
+                                                                                      fraction):
+    """One hour ahead at the load flown (90 %) and in the rest mode: with the EKF's heat flows the
+    winding error is a fraction of the design model's alone (measured -27.1 -> -6.8 K and
+    -8.3 -> +0.9 K)."""
+    errors = _hour_ahead_winding_errors(plant_model, generator, fraction)
+    assert abs(errors["offset_free"]) < 0.5 * abs(errors["alone"]), errors
+    assert errors["alone"] < -2.0  # the mismatch matters: the design model alone is degrees too cool
+
+
+def test_after_one_load_the_split_of_the_heat_flows_errs_warm_at_a_lower_load(plant_model, generator):
+    """After 1.5 h at one load the filter cannot tell a constant heat flow from a load-scaled one:
+    at 60 % the plan is too warm (measured +10.5 K, against -4.5 K for the design model alone),
+    on the safe side. Load changes in flight separate the two."""
+    errors = _hour_ahead_winding_errors(plant_model, generator, 0.6)
+    assert errors["offset_free"] > 0.0 > errors["alone"], errors
 
 
 def test_planning_generator_of_a_filter_without_disturbances_is_the_design_model(plant_model, generator):
