@@ -35,12 +35,7 @@ def _cycle_bound(system, settings):
     return math.ceil((system.mission.duration_s + budget) / settings.cycle_s) + 1
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known defect: the healthy gen2 reaches 86.7 °C > 85 °C. The fault test on the EKF's disturbance "
-    "heat flows does not alarm on this blockage (convection held, inlet +60 K: the model first predicts "
-    "gen1 warmer), so the planning model is never recalibrated on the healthy generator, and the planner "
-    "does not use the filter's disturbance heat flows: it loads gen2 on a model 10 % short in h_end_air"))
-@pytest.mark.parametrize("scheduler", ["heuristic", "optimal"])
+@pytest.mark.parametrize("scheduler", ["heuristic", "engineer", "optimal"])
 def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_the_limit(tmp_path, scheduler):
     system = _system(tmp_path, HOT_AT_REST)
     settings = ManagerSettings()

@@ -5,7 +5,9 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
    :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
-   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`); the fault monitor
+   its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`) and the filter's
+   disturbance heat flows (:func:`~genthermal.schedule.monitor.planning_generator`: offset-free
+   predictions); the fault monitor
    (:mod:`genthermal.schedule.monitor`) tests the filters' disturbance heat flows and, on an
    alarm, identifies the fault from the in-flight record;
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
@@ -574,7 +576,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 if detectors is not estimators:
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [e.generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
+                           [e.planning_generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
                            resting_s)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
