@@ -119,6 +119,7 @@ def test_chapter7_scenarios_fly_the_chapter7_machine():
         system = PowerSystem.from_mission(load_mission(name))
         # the thesis's simulation: the plant is the model itself, and the heuristic checks θmax itself
         assert system.margin_K == 0.0 and dict(system.plant_mismatch) == {}, name
+        assert system.filter == "kf", name  # and its manager's filter is the thesis's linear one (6.3)
 
 
 def test_unknown_parameter_set_is_refused():

@@ -49,6 +49,7 @@ def test_large_blockage_scenario_states_its_flow_and_exponent():
     ({"generators": {"plant_mismatch": {"h_end_air": -1}}}, "generators.plant_mismatch.h_end_air"),
     ({"generators": {"margin_K": -1}}, "generators.margin_K"),
     ({"generators": {"margin_K": "none"}}, "generators.margin_K"),
+    ({"generators": {"filter": "ukf"}}, "generators.filter"),
 ])
 def test_bad_fields_name_the_field(extras, field):
     with pytest.raises(InputError) as error:
@@ -95,3 +96,23 @@ def test_segments_timeline_and_what_remains():
     left, rest_of = remaining_after(segments, schedule, timeline, 103 + 10)
     assert left[0].duration_s == pytest.approx(1100.0) and left[0].levels[0] == (0.0, 7.0)
     assert left[0].levels[1][0] == pytest.approx(200.0) and rest_of.rest_before_s[0] == 0.0
+
+
+def test_a_scenario_filter_is_the_one_flown_unless_the_option_overrides_it():
+    """``generators.filter`` (the chapter-7 scenarios: ``kf``, the thesis manager's linear filter)
+    is the filter a flight runs; without it the manager's own; ``fly --filter`` overrides it."""
+    import argparse
+
+    from genthermal.commands.fly import register
+    from genthermal.commands.plan import settings_from_args
+    from genthermal.schedule.closed_loop import ManagerSettings, flight_filter
+
+    assert flight_filter(system_from(generators={"filter": "kf"}), ManagerSettings()) == "kf"
+    assert flight_filter(system_from(), ManagerSettings()) == ManagerSettings().filter == "ekf"
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    system, settings = settings_from_args(parser.parse_args(["fly", "chapter7_inlet_3C", "--scheduler", "heuristic"]))
+    assert flight_filter(system, settings) == "kf" and not settings.tell_fault
+    system, settings = settings_from_args(parser.parse_args(["fly", "chapter7_inlet_3C", "--scheduler", "heuristic",
+                                                             "--filter", "ekf", "--tell-fault"]))
+    assert flight_filter(system, settings) == "ekf" and settings.tell_fault

@@ -23,9 +23,10 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", default=0, type=int, help="seed of the measurement noise (default 0)")
     parser.add_argument("--tell-fault", action="store_true", help="hand the manager each fault's effect and "
                         "parameters from the first cycle after its onset (the old behaviour, for comparison)")
-    parser.add_argument("--filter", default=ManagerSettings.filter, metavar="|".join(FLIGHT_FILTERS),
+    parser.add_argument("--filter", metavar="|".join(FLIGHT_FILTERS),
                         help="filter in the loop — ekf: extended Kalman filter on the flown model (--model) with "
-                        "disturbance heat flows (default); kf: the thesis's linear filter on its design model")
+                        "disturbance heat flows; kf: the thesis's linear filter on its design model (default: "
+                        f"the scenario's generators.filter, else {ManagerSettings.filter})")
     parser.set_defaults(func=run)
 
 

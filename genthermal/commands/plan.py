@@ -74,10 +74,14 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     if getattr(args, "filter", None) is not None:
         if args.filter not in FLIGHT_FILTERS:
             raise InputError("--filter", args.filter, f"must be one of {', '.join(FLIGHT_FILTERS)}")
-        settings = dataclasses.replace(settings, filter=args.filter, tell_fault=bool(args.tell_fault))
+        settings = dataclasses.replace(settings, filter=args.filter)
+    if getattr(args, "tell_fault", False):
+        settings = dataclasses.replace(settings, tell_fault=True)
     system = PowerSystem.from_mission(load_mission(args.scenario))
     if args.margin is not None:  # the option overrides the scenario's margin
         system = dataclasses.replace(system, margin_K=None)
+    if getattr(args, "filter", None) is not None:  # and --filter the scenario's filter
+        system = dataclasses.replace(system, filter=None)
     models = {}
     for option in ("model", "plant"):
         if getattr(args, option, None):

@@ -235,6 +235,12 @@ class FlightResult:
     sensor_watch: object = None
 
 
+def flight_filter(system: PowerSystem, settings: ManagerSettings) -> str:
+    """The filter a flight runs: the scenario's (``generators.filter``, e.g. the thesis's linear
+    filter in the thesis-reproduction scenarios) when it names one, else ``settings.filter``."""
+    return settings.filter if system.filter is None else system.filter
+
+
 def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
     """The back-off margin a flight plans with, K: the scenario's (``generators.margin_K``, e.g. 0 in
     the thesis-reproduction scenarios, whose heuristic checks θmax itself) when it gives one, else
@@ -536,11 +542,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
-                                 filter_cache, settings.filter) for g in range(system.n_generators)]
+                                 filter_cache, flight_filter(system, settings)) for g in range(system.n_generators)]
     # the fault detector reads an extended Kalman filter's disturbance states: with the linear
     # filter in the loop it gets parallel extended Kalman filters of its own
     detector_cache: dict = {}
-    detectors = estimators if settings.filter == "ekf" or settings.tell_fault else [
+    detectors = estimators if flight_filter(system, settings) == "ekf" or settings.tell_fault else [
         StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                        detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)

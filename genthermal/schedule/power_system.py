@@ -14,6 +14,7 @@ validated here)::
       limit_C: 110                 # temperature limit theta_max, degC (default: the machine's limit of its
                                    # protected sensor; the thesis generator's 110, thesis 7.3.1)
       current_limit_percent: 100   # highest phase current a generator may carry, % of rated
+      filter: kf                   # the filter in the load manager's loop (ekf|kf; default: the manager's own)
       margin_K: 0                  # the load manager's back-off margin below limit_C, K (default: the
                                    # manager's, 2.5 K; 0: plan to theta_max itself, as the thesis
                                    # heuristic does, eqs. 7.1-7.5); --margin overrides it
@@ -60,8 +61,22 @@ DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
+#: Filters a scenario may name in ``generators.filter`` (the keys of
+#: :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`, which imports this module).
+SCENARIO_FILTERS = ("ekf", "kf")
+
+
+def _filter_name(config: Mapping) -> str | None:
+    """``generators.filter`` of a scenario, None when it names none; InputError for another value."""
+    if "filter" not in config:
+        return None
+    if config["filter"] not in SCENARIO_FILTERS:
+        raise InputError("generators.filter", config["filter"], f"must be one of {', '.join(SCENARIO_FILTERS)}")
+    return str(config["filter"])
+
+
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent", "margin_K",
-                   "plant_mismatch", "machine")
+                   "filter", "plant_mismatch", "machine")
 _FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C", "inlet_rise_tau_min"),
                "inlet_rise": ("inlet_rise_C", "inlet_rise_tau_min"),
                "effect": ("effect", "values", "inlet_rise_C", "inlet_rise_tau_min")}
@@ -377,6 +392,10 @@ class PowerSystem:
     margin_K : float, optional
         The scenario's back-off margin of the load manager below ``limit_C``, K; None (default):
         the manager's own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.margin_K`).
+    filter : str, optional
+        The scenario's filter in the loop (``generators.filter``: ``"ekf"`` or ``"kf"``, e.g. the
+        thesis's linear filter in the thesis-reproduction scenarios); None (default): the manager's
+        own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.filter`).
     """
 
     mission: Mission
@@ -390,6 +409,7 @@ class PowerSystem:
     model: Any = None
     plant: Any = None
     margin_K: float | None = None
+    filter: str | None = None
 
     def __post_init__(self):
         if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
@@ -456,7 +476,8 @@ class PowerSystem:
                    current_limit_percent=_number(config, "current_limit_percent", "generators", 50.0, 150.0,
                                                  "%", 100.0),
                    plant_mismatch=factors, machine=machine,
-                   margin_K=_number(config, "margin_K", "generators", 0.0, 50.0, "K") if "margin_K" in config else None)
+                   margin_K=_number(config, "margin_K", "generators", 0.0, 50.0, "K") if "margin_K" in config else None,
+                   filter=_filter_name(config))
 
     # --- quantities -------------------------------------------------------------------------
     @property
