@@ -24,6 +24,10 @@ def _problem(generators, x0, segments, limit_C, flown=None, max_rest_s=1800.0, r
                            limit_C=limit_C, max_rest_s=max_rest_s, dt_s=10.0, window_s=300.0, flown=flown)
 
 
+#: A filter that has converged: a tenth of the initial covariance (node standard deviation ~1 K).
+CONVERGED = 0.1
+
+
 def _flown(filters, x0, P0=None):
     nd = len(filters[0].disturbance_names)
     z0 = [np.concatenate([x, np.zeros(nd)]) for x in x0]
@@ -66,8 +70,8 @@ def test_plan_flown_open_loop_keeps_every_generator_below_thetamax_minus_its_bac
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
     segments = split_segments([Segment(4, "5 cruise", 1800.0, ((0.0, 4.9),)),
-                               Segment(7, "7 landing", 1200.0, ((0.0, 7.0),))], 300.0)
-    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0))
+                               Segment(7, "7 landing", 1200.0, ((0.0, 5.0),))], 300.0)
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
     result = flown_optimal_plan(problem)
     assert result.method == "optimal" and result.feasible
     flown = predict(problem, result.schedule)  # the filter's own step, every 10 s, with its back-off
@@ -87,10 +91,11 @@ def test_displacement_during_landing_saves_rest(believed, design_model):
     generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 92.0), np.full(models[1].n_states, 60.0)]
-    landing = Segment(7, "7 landing", 1200.0, ((0.0, 7.0),))
+    landing = Segment(7, "7 landing", 1200.0, ((0.0, 5.0),))
+    P0 = CONVERGED * filters[0].P0
     per_interval = flown_optimal_plan(_problem(generators, x0, split_segments([landing], 300.0), 110.0,
-                                               _flown(filters, x0)))
-    per_action = flown_optimal_plan(_problem(generators, x0, [landing], 110.0, _flown(filters, x0)))
+                                               _flown(filters, x0, P0)))
+    per_action = flown_optimal_plan(_problem(generators, x0, [landing], 110.0, _flown(filters, x0, P0)))
     assert per_interval.feasible and per_action.feasible
     assert per_interval.schedule.displaced_A[0].max() > 0.2
     assert per_interval.schedule.added_rest_s < per_action.schedule.added_rest_s - 30.0 or \
@@ -125,3 +130,24 @@ def test_planner_model_settings_and_options_reject_bad_values(tmp_path, capsys):
                           (["--confidence-sigmas", "-1"], "--confidence-sigmas")):
         assert main(["fly", "blockage_large", "--json", str(tmp_path / "x.json"), *extra]) == 2
         assert option in capsys.readouterr().err
+
+
+def test_closed_loop_on_the_flown_model_keeps_every_generator_below_thetamax(tmp_path):
+    """One hour, gen1's coolant nearly blocked from 10 min, the plant 10 % short in end-winding
+    cooling and 5 % high in resistance (the default mismatch), θmax 104 °C: the manager plans on
+    the flown model with the filter's back-off, displacing and resting per cycle."""
+    import json
+
+    from flight_scenarios import SHORT
+
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 104}"))
+    out = tmp_path / "flight.json"
+    assert main(["fly", str(scenario), "--scheduler", "optimal", "--planner-model", "nonlinear", "--tell-fault",
+                 "--json", str(out)]) == 0
+    flight = json.loads(out.read_text())
+    assert flight["breach_s"] == 0.0
+    assert max(flight["max_T_winding"].values()) <= 104.0  # gen1 reaches 107 °C unmanaged
+    assert flight["plans"] and all(plan["method"].startswith("optimal") for plan in flight["plans"])
+    assert all(plan["backoff_K"] > 0.1 for plan in flight["plans"] if plan["feasible"])
+    assert flight["displaced_Ah"] > 0.0

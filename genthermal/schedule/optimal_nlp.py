@@ -390,6 +390,7 @@ class FlownTranscription:
         lbw, ubw, lbg, ubg = self._bounds(backoff_K)
         solution = solver(x0=np.clip(guess, lbw, ubw), p=self._parameters(), lbx=lbw, ubx=ubw, lbg=lbg, ubg=ubg)
         stats = solver.stats()
+        self.iterations = getattr(self, "iterations", 0) + int(stats.get("iter_count", 0))
         w = np.asarray(solution["x"]).ravel()
         displaced = w[:self.n_gen * self.N_seg].reshape((self.n_gen, self.N_seg), order="F")[:, :self.n_seg]
         rests = w[self.n_gen * self.N_seg:self.n_gen * self.N_seg + self.n_seg] * 60.0
@@ -455,10 +456,10 @@ def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = N
     PlanResult
         ``method`` ``optimal`` (``lowest peak`` for the min-max); the initial guess, named by its
         origin, with a warning when IPOPT fails and the guess when it is better.
-        ``details['backoff_K']``: the largest back-off along the plan, K.
+        ``details['backoff_K']``: the largest back-off along the plan, K; ``details['ipopt_iterations']``.
     """
     started = time.perf_counter()
-    if not minimax:
+    if not minimax and initial is None:  # a closed loop re-plans because its current plan breaches
         nominal, _ = _judged(problem, Schedule.nominal(problem.n_generators, len(problem.segments)), "optimal")
         if nominal.feasible:
             nominal.solve_s = time.perf_counter() - started
@@ -483,4 +484,5 @@ def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = N
             guess.warnings.append(f"optimal scheduler (flown model) fell back to its initial guess (IPOPT: {status})")
         best = guess
     best.solve_s = time.perf_counter() - started
+    best.details["ipopt_iterations"] = getattr(transcription, "iterations", 0)
     return best
