@@ -1,6 +1,5 @@
 """The optimal scheduler on the flown (nonlinear) model: its plans, its back-off and its option."""
 
-import dataclasses
 
 import numpy as np
 import pytest
@@ -8,7 +7,7 @@ import pytest
 from genthermal.cli import main
 from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
-from genthermal.schedule.closed_loop import ManagerSettings
+from genthermal.schedule.closed_loop import ManagerSettings, plan_with
 from genthermal.schedule.flown import FlownPlanning
 from genthermal.schedule.optimal import OptimalSettings, optimal_plan
 from genthermal.schedule.optimal_nlp import flown_optimal_plan
@@ -113,6 +112,9 @@ def test_plan_that_exceeds_thetamax_with_its_back_off_is_not_feasible(believed, 
     result = flown_optimal_plan(problem)
     assert not result.feasible
     assert result.peak_C > 110.0
+    managed = plan_with("optimal", problem, ManagerSettings(planner_model="nonlinear"), ("gen1", "gen2"), 110.0)
+    assert not managed.feasible  # never feasible: its own prediction with its back-off is above θmax
+    assert managed.details["lowest_peak_C"] > 110.0 and managed.details["response"]
 
 
 def test_planner_model_settings_and_options_reject_bad_values(tmp_path, capsys):

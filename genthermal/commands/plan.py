@@ -2,7 +2,9 @@
 
 Open-loop load-management plan on the linear design model (thesis chapter 7): the mission is flown
 as planned until the first management cycle after the fault onset, then one schedule (displaced
-current per generator and rest before each action) is planned for the rest of the mission.
+current per generator and rest before each action) is planned for the rest of the mission. With
+``--planner-model nonlinear`` the optimal scheduler plans and flies on the nonlinear model (per
+management cycle, back-off from the filter's initial covariance: no measurements in open loop).
 """
 
 from __future__ import annotations

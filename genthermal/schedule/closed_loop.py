@@ -10,14 +10,19 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
    alarm, identifies the fault from the in-flight record;
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
    temperature held (thesis 7.3.6) and the faults identified so far (with ``tell_fault``: the
-   scenario's faults, each known at the first cycle after its onset);
+   scenario's faults, each known at the first cycle after its onset): on the design model
+   (``planner_model`` ``affine``), or on the filter's nonlinear model from its state with the
+   disturbances held and a back-off of the filter's covariance propagated along the plan
+   (``nonlinear``, :mod:`genthermal.schedule.flown`; the mission is then cut into control intervals
+   of one cycle, each with its own displacement and rest);
 3. **re-plan** (unless ``replan`` is off) if a temperature above the planning limit
    :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
 The true plant is the nonlinear model with the faults from their onsets and parameters that differ
 from the design model (``PowerSystem.plant_mismatch``). The back-off ``margin_K`` absorbs the
-mismatch; its cost in mission time is measured by flying with and without it.
+mismatch; its cost in mission time is measured by flying with and without it. The nonlinear planner
+replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
@@ -156,7 +161,8 @@ class ManagerSettings:
             raise InputError("filter", self.filter, "the nonlinear planner plans on the extended Kalman filter's "
                              "model and covariance: use the filter ekf")
         if not (np.isfinite(self.confidence_sigmas) and self.confidence_sigmas >= 0):
-            raise InputError("confidence_sigmas", self.confidence_sigmas, "must be a number of standard deviations >= 0")
+            raise InputError("confidence_sigmas", self.confidence_sigmas,
+                             "must be a number of standard deviations >= 0")
 
     @property
     def nonlinear(self) -> bool:
@@ -457,7 +463,8 @@ class _FlownOpenLoop:
         """Generator ``g``'s filter on the model with the faults started by ``t_s``."""
         beliefs = _told_beliefs(self.system, t_s)[g]
         if beliefs not in self._filters:
-            self._filters[beliefs] = ExtendedKalmanFilter(believed_model(self.system.planning_model, beliefs), self.dt_s)
+            model = believed_model(self.system.planning_model, beliefs)
+            self._filters[beliefs] = ExtendedKalmanFilter(model, self.dt_s)
         return self._filters[beliefs]
 
     def steps(self, z0, timeline, t0: float, n: int):

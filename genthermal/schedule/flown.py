@@ -65,7 +65,8 @@ def covariance_steps(ekf: ExtendedKalmanFilter) -> ca.Function:
     Z, Pa_all, Pw_all, V = steps(z0, Pa0, Pw0, U, restarts)
     ekf._planning_covariance_steps = ca.Function(
         "planning_prediction_chunk", [z0, Pa0, Pw0, U, restarts],
-        [Z, Pa_all[:, -nz:], Pw_all[:, -nz:], V], ["z", "Pa", "Pw", "U", "restart"], ["Z", "Pa_end", "Pw_end", "variance"])
+        [Z, Pa_all[:, -nz:], Pw_all[:, -nz:], V], ["z", "Pa", "Pw", "U", "restart"],
+        ["Z", "Pa_end", "Pw_end", "variance"])
     return ekf._planning_covariance_steps
 
 
@@ -95,7 +96,8 @@ class FlownPlanning:
             raise InputError("filter", [type(f).__name__ for f in self.filters],
                              "planning on the flown model needs the extended Kalman filter (--filter ekf)")
         if not (np.isfinite(self.confidence_sigmas) and self.confidence_sigmas >= 0):
-            raise InputError("confidence_sigmas", self.confidence_sigmas, "must be a number of standard deviations >= 0")
+            raise InputError("confidence_sigmas", self.confidence_sigmas,
+                             "must be a number of standard deviations >= 0")
         self.z0 = np.asarray(self.z0, dtype=float)
         self.P0 = np.asarray(self.P0, dtype=float)
         if self.z0.shape[0] != len(self.filters) or self.P0.shape[0] != len(self.filters):
@@ -108,7 +110,8 @@ class FlownPlanning:
         restart = np.zeros(n)
         restart[np.unique(timeline.window_start)] = 1.0
         n_out = self.filters[0].H.shape[0]
-        outputs, backoff = np.empty((problem.n_generators, n_out, n + 1)), np.empty((problem.n_generators, n_out, n + 1))
+        outputs = np.empty((problem.n_generators, n_out, n + 1))
+        backoff = np.empty_like(outputs)
         chunk = PREDICTION_CHUNK_STEPS
         n_padded = int(np.ceil(n / chunk)) * chunk
         restart = np.concatenate([restart, np.zeros(n_padded - n)])

@@ -41,7 +41,7 @@ import numpy as np
 from ..discretise import ModalDecay, check_step_accuracy, phi_matrices, step_expression
 from ..errors import InputError
 from .heuristic import heuristic_plan
-from .plan import PlanningProblem, PlanResult, Schedule, evaluate, predict
+from .plan import PlanningProblem, PlanResult, Schedule, predict
 
 #: Rests shorter than this (s) are interior-point residue and dropped.
 MIN_REST_S = 1.0
@@ -209,7 +209,8 @@ class FlownTranscription:
         self.N_int = self.n_int + (self.N_seg - self.n_seg)
         pad = self.N_seg - self.n_seg
         self.segment_of_padded = np.concatenate([self.segment_of, self.n_seg + np.arange(pad)]).astype(int)
-        self.lengths = np.concatenate([[length for _, length, _ in self.intervals], np.full(pad, PAD_STEP_S * self.n_sub)])
+        self.lengths = np.concatenate([[length for _, length, _ in self.intervals],
+                                       np.full(pad, PAD_STEP_S * self.n_sub)])
         self.currents = np.concatenate([[current for _, _, current in self.intervals],
                                         np.full(pad, problem.rest_current_A)])
         self.first_interval = np.array([np.flatnonzero(self.segment_of_padded == k)[0] for k in range(self.N_seg)])
@@ -332,7 +333,8 @@ class FlownTranscription:
 
     def _bounds(self, backoff_K: np.ndarray):
         """``(lbw, ubw, lbg, ubg)`` for the back-off ``backoff_K`` (n_gen, n_outputs, n_seg), K."""
-        problem, settings, n_gen, N_seg, pad = self.problem, self.settings, self.n_gen, self.N_seg, self.N_seg - self.n_seg
+        problem, settings, n_gen, N_seg = self.problem, self.settings, self.n_gen, self.N_seg
+        pad = N_seg - self.n_seg
         sizes = self._w_sizes()
         bounds = [problem.displacement_bounds(k) for k in range(self.n_seg)] + [(0.0, 0.0)] * pad
         longest_rest = np.concatenate([np.full(self.n_seg, problem.max_rest_s / 60.0), np.zeros(pad)])
