@@ -1,5 +1,6 @@
 """The optimal scheduler on the flown (nonlinear) model: its plans, its back-off and its option."""
 
+import dataclasses
 
 import numpy as np
 import pytest
@@ -153,3 +154,22 @@ def test_closed_loop_on_the_flown_model_keeps_every_generator_below_thetamax(tmp
     assert flight["plans"] and all(plan["method"].startswith("optimal") for plan in flight["plans"])
     assert all(plan["backoff_K"] > 0.1 for plan in flight["plans"] if plan["feasible"])
     assert flight["displaced_Ah"] > 0.0
+
+
+def test_shed_on_the_flown_model_serves_all_it_can_within_thetamax(believed, design_model):
+    """No rest left and both generators hot at full load: the manager sheds the least load that
+    keeps θmax with the back-off, instead of switching generators off."""
+    models, filters = believed
+    generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
+                  AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 100.0), np.full(models[1].n_states, 100.0)]
+    segments = split_segments([Segment(5, "6 cruise_combat", 1200.0, ((0.0, 7.0),))], 300.0)
+    flown = _flown(filters, x0, CONVERGED * filters[0].P0)
+    problem = dataclasses.replace(_problem(generators, x0, segments, 110.0, flown), max_rest_s=0.0, rest_budget_s=0.0)
+    managed = plan_with("optimal", problem, ManagerSettings(planner_model="nonlinear"), ("gen1", "gen2"), 110.0)
+    assert managed.method == "shed" and not managed.feasible
+    assert not managed.schedule.switched_off.any()
+    not_served = managed.schedule.displaced_A.sum(axis=0)
+    assert not_served.max() > 0.1 and not_served.min() >= -1e-6
+    assert managed.peak_C <= 110.0 + 0.05  # its own prediction, back-off included
+    assert managed.schedule.displaced_A[:, -1].max() < 7.0  # and it still serves load

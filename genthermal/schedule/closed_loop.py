@@ -57,7 +57,8 @@ from .plan import (PlanningProblem, PlanResult, Schedule, build_timeline, evalua
                    mission_segments, predict, remaining_after, split_segments)
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
-from .shed import shed_plan
+from .optimal_nlp import flown_optimal_plan
+from .shed import NOT_SERVED_TOLERANCE_A, shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
@@ -292,6 +293,12 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
                  lowest_peak_action=segment.action_index + 1)
     if lowest.peak_C > limit_C:
         nobody = np.zeros(problem.n_generators, dtype=bool)
+        if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
+            shed = _flown_shed(problem, settings, previous, names, limit_C, where)
+            if shed is not None:
+                shed.solve_s += result.solve_s + lowest.solve_s
+                shed.details.update(found)
+                return shed
         shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
@@ -312,6 +319,30 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     relaxed.warnings.append(message)
     relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
     return relaxed
+
+
+def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
+                where: str) -> PlanResult | None:
+    """The optimal scheduler on the flown model with load allowed to go unserved
+    (:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``); None when even that
+    does not keep its prediction within θmax (the caller switches generators off)."""
+    result = flown_optimal_plan(problem, settings.optimal.nonlinear, previous, shed=True)
+    if not result.feasible:  # its own prediction, with its back-off, above θmax
+        return None
+    result = _within_budget(problem, result)
+    not_served = result.schedule.displaced_A.sum(axis=0)
+    short = not_served > NOT_SERVED_TOLERANCE_A
+    shedding = [names[g] for g in range(problem.n_generators)
+                if np.any((result.schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A) & short)]
+    durations = np.array([s.duration_s for s in problem.segments])
+    not_served_Ah = float(np.sum(np.clip(not_served, 0.0, None) * durations) / 3600.0)
+    response = (f"shed load of {', '.join(shedding) or 'nobody'}: {not_served_Ah:.2f} A·h not served, the least "
+                f"that keeps every generator within θmax {limit_C:g} °C on the flown model with its back-off, after rest "
+                f"{result.schedule.added_rest_s / 60:.1f} min and displacement")
+    result.method, result.feasible = "shed", False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(response=response, planned_peak_C=result.peak_C, shedding=shedding, switched_off=[])
+    return result
 
 
 def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:

@@ -163,6 +163,10 @@ class _RestModel:
         return x_ss + ca.DM(self.decay.V) @ (ca.exp(rates) * (ca.DM(self.decay.V_inv) @ (x - x_ss)))
 
 
+#: Rest (min) that one A·h of phase current not served costs when the transcription may shed load:
+#: choice of this project, far above any rest the budget allows (a 4-h mission's budget is 60 min),
+#: so load is shed only where rest and displacement cannot keep θmax.
+SHED_WEIGHT_MIN_PER_AH = 1000.0
 #: The NLP's horizon is padded to a multiple of this many segments (empty segments at the end), so
 #: that one solver serves every re-plan of a flight: the mission shrinks by a segment per cycle.
 HORIZON_BLOCK = 16
@@ -171,7 +175,7 @@ PAD_STEP_S = 1e-3
 
 
 class FlownTranscription:
-    """The NLP of one planning problem on the flown model (module docstring).
+    r"""The NLP of one planning problem on the flown model (module docstring).
 
     Everything numeric (filter states, disturbances, inlet, currents, step matrices, bounds) is a
     parameter or a bound of the NLP, and the horizon is padded to a multiple of
@@ -185,12 +189,16 @@ class FlownTranscription:
     settings : NonlinearSettings
     minimax : bool
         Minimise the highest backed-off temperature instead (the lowest reachable peak).
+    shed : bool
+        Let the generators carry less than the demand in total (:math:`\sum_g d_{g,k} \ge 0`, the
+        difference not served) at :data:`SHED_WEIGHT_MIN_PER_AH` per A·h.
     """
 
-    def __init__(self, problem: PlanningProblem, settings: NonlinearSettings, minimax: bool = False):
+    def __init__(self, problem: PlanningProblem, settings: NonlinearSettings, minimax: bool = False,
+                 shed: bool = False):
         if problem.flown is None:
             raise InputError("problem.flown", None, "the flown-model transcription needs the filters' states")
-        self.problem, self.settings, self.minimax = problem, settings, minimax
+        self.problem, self.settings, self.minimax, self.shed = problem, settings, minimax, bool(shed and not minimax)
         flown = problem.flown
         self.n_gen, self.n_seg = problem.n_generators, len(problem.segments)
         self.nx = flown.filters[0].model.n_states
@@ -255,7 +263,7 @@ class FlownTranscription:
         structure = None if self.n_int == self.n_seg else tuple(self.segment_of)
         return (tuple(id(f) for f in flown.filters), getattr(self, "N_seg", 0), structure, self.n_sub,
                 self.settings.rest_checks, self.minimax, self.settings.displacement_weight, self.settings.expand,
-                self.settings.max_iter, self.settings.mu_init)
+                self.settings.max_iter, self.settings.mu_init, self.shed)
 
     def _cache(self) -> dict:
         """Solvers built for the first filter (the key names all of them)."""
@@ -313,6 +321,8 @@ class FlownTranscription:
         g_all = ca.vertcat(*equalities, ca.sum1(D).T, temperatures, ca.sum1(R))
         penalty = settings.displacement_weight * ca.sum2(ca.sum1(D ** 2) * (durations / 3600.0).T)
         objective = peak + 1e-3 * ca.sum1(R) if self.minimax else ca.sum1(R) + penalty / 60.0
+        if self.shed:  # A·h not served
+            objective = objective + SHED_WEIGHT_MIN_PER_AH * ca.mtimes(ca.sum1(D), durations / 3600.0)
         options = {"print_time": False, "expand": settings.expand,
                    "ipopt": {"print_level": 0, "sb": "yes", "max_iter": settings.max_iter, "tol": 1e-6,
                              "acceptable_tol": 1e-4, "mu_init": settings.mu_init}}
@@ -356,6 +366,8 @@ class FlownTranscription:
         budget = problem.rest_budget_s / 60.0 if np.isfinite(problem.rest_budget_s) else np.inf
         lbg = np.concatenate([np.zeros(self.n_equalities_expected), np.full(upper.size, -np.inf), [-np.inf]])
         ubg = np.concatenate([np.zeros(self.n_equalities_expected), upper, [budget]])
+        if self.shed:  # the load balance rows: sum_g d >= 0
+            ubg[self.n_equalities_expected - N_seg:self.n_equalities_expected] = np.inf
         return lbw, ubw, lbg, ubg
 
     @property
@@ -429,9 +441,16 @@ def _guess(problem: PlanningProblem, settings: NonlinearSettings, initial: Sched
     return _judged(problem, heuristic_plan(design).schedule, "optimal->heuristic")
 
 
-def _better(candidate: PlanResult, incumbent: PlanResult | None, minimax: bool) -> bool:
+def _cost_min(result: PlanResult, segments) -> float:
+    """Rest (min) plus :data:`SHED_WEIGHT_MIN_PER_AH` per A·h not served."""
+    durations = np.array([s.duration_s for s in segments])
+    not_served_Ah = float(np.sum(np.clip(result.schedule.displaced_A.sum(axis=0), 0.0, None) * durations) / 3600.0)
+    return result.schedule.added_rest_s / 60.0 + SHED_WEIGHT_MIN_PER_AH * not_served_Ah
+
+
+def _better(candidate: PlanResult, incumbent: PlanResult | None, minimax: bool, segments=()) -> bool:
     """True when ``candidate`` beats ``incumbent``: a lower peak (min-max), else feasible first,
-    then less rest."""
+    then less rest and load not served."""
     if incumbent is None:
         return True
     if minimax:
@@ -440,11 +459,11 @@ def _better(candidate: PlanResult, incumbent: PlanResult | None, minimax: bool) 
         return candidate.feasible
     if not candidate.feasible:
         return candidate.peak_C < incumbent.peak_C - 1e-3
-    return candidate.schedule.added_rest_s < incumbent.schedule.added_rest_s - MIN_REST_S
+    return _cost_min(candidate, segments) < _cost_min(incumbent, segments) - MIN_REST_S / 60.0
 
 
 def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = NonlinearSettings(),
-                       initial: Schedule | None = None, minimax: bool = False) -> PlanResult:
+                       initial: Schedule | None = None, minimax: bool = False, shed: bool = False) -> PlanResult:
     """Plan on the flown model (module docstring).
 
     Parameters
@@ -456,6 +475,8 @@ def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = N
         Warm start (the previous plan in a closed loop); default the heuristic's plan.
     minimax : bool
         Minimise the peak (the lowest reachable peak) instead of the rest.
+    shed : bool
+        Let load go unserved where nothing else keeps θmax (:class:`FlownTranscription`).
 
     Returns
     -------
@@ -465,7 +486,7 @@ def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = N
         ``details['backoff_K']``: the largest back-off along the plan, K; ``details['ipopt_iterations']``.
     """
     started = time.perf_counter()
-    if not minimax and initial is None:  # a closed loop re-plans because its current plan breaches
+    if not (minimax or shed) and initial is None:  # a closed loop re-plans because its plan breaches
         nominal, _ = _judged(problem, Schedule.nominal(problem.n_generators, len(problem.segments)), "optimal")
         if nominal.feasible:
             nominal.solve_s = time.perf_counter() - started
@@ -473,19 +494,20 @@ def flown_optimal_plan(problem: PlanningProblem, settings: NonlinearSettings = N
     guess, backoff = _guess(problem, settings, initial)
     if minimax:
         guess.method = "lowest peak (initial guess)"
-    transcription = FlownTranscription(problem, settings, minimax)
+    transcription = FlownTranscription(problem, settings, minimax, shed)
     best, status, schedule = None, "not run", guess.schedule
     for _ in range(max(settings.backoff_passes, 1)):
         schedule, success, status = transcription.solve(transcription.initial_guess(schedule, guess.peak_C), backoff)
         if not success:
             break
-        result, solved_backoff = _judged(problem, schedule, "lowest peak" if minimax else "optimal")
-        if _better(result, best, minimax):
+        method = "lowest peak" if minimax else "shed" if shed else "optimal"
+        result, solved_backoff = _judged(problem, schedule, method)
+        if _better(result, best, minimax, problem.segments):
             best = result
         if minimax or result.feasible:
             break
         backoff = np.maximum(backoff, solved_backoff)
-    if best is None or _better(guess, best, minimax):
+    if best is None or _better(guess, best, minimax, problem.segments):
         if best is None:
             guess.warnings.append(f"optimal scheduler (flown model) fell back to its initial guess (IPOPT: {status})")
         best = guess
