@@ -28,6 +28,11 @@ rest Jacobian :math:`J`). The back-off :math:`b_{g,k}` is the largest back-off o
 :class:`~genthermal.schedule.flown.FlownPlanning` on segment :math:`k` along the initial guess;
 after solving, the plan is predicted at the filter's step (10 s) with its own back-off, and solved
 again from there (``backoff_passes``) if that prediction exceeds θmax.
+
+Two variants share the transcription: the min-max of the backed-off temperature (the lowest
+reachable peak), and **shedding**, where :math:`\sum_g d_{g,k} \ge 0` and the load not served
+costs :data:`SHED_WEIGHT_MIN_PER_AH` minutes of rest per A·h, for when no rest within the budget
+and no displacement keeps θmax.
 """
 
 from __future__ import annotations
