@@ -82,8 +82,7 @@ DEFAULT_INITIAL_DISTURBANCE_W = 10.0
 
 def node_heat_capacities(model: ThermalModel) -> np.ndarray:
     """Heat capacity :math:`C_i` (J/K) of every state node, in ``state_names`` order."""
-    values = {model.parameters[name].symbol: model.parameters.value(name) for name in model.parameter_names}
-    return np.array([float(model.network.node(name).capacitance.subs(values)) for name in model.state_names])
+    return model.heat_capacities()
 
 
 class ExtendedKalmanFilter(RecursiveFilter):
