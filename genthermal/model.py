@@ -48,6 +48,33 @@ _CASADI_FUNCTIONS = {"log": ca.log, "exp": ca.exp, "sqrt": ca.sqrt, "Abs": ca.fa
                      "LossFloor": lambda v: ca.fmax(v, 0)}
 
 
+#: Compiled evaluators of single sympy expressions: (expression, loss_floors) → (the symbols it
+#: reads, function of them). Models derived from one another (an effect adds a heat source or
+#: scales one link) share almost every expression, and writing each evaluator's source
+#: (``sympy.lambdify``) is most of the cost of building a model; a cached evaluator builds the same
+#: CasADi expression from the new model's symbols.
+_EVALUATORS: dict = {}
+#: Bound on the cached evaluators (the cache is emptied when it holds more).
+_MAX_EVALUATORS = 20000
+
+
+def _evaluator(expression, loss_floors: bool | None):
+    """``(symbols, sympy.lambdify(symbols, expression))``, ``symbols`` the free symbols of
+    ``expression`` by name: into CasADi functions (``loss_floors`` True or False, see
+    :func:`to_casadi`) or, for ``None``, into numpy; cached (see :data:`_EVALUATORS`)."""
+    key = (expression, loss_floors)
+    if key not in _EVALUATORS:
+        if len(_EVALUATORS) >= _MAX_EVALUATORS:
+            _EVALUATORS.clear()
+        if loss_floors is None:
+            modules = ["numpy"]
+        else:
+            modules = [_CASADI_FUNCTIONS if loss_floors else {**_CASADI_FUNCTIONS, "LossFloor": lambda v: v}, "math"]
+        symbols = tuple(sorted(expression.free_symbols, key=str))
+        _EVALUATORS[key] = (symbols, sympy.lambdify(symbols, expression, modules=modules))
+    return _EVALUATORS[key]
+
+
 def to_casadi(expressions, symbols, values, loss_floors: bool = True):
     """Evaluate sympy ``expressions`` with ``symbols`` replaced by CasADi ``values``.
 
@@ -64,10 +91,18 @@ def to_casadi(expressions, symbols, values, loss_floors: bool = True):
     Returns
     -------
     list of casadi.SX
+        One per expression: what ``sympy.lambdify`` of the expression evaluates to, from an
+        evaluator cached across models (:data:`_EVALUATORS`).
     """
-    functions = _CASADI_FUNCTIONS if loss_floors else {**_CASADI_FUNCTIONS, "LossFloor": lambda v: v}
-    function = sympy.lambdify(symbols, list(expressions), modules=[functions, "math"])
-    return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in function(*values)]
+    value_of = dict(zip(symbols, values))
+    results = []
+    for expression in expressions:
+        used, evaluate = _evaluator(sympy.sympify(expression), bool(loss_floors))
+        missing = [s for s in used if s not in value_of]
+        if missing:
+            raise InputError("expression", str(expression), f"reads {', '.join(map(str, missing))}, not given a value")
+        results.append(evaluate(*(value_of[s] for s in used)))
+    return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in results]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -293,7 +328,13 @@ class ThermalModel:
         labelled += [(f"resistance of air stream {s.upstream}->{s.downstream} ({s.label})", s.resistance)
                      for s in net.air_streams]
         symbols = [self.parameters[n].symbol for n in self.parameter_names]
-        return labelled, sympy.lambdify(symbols, [expr for _, expr in labelled], modules=["numpy"])
+        evaluators = [_evaluator(sympy.sympify(expr), None) for _, expr in labelled]
+
+        def evaluate(*values):
+            value_of = dict(zip(symbols, values))
+            return [function(*(value_of[s] for s in used)) for used, function in evaluators]
+
+        return labelled, evaluate
 
     def heat_capacities(self) -> np.ndarray:
         """Heat capacity (J/K) of every state node, in ``state_names`` order, from the compiled

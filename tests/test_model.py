@@ -205,3 +205,20 @@ def test_heat_capacities_are_the_capacitance_expressions_evaluated(plant_model):
     values = {plant_model.parameters[n].symbol: plant_model.parameters.value(n) for n in plant_model.parameter_names}
     expected = [float(plant_model.network.node(n).capacitance.subs(values)) for n in plant_model.state_names]
     np.testing.assert_allclose(plant_model.heat_capacities(), expected, rtol=1e-12)
+
+
+def test_to_casadi_reuses_evaluators_and_names_an_unknown_symbol():
+    """Evaluators are cached per expression across models: the same expression evaluates with
+    each call's own values; an expression reading a symbol given no value is refused by name."""
+    import casadi as ca
+
+    from genthermal.errors import InputError
+    from genthermal.model import to_casadi
+
+    a, b = sympy.symbols("a_test b_test")
+    expression = a ** 2 / (1 + b)
+    first = to_casadi([expression], [a, b], [ca.SX(3.0), ca.SX(1.0)])[0]
+    second = to_casadi([expression], [b, a], [ca.SX(0.0), ca.SX(2.0)])[0]
+    assert float(ca.evalf(first)) == pytest.approx(4.5) and float(ca.evalf(second)) == pytest.approx(4.0)
+    with pytest.raises(InputError, match="b_test"):
+        to_casadi([expression], [a], [ca.SX(1.0)])
