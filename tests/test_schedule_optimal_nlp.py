@@ -48,7 +48,8 @@ def test_agrees_with_the_affine_transcription_when_no_nonlinearity_is_active(des
     that node by up to 0.02 K per 10 s more than the affine branch the affine planner uses)."""
     faulty = design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)
     generators = [AffineGenerator(faulty), AffineGenerator(design_model)]
-    quiet = dict(node_heat_noise_W=0.0, disturbance_drift_W=0.0, load_scaled_drift_W=0.0, initial_disturbance_W=0.0)
+    quiet = dict(node_heat_noise_W=0.0, disturbance_drift_W=0.0, load_scaled_drift_W=0.0, coolant_drift_W=0.0,
+                 inlet_drift_K=0.0, initial_disturbance_W=0.0)
     filters = [ExtendedKalmanFilter(m, 10.0, **quiet) for m in (faulty, design_model)]
     x0 = [g.steady_state(g.input(4.5, t, 20.0)) for g, t in zip(generators, INLETS_C)]
     segments = split_segments([Segment(0, "a", 900.0, ((0.0, 5.5),)), Segment(1, "b", 1200.0, ((0.0, 6.5),))], 300.0)

@@ -111,17 +111,11 @@ def _run_function(ekf, n_sub: int) -> ca.Function:
     flat = [ca.SX.sym(name, nx * nx) for name in ("E", "G1", "G2")]
     phis = [ca.reshape(v, nx, nx) for v in flat]
     u = u0 + current * eI
-    n_nodes = ekf.M.shape[1]
-    heat = dist[:n_nodes]
-    if ekf.load_scaled:
-        phases = [u[model.input_names.index(name)] for name in model.spec.interface.load_currents]
-        heat = heat + sum(p ** 2 for p in phases) / (len(phases) * ekf.rated_current_A ** 2) * dist[n_nodes:]
     xs, us, ws = ca.SX.sym("xs", nx), ca.SX.sym("us", nu), ca.SX.sym("ws", nx)
     step = ca.Function("step", [xs, us, ws, h, *flat], [step_expression(model, xs, us, ws, ca.DM(model.p0), h, phis)])
-    forcing = ca.DM(ekf.M) @ heat
 
     def one_step(state):
-        return step(state, u, forcing, h, *flat)
+        return step(state, _model_input(ekf, u, dist), ca.DM(ekf.M) @ _heat(ekf, state, u, dist), h, *flat)
     states, outputs = x, []
     for _ in range(n_sub):
         states = one_step(states)
@@ -131,15 +125,20 @@ def _run_function(ekf, n_sub: int) -> ca.Function:
     return function
 
 
-def disturbance_rate(ekf, u: np.ndarray, dist: np.ndarray) -> np.ndarray:
-    r"""The filter's disturbance forcing :math:`M(d + \ell(u) m)` (K/s) at input ``u`` for the
-    disturbance states ``dist`` (W)."""
-    model, n_nodes = ekf.model, ekf.M.shape[1]
-    heat = np.array(dist[:n_nodes], dtype=float)
-    if ekf.load_scaled:
-        phases = np.array([u[model.input_names.index(name)] for name in model.spec.interface.load_currents])
-        heat = heat + np.mean(phases ** 2) / ekf.rated_current_A ** 2 * np.asarray(dist[n_nodes:])
-    return ekf.M @ heat
+def _heat(ekf, x_nodes, u, dist):
+    """The filter's disturbance heat flow into each disturbance node (W) at nodes ``x_nodes`` and
+    input ``u``, as its transition computes it (:meth:`ExtendedKalmanFilter.basis_values`)."""
+    n_nodes, phi = ekf.M.shape[1], ekf.basis_values(x_nodes, u)
+    n_bases = len(phi) // n_nodes
+    return ca.vertcat(*[sum(dist[b * n_nodes + j] * phi[b * n_nodes + j] for b in range(n_bases))
+                        for j in range(n_nodes)])
+
+
+def _model_input(ekf, u, dist):
+    """The inputs the model sees in the filter: the inlet raised by its offset state, if any."""
+    if getattr(ekf, "inlet_offset", False):
+        return u + dist[-1] * ca.DM([float(name == ekf.coolant_input) for name in ekf.model.input_names])
+    return u
 
 
 class _RestModel:
@@ -152,9 +151,12 @@ class _RestModel:
         if ca.depends_on(model.functions["jac_x"](x, u, model.p0), x):
             raise InputError("model", model.name, "a rest of free length needs a model affine in the state at a "
                              "fixed input; plan on the design model (--planner-model affine)")
-        J = np.asarray(model.functions["jac_x"](np.zeros(nx), u_rest, model.p0))
-        rate = np.asarray(model.functions["rhs"](np.zeros(nx), u_rest, model.p0)).ravel()
-        self.x_ss = -np.linalg.solve(J, rate + disturbance_rate(ekf, u_rest, z0[nx:]))
+        dist = ca.DM(z0[nx:])
+        u_model = _model_input(ekf, ca.DM(u_rest), dist)
+        rate = model.functions["rhs"](x, u_model, model.p0) + ca.DM(ekf.M) @ _heat(ekf, x, ca.DM(u_rest), dist)
+        J_f = ca.Function("rest_rate", [x], [ca.jacobian(rate, x), rate])
+        J, f0 = (np.asarray(m) for m in J_f(np.zeros(nx)))
+        self.x_ss = -np.linalg.solve(J, f0.ravel())
         self.decay = ModalDecay.of(J, model.name)
 
     def after(self, x, minutes, fraction: float = 1.0):
