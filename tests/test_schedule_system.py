@@ -116,3 +116,12 @@ def test_a_scenario_filter_is_the_one_flown_unless_the_option_overrides_it():
     system, settings = settings_from_args(parser.parse_args(["fly", "chapter7_inlet_3C", "--scheduler", "heuristic",
                                                              "--filter", "ekf", "--tell-fault"]))
     assert flight_filter(system, settings) == "ekf" and settings.tell_fault
+
+
+def test_the_nonlinear_planner_refuses_a_scenario_that_flies_the_linear_filter():
+    from genthermal.schedule.closed_loop import ManagerSettings, fly
+
+    system = PowerSystem.from_mission(load_mission("chapter7_inlet_3C"))
+    with pytest.raises(InputError) as error:
+        fly(system, "optimal", ManagerSettings(planner_model="nonlinear"))
+    assert error.value.field == "generators.filter" and "--filter ekf" in str(error.value)

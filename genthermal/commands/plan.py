@@ -2,7 +2,9 @@
 
 Open-loop load-management plan on the linear design model (thesis chapter 7): the mission is flown
 as planned until the first management cycle after the fault onset, then one schedule (displaced
-current per generator and rest before each action) is planned for the rest of the mission.
+current per generator and rest before each action) is planned for the rest of the mission. With
+``--planner-model nonlinear`` the optimal scheduler plans and flies on the nonlinear model (per
+management cycle, back-off from the filter's initial covariance: no measurements in open loop).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
-from ..schedule.closed_loop import DEFAULT_REST_BUDGET_FRACTION, SCHEDULERS, ManagerSettings, plan_mission
+from ..schedule.closed_loop import (DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS, SCHEDULERS, ManagerSettings,
+                                     plan_mission)
 from ..schedule.monitor import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
 from ..schedule.report import flight_summary, plot_flight, summary_text
@@ -37,6 +40,15 @@ def add_schedule_arguments(parser) -> None:
                         help="most rest the whole flight may add, min (default "
                         f"{100 * DEFAULT_REST_BUDGET_FRACTION:g} %% of the mission); when it is spent, or no rest "
                         "keeps a generator within the limit, the manager switches that generator off and sheds load")
+    parser.add_argument("--planner-model", default=ManagerSettings.planner_model, metavar="|".join(PLANNER_MODELS),
+                        help="what the optimal scheduler plans on — affine: the linear design model within θmax "
+                        "minus --margin, with --rise-backoff (default); nonlinear: the flown model the filter runs "
+                        "on (--model with the faults believed), within θmax minus a back-off of "
+                        "--confidence-sigmas standard deviations of the filter's covariance, displacement and rest "
+                        "free per management cycle")
+    parser.add_argument("--confidence-sigmas", default=str(ManagerSettings.confidence_sigmas),
+                        help="nonlinear planner: standard deviations of the predicted temperature kept below θmax "
+                        f"(default {ManagerSettings.confidence_sigmas:g})")
     parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
                         "(genthermal.model_file); default the scenario's machine")
     parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
@@ -65,8 +77,20 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     budget_min = None
     if getattr(args, "rest_budget_min", None) is not None:
         budget_min = _number_in("--rest-budget-min", args.rest_budget_min, 0.0, 24 * 60.0, "a number of minutes")
+    planner_model = getattr(args, "planner_model", ManagerSettings.planner_model)
+    if planner_model not in PLANNER_MODELS:
+        raise InputError("--planner-model", planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
+    if planner_model == "nonlinear" and args.scheduler != "optimal":
+        raise InputError("--planner-model", planner_model, "the nonlinear transcription is the optimal scheduler's: "
+                         "use --scheduler optimal (the other schedulers plan on the design model)")
+    if planner_model == "nonlinear" and getattr(args, "filter", None) not in (None, "ekf"):
+        raise InputError("--filter", args.filter, "the nonlinear planner plans on the extended Kalman filter's "
+                         "model and covariance: use --filter ekf")
+    sigmas = _number_in("--confidence-sigmas", getattr(args, "confidence_sigmas", "2"), 0.0, 10.0,
+                        "a number of standard deviations")
     settings = ManagerSettings(cycle_s=60.0 * cycle_min, margin_K=margin, rise_backoff=backoff,
-                               rest_budget_s=None if budget_min is None else 60.0 * budget_min)
+                               rest_budget_s=None if budget_min is None else 60.0 * budget_min,
+                               planner_model=planner_model, confidence_sigmas=sigmas)
     if getattr(args, "seed", None) is not None:
         if int(args.seed) < 0:
             raise InputError("--seed", args.seed, "must be a whole number >= 0")

@@ -12,14 +12,19 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
    alarm, identifies the fault from the in-flight record;
 2. **predict** to the end of the mission under the current schedule, with the measured inlet
    temperature held (thesis 7.3.6) and the faults identified so far (with ``tell_fault``: the
-   scenario's faults, each known at the first cycle after its onset);
+   scenario's faults, each known at the first cycle after its onset): on the design model
+   (``planner_model`` ``affine``), or on the filter's nonlinear model from its state with the
+   disturbances held and a back-off of the filter's covariance propagated along the plan
+   (``nonlinear``, :mod:`genthermal.schedule.flown`; the mission is then cut into control intervals
+   of one cycle, each with its own displacement and rest);
 3. **re-plan** (unless ``replan`` is off) if a temperature above the planning limit
    :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
 The true plant is the nonlinear model with the faults from their onsets and parameters that differ
 from the design model (``PowerSystem.plant_mismatch``). The back-off ``margin_K`` absorbs the
-mismatch; its cost in mission time is measured by flying with and without it.
+mismatch; its cost in mission time is measured by flying with and without it. The nonlinear planner
+replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
@@ -42,19 +47,28 @@ import time
 
 import numpy as np
 
+from ..errors import InputError
+from ..estimation.ekf import ExtendedKalmanFilter
 from ..simulate import simulate
+from .flown import DEFAULT_CONFIDENCE_SIGMAS, FlownPlanning
 from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
-                   generator_inputs, mission_segments, predict, remaining_after)
+                   generator_inputs, mission_segments, predict, remaining_after, split_segments)
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
-from .shed import shed_plan
+from .optimal_nlp import flown_optimal_plan
+from .shed import NOT_SERVED_TOLERANCE_A, shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
+#: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
+#: model with the margin and the rise back-off; ``nonlinear``, the flown model the filter runs
+#: on, with the back-off of its covariance (:mod:`genthermal.schedule.flown`), the mission cut
+#: into control intervals of one cycle.
+PLANNER_MODELS = ("affine", "nonlinear")
 #: Default back-off margin below θmax, K.
 DEFAULT_MARGIN_K = 2.5
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
@@ -112,6 +126,14 @@ class ManagerSettings:
         Fault detection and identification in flight.
     sensor_watch : SensorWatchSettings
         Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
+    planner_model : str
+        One of :data:`PLANNER_MODELS`: ``affine`` (default) plans on the design model within θmax −
+        ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
+        ``filter`` must be ``ekf``) within θmax with the back-off of the filter's covariance
+        (``confidence_sigmas`` standard deviations; ``margin_K`` and ``rise_backoff`` unused), and
+        displacement and rest free per management cycle.
+    confidence_sigmas : float
+        Standard deviations of the predicted temperature kept below θmax by the nonlinear planner.
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
     cpu_limit_s : float or None
@@ -132,6 +154,8 @@ class ManagerSettings:
     tell_fault: bool = False
     replan: bool = True
     filter: str = "ekf"
+    planner_model: str = "affine"
+    confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
     detection: DetectionSettings = DetectionSettings()
     sensor_watch: SensorWatchSettings = SensorWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
@@ -145,6 +169,19 @@ class ManagerSettings:
             raise ValueError(f"rest_budget_s = {self.rest_budget_s!r}: must be a number of seconds >= 0 or None")
         if self.cpu_limit_s is not None and not (np.isfinite(self.cpu_limit_s) and self.cpu_limit_s > 0):
             raise ValueError(f"cpu_limit_s = {self.cpu_limit_s!r}: must be a number of seconds > 0 or None")
+        if self.planner_model not in PLANNER_MODELS:
+            raise InputError("planner_model", self.planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
+        if self.planner_model == "nonlinear" and self.filter != "ekf":
+            raise InputError("filter", self.filter, "the nonlinear planner plans on the extended Kalman filter's "
+                             "model and covariance: use the filter ekf")
+        if not (np.isfinite(self.confidence_sigmas) and self.confidence_sigmas >= 0):
+            raise InputError("confidence_sigmas", self.confidence_sigmas,
+                             "must be a number of standard deviations >= 0")
+
+    @property
+    def nonlinear(self) -> bool:
+        """True when planning on the flown (nonlinear) model."""
+        return self.planner_model == "nonlinear"
 
     def rest_budget_for(self, mission_duration_s: float) -> float:
         """The flight's rest budget, s, for a mission of ``mission_duration_s`` (s)."""
@@ -301,6 +338,12 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
                  lowest_peak_action=segment.action_index + 1)
     if lowest.peak_C > limit_C:
         nobody = np.zeros(problem.n_generators, dtype=bool)
+        if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
+            shed = _flown_shed(problem, settings, previous, names, limit_C, where)
+            if shed is not None:
+                shed.solve_s += result.solve_s + lowest.solve_s
+                shed.details.update(found)
+                return shed
         shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
@@ -321,6 +364,30 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     relaxed.warnings.append(message)
     relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
     return relaxed
+
+
+def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
+                where: str) -> PlanResult | None:
+    """The optimal scheduler on the flown model with load allowed to go unserved
+    (:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``); None when even that
+    does not keep its prediction within θmax (the caller switches generators off)."""
+    result = flown_optimal_plan(problem, settings.optimal.nonlinear, previous, shed=True)
+    if not result.feasible:  # its own prediction, with its back-off, above θmax
+        return None
+    result = _within_budget(problem, result)
+    not_served = result.schedule.displaced_A.sum(axis=0)
+    short = not_served > NOT_SERVED_TOLERANCE_A
+    shedding = [names[g] for g in range(problem.n_generators)
+                if np.any((result.schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A) & short)]
+    durations = np.array([s.duration_s for s in problem.segments])
+    not_served_Ah = float(np.sum(np.clip(not_served, 0.0, None) * durations) / 3600.0)
+    response = (f"shed load of {', '.join(shedding) or 'nobody'}: {not_served_Ah:.2f} A·h not served, the least "
+                f"that keeps every generator within θmax {limit_C:g} °C on the flown model with its back-off, after rest "
+                f"{result.schedule.added_rest_s / 60:.1f} min and displacement")
+    result.method, result.feasible = "shed", False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(response=response, planned_peak_C=result.peak_C, shedding=shedding, switched_off=[])
+    return result
 
 
 def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:
@@ -375,16 +442,24 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
-             rest_budget_s: float, rest_taken_s: float = 0.0) -> PlanningProblem:
+             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
-    ``rest_taken_s`` (s) of rest already flown right before the first segment."""
+    ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
+    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance."""
     inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
     budget = max(float(rest_budget_s), 0.0)
+    limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
+        (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
-                           system.limit_C - planning_margin_K(system, settings), min(settings.max_rest_s, budget),
-                           settings.dt_s,
-                           settings.rise_backoff, settings.cycle_s, budget, float(rest_taken_s))
+                           limit, min(settings.max_rest_s, budget), settings.dt_s,
+                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown)
+
+
+def _segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
+    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle."""
+    segments = mission_segments(system.mission)
+    return split_segments(segments, settings.cycle_s) if settings.nonlinear else segments
 
 
 class _Recorder:
@@ -454,38 +529,86 @@ def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_a
     return outputs, states
 
 
+class _FlownOpenLoop:
+    """The open-loop plan's run on the flown model (nonlinear planner): per generator, the extended
+    Kalman filter on the planning model with the faults known at a time, stepped with the
+    disturbances at zero (no measurements: the filter's initial covariance is the uncertainty)."""
+
+    def __init__(self, system: PowerSystem, dt_s: float):
+        self.system, self.dt_s, self._filters = system, dt_s, {}
+
+    def filter(self, g: int, t_s: float) -> ExtendedKalmanFilter:
+        """Generator ``g``'s filter on the model with the faults started by ``t_s``."""
+        beliefs = _told_beliefs(self.system, t_s)[g]
+        if beliefs not in self._filters:
+            model = believed_model(self.system.planning_model, beliefs)
+            self._filters[beliefs] = ExtendedKalmanFilter(model, self.dt_s)
+        return self._filters[beliefs]
+
+    def steps(self, z0, timeline, t0: float, n: int):
+        """Run ``n`` steps of ``timeline`` from filter states ``z0`` (n_gen, n_z). Returns
+        (outputs (n_gen, 2, n), states after (n_gen, n_z))."""
+        system = self.system
+        outputs, states = np.empty((system.n_generators, 2, n)), np.array(z0, dtype=float)
+        for i in range(n):
+            t = t0 + i * timeline.dt_s
+            for g in range(system.n_generators):
+                ekf = self.filter(g, t)
+                u = system.design_generator(g).input(timeline.currents_A[g, i], float(system.inlet_C(g, t)),
+                                                     system.mission.T_ambient_C)
+                states[g] = np.asarray(ekf.state_step(states[g], u)).ravel()
+                outputs[g, :, i] = ekf.H @ states[g] + ekf.e
+        return outputs, states
+
+
 def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings()) -> FlightResult:
-    """Open-loop plan on the design model.
+    """Open-loop plan on the design model (or, with ``settings.planner_model`` ``nonlinear``, on
+    the flown model, :class:`_FlownOpenLoop`).
 
     The mission is flown as planned up to the first management cycle at or after the earliest
     fault onset; there every fault of the scenario is taken as known (conservative for later
-    onsets) and one plan is made for the rest of the mission, which the design model then flies.
+    onsets) and one plan is made for the rest of the mission, which the same model then flies.
     """
     dt = settings.dt_s
-    segments = mission_segments(system.mission)
+    segments = _segments(system, settings)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    flown_run = _FlownOpenLoop(system, dt) if settings.nonlinear else None
+    if flown_run is not None:
+        x = np.hstack([x, np.zeros((system.n_generators, len(flown_run.filter(0, 0.0).disturbance_names)))])
     budget = settings.rest_budget_for(system.mission.duration_s)
     onset = min((f.onset_s for f in system.faults), default=0.0)
     t_plan = float(np.ceil(onset / settings.cycle_s - 1e-9) * settings.cycle_s)
     timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
     n_before = min(int(round(t_plan / dt)), timeline.n_steps)
     recorder = _Recorder(system)
-    outputs, x = _design_steps(system, x, timeline, 0.0, n_before, system.faults_known_at)
+
+    def run(x, timeline, t0, n, faults_at):
+        if flown_run is None:
+            return _design_steps(system, x, timeline, t0, n, faults_at)
+        return flown_run.steps(x, timeline, t0, n)
+    outputs, x = run(x, timeline, 0.0, n_before, system.faults_known_at)
     recorder.add(segments, timeline, n_before, outputs, 0.0)
     segments, schedule = remaining_after(segments, schedule, timeline, n_before)
     table = None
     if segments:
         all_faults = tuple(range(len(system.faults)))
         generators = [system.design_generator(g, all_faults) for g in range(system.n_generators)]
-        problem = _problem(system, settings, segments, x, t_plan, generators, np.floor(budget / dt + 1e-9) * dt)
+        flown = None
+        if flown_run is not None:
+            end = system.mission.duration_s
+            filters = [flown_run.filter(g, end) for g in range(system.n_generators)]
+            flown = FlownPlanning(filters, x, [f.P0 for f in filters], settings.confidence_sigmas)
+        nodes = x[:, :system.nominal_model.n_states]
+        problem = _problem(system, settings, segments, nodes, t_plan, generators, np.floor(budget / dt + 1e-9) * dt,
+                           flown=flown)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
             recorder.plan(t_plan, result)
         table = schedule.table(segments, system.generator_names)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
-        outputs, x = _design_steps(system, x, timeline, t_plan, timeline.n_steps, system.faults_known_at)
+        outputs, x = run(x, timeline, t_plan, timeline.n_steps, system.faults_known_at)
         recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
     return recorder.result(scheduler, False, table, rest_budget_s=budget)
 
@@ -537,10 +660,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
     rng = np.random.default_rng(settings.seed)
     noise_sd = np.sqrt(np.asarray(system.planning_model.spec.interface.noise_variances_K2))
-    segments = mission_segments(system.mission)
+    segments = _segments(system, settings)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
+    if settings.nonlinear and flight_filter(system, settings) != "ekf":
+        raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
+                         "filter's model and covariance: fly this scenario with --filter ekf")
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                                  filter_cache, flight_filter(system, settings)) for g in range(system.n_generators)]
     # the fault detector reads an extended Kalman filter's disturbance states: with the linear
@@ -581,9 +707,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
                 if detectors is not estimators:
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
+        flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators],
+                              [e.P for e in estimators], settings.confidence_sigmas) if settings.nonlinear else None
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [e.planning_generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
-                           resting_s)
+                           resting_s, flown)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):

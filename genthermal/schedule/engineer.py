@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from .heuristic import SegmentResponse
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict, robust_outputs
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,9 +73,7 @@ def predicted_violators(problem: PlanningProblem) -> list[int]:
     """Generators whose prediction under the nominal schedule (back-off included) exceeds the
     planning limit anywhere in the rest of the mission."""
     prediction = predict(problem, Schedule.nominal(problem.n_generators, len(problem.segments)))
-    outputs = prediction.outputs
-    future = np.maximum(outputs[:, :, 1:], robust_outputs(outputs, prediction.timeline.window_start,
-                                                          prediction.rise_backoff))
+    future = prediction.future()
     return [g for g in range(problem.n_generators) if future[g].max() > problem.limit_C + LIMIT_TOLERANCE_K]
 
 

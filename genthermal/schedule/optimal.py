@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse
 
 from .heuristic import heuristic_plan
+from .optimal_nlp import NonlinearSettings, flown_optimal_plan
 from .plan import PlanningProblem, PlanResult, Schedule, evaluate
 
 
@@ -55,12 +56,16 @@ class OptimalSettings:
         adds no mission time, the penalty only picks the least displacement among equal missions).
     max_iter : int
         IPOPT iteration limit.
+    nonlinear : NonlinearSettings
+        The transcription on the flown model, used when the problem carries it (``problem.flown``,
+        :mod:`genthermal.schedule.optimal_nlp`).
     """
 
     check_s: float = 60.0
     rest_substeps: int = 3
     displacement_weight: float = 1.0
     max_iter: int = 300
+    nonlinear: NonlinearSettings = NonlinearSettings()
 
 
 def sparse_dm(matrix) -> ca.DM:
@@ -256,8 +261,11 @@ def optimal_plan(problem: PlanningProblem, settings: OptimalSettings = OptimalSe
     -------
     PlanResult
         The better of IPOPT's schedule and the heuristic's (``method`` ``optimal``), or the
-        heuristic's with ``method`` ``optimal->heuristic`` and a warning when IPOPT failed.
+        heuristic's with ``method`` ``optimal->heuristic`` and a warning when IPOPT failed. With
+        ``problem.flown``: :func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`.
     """
+    if problem.flown is not None:
+        return flown_optimal_plan(problem, settings.nonlinear, initial)
     started = time.perf_counter()
     heuristic = heuristic_plan(problem)
     if not heuristic.feasible:  # nothing to optimise within the limit: say so via the heuristic
@@ -285,8 +293,10 @@ def lowest_reachable_peak(problem: PlanningProblem, settings: OptimalSettings = 
 
     Used to report an infeasible case: if its peak is above the limit, no schedule keeps
     θ ≤ θmax, and ``peak_C``, ``peak_generator`` and ``peak_segment`` say how close one can get
-    and where.
+    and where. With ``problem.flown``, the min-max on the flown model.
     """
+    if problem.flown is not None:
+        return flown_optimal_plan(problem, settings.nonlinear, minimax=True)
     started = time.perf_counter()
     heuristic = heuristic_plan(problem)
     transcription = _Transcription(problem, settings, minimax=True)

@@ -22,6 +22,7 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
+from ..errors import InputError
 from ..exciter import DEFAULT_POWER_FACTOR
 from ..machines.interface import GeneratorRole
 from ..mission import DEFAULT_GENERATOR, DEFAULT_RATED_CURRENT_A, Mission
@@ -97,6 +98,16 @@ class Segment:
                 if start > elapsed_s + 1e-9]
         first = (0.0, float(self.current_at(elapsed_s)))
         return Segment(self.action_index, self.label, self.duration_s - elapsed_s, tuple([first] + kept))
+
+
+def split_segments(segments, interval_s: float) -> tuple[Segment, ...]:
+    """Every segment cut into its windows (:meth:`Segment.windows`) of at most ``interval_s`` (s),
+    each a segment of constant current with the action's index and label: a schedule on them
+    displaces load per control interval and may rest before any of them."""
+    if not (np.isfinite(interval_s) and interval_s > 0):
+        raise InputError("interval_s", interval_s, "the control interval must be a positive number of seconds")
+    return tuple(Segment(segment.action_index, segment.label, length, ((0.0, current),))
+                 for segment in segments for _, length, current in segment.windows(interval_s))
 
 
 def mission_segments(mission: Mission) -> tuple[Segment, ...]:
@@ -342,6 +353,10 @@ class PlanningProblem:
     rest_taken_s : float
         Rest already flown right before the first segment (a rest in progress), s: the rest
         before that segment may add only ``max_rest_s`` minus this.
+    flown : FlownPlanning, optional
+        Plan on the nonlinear model the manager flies (:mod:`genthermal.schedule.flown`): then
+        :func:`predict` runs that model from the filter's state, with a back-off derived from the
+        filter's covariance, and ``limit_C`` is θmax itself. Default None: the design models.
     """
 
     segments: tuple
@@ -358,6 +373,7 @@ class PlanningProblem:
     window_s: float = 300.0
     rest_budget_s: float = np.inf
     rest_taken_s: float = 0.0
+    flown: object = None
 
     @property
     def n_generators(self) -> int:
@@ -377,20 +393,28 @@ class PlanningProblem:
 
 @dataclasses.dataclass
 class Prediction:
-    """Design-model prediction of a schedule: ``outputs`` (n_generators, n_outputs, n_steps + 1) at
-    ``time_s`` (from the planning instant), with the ``timeline`` that produced them and the
-    ``rise_backoff`` of the problem."""
+    """Prediction of a schedule: ``outputs`` (n_generators, n_outputs, n_steps + 1) at ``time_s``
+    (from the planning instant), with the ``timeline`` that produced them, the ``rise_backoff`` of
+    the problem and, when planning on the flown model, the uncertainty back-off ``backoff_K``
+    (same shape as ``outputs``, K)."""
 
     time_s: np.ndarray
     outputs: np.ndarray
     timeline: Timeline
     rise_backoff: float = 0.0
+    backoff_K: np.ndarray | None = None
+
+    def future(self) -> np.ndarray:
+        """(n_generators, n_outputs, n_steps) future temperatures with every back-off (the rise
+        back-off and the uncertainty back-off) added, °C."""
+        backed_off = self.outputs if self.backoff_K is None else self.outputs + self.backoff_K
+        return np.maximum(backed_off[:, :, 1:],
+                          robust_outputs(backed_off, self.timeline.window_start, self.rise_backoff))
 
     def peak(self) -> tuple[float, int, int]:
-        """``(peak °C, generator, segment)`` over the future samples, the rise back-off included
+        """``(peak °C, generator, segment)`` over the future samples, the back-offs included
         (the first sample is the present)."""
-        future = np.maximum(self.outputs[:, :, 1:],
-                            robust_outputs(self.outputs, self.timeline.window_start, self.rise_backoff)).max(axis=1)
+        future = self.future().max(axis=1)
         g, i = np.unravel_index(np.argmax(future), future.shape)
         return float(future[g, i]), int(g), int(self.timeline.segment[i])
 
@@ -430,8 +454,12 @@ def affine_states(E: np.ndarray, forced: np.ndarray, x0: np.ndarray) -> np.ndarr
 
 
 def predict(problem: PlanningProblem, schedule: Schedule) -> Prediction:
-    """Run ``schedule`` on the design models from ``problem.x0`` on the grid ``problem.dt_s``."""
+    """Run ``schedule`` on the design models from ``problem.x0`` on the grid ``problem.dt_s``, or
+    on the flown models from the filters' states when ``problem.flown`` is set."""
     timeline = build_timeline(problem.segments, schedule, problem.rest_current_A, problem.dt_s, problem.window_s)
+    if problem.flown is not None:
+        time_s, outputs, backoff = problem.flown.predict(problem, timeline)
+        return Prediction(time_s, outputs, timeline, problem.rise_backoff, backoff)
     n = timeline.n_steps
     outputs = np.empty((problem.n_generators, problem.generators[0].Cy.shape[0], n + 1))
     for g, generator in enumerate(problem.generators):
