@@ -50,6 +50,7 @@ from ..conditions import checked_number, reject_unknown_keys
 from ..errors import InputError
 from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
 from .monitor import Cusum
+from .sensor_patterns import frozen_since, opposite_flows
 
 SCENARIO_KEY = "sensor_faults"
 
@@ -86,6 +87,20 @@ class SensorWatchSettings:
         85 min, after a re-plan and a shorted turn believed (``tests/test_sensor_watch.py``).
     check_delay_s : float
         The check runs this long after the alarm (one management cycle), s.
+    stuck_min_samples : int
+        A reading equal over this many consecutive samples, after a noisy one, is a frozen
+        channel (:func:`~genthermal.schedule.sensor_patterns.frozen_since`): 12 samples, 2 min at
+        the 10-s step; with the thesis noise (σ ≈ 0.09 K) two equal samples of a live PT100 are
+        already improbable.
+    pattern_drift, pattern_threshold : float
+        :math:`\nu, h` of the one-sided CUSUM on the opposite-heat-flow statistic :math:`m_g`
+        (:mod:`~genthermal.schedule.sensor_patterns`, in standard deviations): above the healthy
+        flight's largest :math:`m_g` (0.45) and the values at the alarms of real faults (< 0.1);
+        a 1.5 K/h iron drift builds 2 within about an hour.
+    max_defer_s : float
+        A new belief of the fault monitor on a generator whose heat flows show the sensor
+        pattern (its CUSUM above zero) is held back, and its record checked every cycle, for at
+        most this long, s; then the belief is taken (the plan changes one or more cycles late).
     enabled : bool
         False: faults are injected but not looked for (the comparison case).
     """
@@ -93,12 +108,16 @@ class SensorWatchSettings:
     drift: float = 1.0
     threshold: float = 4.0
     min_check_interval_s: float = 900.0
-    max_checks: int = 6
+    max_checks: int = 10
     identify_dt_s: float = 60.0
     lookback_s: float = 1800.0
     min_calibration_s: float = 1200.0
     calibrate_parameters: tuple = ("R0", "h_end_air")
     check_delay_s: float = 300.0
+    stuck_min_samples: int = 12
+    pattern_drift: float = 0.4
+    pattern_threshold: float = 2.0
+    max_defer_s: float = 1800.0
     enabled: bool = True
 
 
@@ -226,8 +245,16 @@ class SensorWatch:
         self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
                       for _ in range(n)]
         self.corrections: dict[tuple[int, int], SensorFault] = {}
+        #: ``(generator, row)`` → time the mask starts, s (a drift's: the start of its check window).
+        self.mask_from: dict[tuple[int, int], float] = {}
         self.claims, self.checks = [], []
         self.suspects: dict[int, int] = {}
+        self.patterns = [Cusum(settings.pattern_drift, settings.pattern_threshold) for _ in range(n)]
+        self._pattern_since: dict[int, float] = {}
+        self.pattern_alarms: list[dict] = []
+        #: Generator → (held-back belief, since s): new beliefs waiting for the sensor check.
+        self.deferred: dict[int, tuple] = {}
+        self.deferrals: list[dict] = []
         self._last_check = [-math.inf] * n
 
     def correct(self, sample_times_s, sensed, only=None) -> np.ndarray:
@@ -237,11 +264,12 @@ class SensorWatch:
         times = np.asarray(sample_times_s, dtype=float)
         for (g, row), fault in self.corrections.items():
             if only is None or (g, row) in only:
-                corrected[g, row, times >= fault.onset_s] = np.nan
+                corrected[g, row, times >= self.mask_from.get((g, row), fault.onset_s)] = np.nan
         return corrected
 
-    def cycle(self, t_s: float, estimators, measured, before, monitor) -> list:
-        """Run the tests on the cycle's innovations; check alarmed generators' records; act on claims.
+    def cycle(self, t_s: float, estimators, measured, before, monitor, detectors=None) -> list:
+        """Run the tests on the cycle's readings, innovations and heat flows; check alarmed
+        generators' records; act on claims; take or keep holding deferred beliefs.
 
         Parameters
         ----------
@@ -255,6 +283,8 @@ class SensorWatch:
             Each estimator's predicted state and covariance before the update.
         monitor : FaultMonitor
             Its record is checked; its fault test of a generator restarts on a claim.
+        detectors : list of StateEstimator, optional
+            The extended Kalman filters of the fault test (default ``estimators``).
 
         Returns
         -------
@@ -265,7 +295,20 @@ class SensorWatch:
             return []
         z = np.array([[e.innovation[r] / e.innovation_std[r] for r in range(len(self.outputs))] for e in estimators])
         claimed, known = [], set(self.corrections)
+        flows = opposite_flows(monitor.statistics(estimators if detectors is None else detectors))
         for g in range(len(estimators)):
+            if self._frozen(g, t_s, monitor):  # a frozen channel needs no model: claimed at once
+                claimed.append(g)
+                continue
+            pattern = self._pattern_alarm(g, t_s, flows[g])
+            if g in self.deferred:
+                if self._check_deferred(g, t_s, monitor):
+                    claimed.append(g)
+                    continue
+            elif pattern and self._may_check(g, t_s):
+                if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0, since_s=self._pattern_since[g]):
+                    claimed.append(g)
+                    continue
             alarmed = []
             for r in range(len(self.outputs)):
                 others = np.delete(z[:, r], g)
@@ -291,6 +334,7 @@ class SensorWatch:
                 monitor.detector.restart(g)
                 for test in self.tests[g]:
                     test.high = test.low = 0.0
+                self.patterns[g].high = 0.0
             estimators[g].update(y)
             # this cycle's innovation mixes the fault and its correction: no test compares against it
             estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
@@ -304,10 +348,14 @@ class SensorWatch:
         monitor.beliefs = list(monitor.beliefs)
         monitor.beliefs[g] = kept[-1].effects if kept else ()
 
-    def review(self, t_s: float, previous_beliefs, estimators, monitor) -> list:
+    def review(self, t_s: float, previous_beliefs, estimators, monitor, previous_model=None) -> list:
         """After the fault monitor's cycle: a unit whose believed machine just changed is checked
         for a sensor fault of either sensor first; a claim undoes the new belief (the change of
-        the reading was the sensor's, not the machine's) and masks the sensor.
+        the reading was the sensor's, not the machine's) and masks the sensor. Without a claim, a
+        unit whose heat flows show the sensor pattern (:meth:`_suspicious`) has the new belief held
+        back, with the recalibration its alarm made (the model goes back to ``previous_model``),
+        and is checked every cycle (:meth:`_check_deferred`): the plan does not move until the
+        sensor is cleared or :attr:`SensorWatchSettings.max_defer_s` has passed.
 
         Returns
         -------
@@ -318,24 +366,98 @@ class SensorWatch:
             return []
         undone = []
         for g, (before, now) in enumerate(zip(previous_beliefs, monitor.beliefs)):
-            if now == before or not self._may_check(g, t_s):
+            if now == before:
+                continue
+            suspicious = self._suspicious(g, t_s)
+            if not (self._may_check(g, t_s) or (suspicious and self._checks_left(g))):
                 continue
             beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
             monitor.beliefs[g] = before  # the record is checked on the machine as believed before
-            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0):
+            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
+                           since_s=self._pattern_since.get(g) if suspicious else None):
                 undone.append(g)
                 estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
+                self.deferred.pop(g, None)
+            elif suspicious:  # the heat flows say "sensor": hold the new belief back, check again
+                self.deferred[g] = (now, self.deferred.get(g, (None, t_s))[1])
+                if previous_model is not None and monitor.calibrations and monitor.calibrations[-1]["time_s"] == t_s:
+                    monitor.model = previous_model  # the alarm's recalibration waits with its belief
+                self.deferrals.append({"generator": g, "time_s": t_s, "belief": [name for name, _ in now[-1:]],
+                                       "outcome": "held"})
+                undone.append(g)
             else:
                 monitor.beliefs = beliefs
         return undone
 
-    def _may_check(self, g: int, t_s: float) -> bool:
-        done = sum(1 for c in self.checks if c["generator"] == g)
-        return done < self.settings.max_checks and t_s - self._last_check[g] >= self.settings.min_check_interval_s
+    def _frozen(self, g: int, t_s: float, monitor) -> bool:
+        """Claim every sensor of generator ``g`` whose reading froze (module
+        :mod:`~genthermal.schedule.sensor_patterns`); True when one was claimed."""
+        times, readings = monitor.readings(g)
+        found = False
+        for row, output in enumerate(self.outputs):
+            if (g, row) in self.corrections:
+                continue
+            start_s = frozen_since(times, readings[row], self.settings.stuck_min_samples)
+            if start_s is None:
+                continue
+            held = float(readings[row][-1])
+            fault = SensorFault(output, "stuck", held, start_s)
+            run = int(np.count_nonzero(times >= start_s))
+            self._mask(g, row, fault, start_s, monitor)
+            self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault, "delta_bic": None,
+                                "alternative": f"reading frozen at {held:.2f} °C for {run} samples (a live sensor "
+                                               "is noisy): no heat flow holds a temperature exactly",
+                                "action": "masked", "evidence": "frozen reading"})
+            found = True
+        return found
 
-    def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None) -> bool:
+    def _pattern_alarm(self, g: int, t_s: float, flow: float) -> bool:
+        """Feed generator ``g``'s opposite-heat-flow statistic to its CUSUM; True on an alarm. Not
+        run once any sensor is masked: one sensor left has no pattern, and a generator compared with
+        one whose sensor is masked shows that one's unobserved heat flow mirrored."""
+        if self.corrections:
+            return False
+        test = self.patterns[g]
+        if test.high == 0.0:
+            self._pattern_since[g] = t_s
+        alarm = test.update(flow)
+        if alarm:
+            self.pattern_alarms.append({"time_s": t_s, "generator": g, "since_s": self._pattern_since[g]})
+        return alarm
+
+    def _suspicious(self, g: int, t_s: float) -> bool:
+        """Generator ``g``'s heat flows show the sensor pattern: its CUSUM is building, or it
+        alarmed within :attr:`SensorWatchSettings.max_defer_s`."""
+        recent = [a for a in self.pattern_alarms if a["generator"] == g and t_s - a["time_s"] <= self.settings.max_defer_s]
+        return self.patterns[g].high > 0.0 or bool(recent)
+
+    def _check_deferred(self, g: int, t_s: float, monitor) -> bool:
+        """Check generator ``g``'s record again while its new belief is held back; take the belief
+        when the pattern is gone or it has waited :attr:`SensorWatchSettings.max_defer_s`. True
+        on a claim."""
+        belief, since_s = self.deferred[g]
+        if self._checks_left(g) and self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
+                                                since_s=self._pattern_since.get(g, since_s)):
+            self.deferred.pop(g, None)
+            self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "sensor fault claimed"})
+            return True
+        if not self._suspicious(g, t_s) or t_s - since_s >= self.settings.max_defer_s:
+            self.deferred.pop(g)
+            monitor.beliefs = list(monitor.beliefs)
+            monitor.beliefs[g] = belief
+            self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "belief taken"})
+        return False
+
+    def _checks_left(self, g: int) -> bool:
+        return sum(1 for c in self.checks if c["generator"] == g) < self.settings.max_checks
+
+    def _may_check(self, g: int, t_s: float) -> bool:
+        return self._checks_left(g) and t_s - self._last_check[g] >= self.settings.min_check_interval_s
+
+    def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None,
+               since_s: float | None = None) -> bool:
         """Fit the alarmed sensor's faults (onset within :attr:`SensorWatchSettings.lookback_s` of
-        the alarm) against the heating faults on generator ``g``'s record, the model first
+        the alarm, or of ``since_s``, s, when earlier: the start of the heat-flow pattern) against the heating faults on generator ``g``'s record, the model first
         calibrated on the record before that window; claim and correct."""
         import time
 
@@ -349,7 +471,8 @@ class SensorWatch:
         record = monitor.frame(g)
         model = monitor.flown_model(g)
         alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
-        before = record[record["time_s"] < alarm_s - self.settings.lookback_s]
+        window_s = min(alarm_s, t_s if since_s is None else since_s) - self.settings.lookback_s
+        before = record[record["time_s"] < window_s]
         span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
         if span_s >= self.settings.min_calibration_s:
             model = calibrate(model, before, [p for p in self.settings.calibrate_parameters if p in model.parameters],
@@ -359,7 +482,7 @@ class SensorWatch:
         search = EffectSearch(model, series).fit_found()
         names = [n for n in search.candidates() if n in self.detection.fault_effects]
         ranked = search.rank(names) if names else []
-        onsets = np.flatnonzero((series.time_s >= alarm_s - self.settings.lookback_s)
+        onsets = np.flatnonzero((series.time_s >= window_s)
                                 & (series.time_s <= alarm_s + self.settings.identify_dt_s))
         onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
         masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
@@ -375,18 +498,31 @@ class SensorWatch:
         for hypothesis in new:
             fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
                                         onset_s=start_s + hypothesis.fault.onset_s)
-            self.corrections[(g, self.outputs.index(fault.sensor))] = fault
-            self._undo_beliefs_since(g, fault.onset_s, monitor)
+            # a drift's onset is uncertain (a slow ramp starts unseen): mask from the window's start
+            self._mask(g, self.outputs.index(fault.sensor), fault,
+                       min(fault.onset_s, window_s) if fault.kind == "drift" else fault.onset_s, monitor)
             self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                 "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
                                 "action": "masked"})
         return bool(new)
+
+    def _mask(self, g: int, row: int, fault: SensorFault, from_s: float, monitor) -> None:
+        """Mask generator ``g``'s sensor ``row`` from ``from_s`` in the flight to come and in the
+        fault monitor's record and test; drop the beliefs its faulty samples may have caused."""
+        self.corrections[(g, row)] = fault
+        self.mask_from[(g, row)] = from_s
+        monitor.mask(g, row, from_s)
+        self._undo_beliefs_since(g, from_s, monitor)
+        self.deferred.pop(g, None)
 
     def to_dict(self, names) -> dict:
         """The flight JSON ``sensor_faults`` entry: injected, claimed (with the action) and checks."""
         return {"injected": [{"generator": names[f.generator], **f.fault.to_dict()} for f in self.injected],
                 "claimed": [{"generator": names[c["generator"]], "claimed_at_s": c["claimed_at_s"],
                              **c["fault"].to_dict(), "delta_ic": c["delta_bic"], "alternative": c["alternative"],
-                             "action": c["action"]} for c in self.claims],
+                             "evidence": c.get("evidence", "record check"), "action": c["action"]}
+                            for c in self.claims],
                 "checks": [{**c, "generator": names[c["generator"]]} for c in self.checks],
+                "pattern_alarms": [{**a, "generator": names[a["generator"]]} for a in self.pattern_alarms],
+                "beliefs_held": [{**d, "generator": names[d["generator"]]} for d in self.deferrals],
                 "load_plan": "unchanged by sensor faults: the believed machine is not changed by a claim"}
