@@ -51,6 +51,24 @@ def record_readings(data, series: MeasuredSeries, interface) -> dict:
     return readings
 
 
+def corrected_record(measurements, series: MeasuredSeries, hypotheses):
+    """``measurements`` (MeasurementData) with the faults of ``hypotheses`` (fitted on the grid of
+    ``series``) removed from their record columns: the fitted signal subtracted (interpolated to
+    the record's times), or the column NaN from the onset for a stuck or noisy sensor of an
+    output that has other sensors (:func:`~genthermal.diagnose.sensor_faults.corrected_readings`)."""
+    frame = measurements.frame.copy()
+    time_s = measurements.time_s
+    for hypothesis in hypotheses:
+        drop = hypothesis.fault.kind in ("stuck", "noise") and hypothesis.evidence == "redundancy"
+        onset_s = float(series.time_s[0]) + hypothesis.fault.onset_s
+        for column in (c for c in hypothesis.columns if c in frame):
+            if drop:
+                frame.loc[time_s >= onset_s, column] = np.nan
+            elif hypothesis.fault.kind != "noise":
+                frame[column] = frame[column].to_numpy(float) - np.interp(time_s, series.time_s, hypothesis.signal)
+    return dataclasses.replace(measurements, frame=frame)
+
+
 class SensorScreen:
     """Sensor faults of one record (module docstring).
 
@@ -62,6 +80,9 @@ class SensorScreen:
         Its model outputs on the diagnosis grid.
     interface : MachineInterface
         The machine's interface (sensor schema, phase currents).
+    prior : sequence of SensorHypothesis
+        Faults claimed before (on the model's own sensors, before a sensor view split them:
+        :func:`corrected_record`); ``data`` is already corrected for them.
 
     Attributes
     ----------
@@ -71,25 +92,28 @@ class SensorScreen:
         The best single-sensor fault tried against the model, claimed or not.
     """
 
-    def __init__(self, data, series: MeasuredSeries, interface):
+    def __init__(self, data, series: MeasuredSeries, interface, prior=()):
         self.output_names = list(interface.output_names)
         self.columns = sensor_columns(interface)
         self.series = series
         self.elapsed_s = series.time_s - series.time_s[0]
         self.readings = record_readings(data, series, interface)
-        self.found: list[SensorHypothesis] = []
+        self.found: list[SensorHypothesis] = list(prior)
+        self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
-        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, self.columns)
+        noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
+                             self.columns)
         self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
 
     def corrected_series(self) -> MeasuredSeries:
         """The series with the claimed sensor faults removed from its outputs."""
-        if not self.found:
+        new = self.found[len(self.prior):]  # the data are already corrected for the prior faults
+        if not new:
             return self.series
-        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names, self.columns)
+        outputs = outputs_from(corrected_readings(self.readings, new), self.output_names, self.columns)
         return dataclasses.replace(self.series, outputs=outputs)
 
     def against_model(self, search, ranked, noise: float, outputs=None, onsets=None,

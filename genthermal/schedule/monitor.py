@@ -442,6 +442,9 @@ class FaultMonitor:
     def _recalibrate(self, t_s: float, candidates, z) -> None:
         from ..diagnose import calibrate
 
+        candidates = [h for h in candidates if (h, 0) not in self.masked]  # a masked sensor: not a reference
+        if not candidates:
+            return
         g = min(candidates, key=lambda h: z[h])
         names = [n for n in self.settings.calibrate_parameters if n in self.system.planning_model.parameters]
         result = calibrate(self.system.planning_model, self.frame(g), names, self.settings.identify_dt_s)

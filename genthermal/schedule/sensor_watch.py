@@ -314,6 +314,9 @@ class SensorWatch:
                 others = np.delete(z[:, r], g)
                 others = others[np.isfinite(others)]
                 d = z[g, r] - (float(np.median(others)) if others.size else 0.0)
+                # the unit's own innovation must move too: with two units, one with a real fault
+                # gives the other the mirrored difference while its own innovation stays small
+                d = math.copysign(min(abs(d), abs(z[g, r])), d) if d * z[g, r] > 0 else 0.0
                 if self.tests[g][r].update(d):
                     alarmed.append(self.outputs[r])
             if g in self.suspects:  # alarmed a cycle ago: the record now holds a cycle after the change
@@ -368,7 +371,8 @@ class SensorWatch:
         for g, (before, now) in enumerate(zip(previous_beliefs, monitor.beliefs)):
             if now == before:
                 continue
-            suspicious = self._suspicious(g, t_s)
+            # only a unit believed healthy: the misfit of an identified effect can take any pattern
+            suspicious = not before and self._suspicious(g, t_s)
             if not (self._may_check(g, t_s) or (suspicious and self._checks_left(g))):
                 continue
             beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
@@ -498,9 +502,7 @@ class SensorWatch:
         for hypothesis in new:
             fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
                                         onset_s=start_s + hypothesis.fault.onset_s)
-            # a drift's onset is uncertain (a slow ramp starts unseen): mask from the window's start
-            self._mask(g, self.outputs.index(fault.sensor), fault,
-                       min(fault.onset_s, window_s) if fault.kind == "drift" else fault.onset_s, monitor)
+            self._mask(g, self.outputs.index(fault.sensor), fault, fault.onset_s, monitor)
             self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                 "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
                                 "action": "masked"})
