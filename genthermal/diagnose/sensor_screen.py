@@ -11,7 +11,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
    detector names the sensor and the time, also when fitted on top of the best physical effect
    it still passes the four tests against that effect alone); the round is then run again on the
-   record with that sensor corrected, so what the machine does is still judged.
+   record with that sensor corrected, so what the machine does is still judged. The faults of the
+   input sensors (coolant inlet, ambient: :mod:`~genthermal.diagnose.input_sensors`) compete in
+   the same step; a claimed one is corrected in the inputs the model is driven with.
+
+Redundant sensors are screened on the model's own sensor schema before the record's sensor view
+is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
+phase would otherwise take a faulty phase sensor for that phase's heat.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
+from .input_sensors import corrected_inputs, screen_inputs
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
                             screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
@@ -114,10 +121,10 @@ class SensorScreen:
         if not new:
             return self.series
         outputs = outputs_from(corrected_readings(self.readings, new), self.output_names, self.columns)
-        return dataclasses.replace(self.series, outputs=outputs)
+        return dataclasses.replace(self.series, outputs=outputs, inputs=corrected_inputs(self.series.inputs, new))
 
     def against_model(self, search, ranked, noise: float, outputs=None, onsets=None,
-                      on_top: bool = False) -> SensorHypothesis | None:
+                      on_top: bool = False, inputs: bool = True) -> SensorHypothesis | None:
         """Claim the best single-sensor fault if it beats the physical effects (module docstring).
 
         Parameters
@@ -136,6 +143,10 @@ class SensorScreen:
             tests against that effect alone. Only where a detector has already said which sensor
             moved and when (in flight): on a record searched blind, a second physical effect that
             moves one sensor most (an iron loss after a blockage) passes it too.
+        inputs : bool
+            Also fit the faults of the input sensors (coolant inlet, ambient:
+            :mod:`~genthermal.diagnose.input_sensors`) when every output is looked at; the
+            better of the two kinds is the candidate.
         """
         from .discover import passes_tests
 
@@ -144,6 +155,11 @@ class SensorScreen:
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
                                          self.elapsed_s, self.output_names, self.columns, exclude,
                                          outputs, onsets)
+        if inputs and (outputs is None or set(outputs) >= set(self.output_names)):
+            through_input = screen_inputs(search.viewed(search.model), search.series,
+                                          search.series.outputs - search.predicted_before, self.output_names, onsets)
+            if through_input is not None and (candidate is None or through_input.delta_bic < candidate.delta_bic):
+                candidate = through_input
         self.alternative = candidate
         if candidate is None:
             return None
@@ -154,7 +170,7 @@ class SensorScreen:
         else:
             candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
             claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
-            if not claimed and on_top:  # the record may hold a machine effect (or model error) and a sensor fault
+            if not claimed and on_top and candidate.evidence != "input":  # the record may hold a machine effect (or model error) and a sensor fault
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
                                               self.elapsed_s, self.output_names, self.columns, exclude,
                                               outputs, onsets)

@@ -491,7 +491,8 @@ class SensorWatch:
         onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
         masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
         outputs = [a for a in alarmed if a not in masked]
-        found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True)
+        # input sensors are not injected nor corrected in flight (the filter reads the true inlet)
+        found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True, inputs=False)
                  if outputs and onsets.size else None)
         noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
         new = [found] if found is not None else noisy[:1]
