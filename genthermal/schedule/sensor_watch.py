@@ -12,31 +12,55 @@ thesis generator); ``kind`` and ``value`` as
 :class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
 is held). The faulty readings go to the filter and to the manager's record, as on a real aircraft.
 
-**Telling them apart.** After each measurement update, the normalised innovation of every sensor,
-taken relative to the median of the other generators (what the units share is the model's error,
-as in :mod:`~genthermal.schedule.monitor`), feeds a two-sided CUSUM per generator and sensor
-(:data:`SensorWatchSettings`). When one sensor alone alarms, it is held out of the filter for one
-cycle and the generator's record since the mission start, now a cycle past the change, goes to
-:func:`genthermal.diagnose.diagnose` on the manager's model, which fits the single-sensor faults
+**Telling them apart**, every cycle, before the fault monitor sees the cycle
+(:mod:`~genthermal.schedule.sensor_patterns` for the first two):
+
+1. *a frozen reading*: a sensor whose last :attr:`SensorWatchSettings.stuck_min_samples` samples are
+   equal after noisy ones is claimed stuck at once, no model asked (a stuck winding sensor used to
+   be believed a shorted turn, with a re-plan, 25 min before its claim);
+2. *opposite heat flows*: a drift is absorbed by the filter's disturbance states faster than it
+   builds an innovation, but to follow one sensor the filter must heat that node and cool the
+   other; a one-sided CUSUM on that pattern alarms, and the unit's record goes to the check below
+   with the onset searched from before the pattern began;
+3. *innovations*: the normalised innovation of every sensor, taken relative to the median of the
+   other generators (what the units share is the model's error) and only as far as the unit's own
+   innovation moves the same way (with two units, a real fault on one gives the other the mirrored
+   difference), feeds a two-sided CUSUM per generator and sensor. When one sensor alone alarms, it
+   is held out of the filter for one cycle and then checked.
+
+The check hands the generator's record since the mission start to the diagnosis on the manager's
+model (calibrated on the record before the onset window), which fits the single-sensor faults
 (:mod:`genthermal.diagnose.sensor_faults`) against the heating faults the manager watches for on one
 criterion: a machine fault moves both sensors as the model couples them, a sensor fault moves one in
 a way no heat flow can. Only a claimed sensor fault is acted on here; machine faults stay with the
 fault monitor.
 
-**Acting on it.** From the fitted onset on, the faulty sensor is masked: the filter updates with the
-other sensor only and the sensor is NaN in the manager's record. Masking, not subtracting the fitted
-fault: on a flight record calibrated for a few parameters, a fitted bias is off by some tenths of a
-kelvin (the model's remaining error), and a corrected reading that far off makes the fault monitor's
-differential test, whose threshold is 0.2 K, alarm on the *other* units. The claim's own cycle is
+**Gating the plan.** When the fault monitor changes the believed machine of a unit believed healthy
+(its test alarmed first), the unit's record is checked for a fault of either sensor at once; a claim
+undoes the new belief. Without a claim, if the unit's heat flows show the sensor pattern (its
+CUSUM is building or alarmed lately), the new belief *and* the recalibration its alarm made are
+held back and the record is checked every cycle, for at most :attr:`SensorWatchSettings.max_defer_s`;
+the plan, made on the believed machine, does not move meanwhile. Real faults do not show the
+pattern when they alarm (shorted turn, stray loss, blockage, iron loss on the Fig. 7.7 flight), so
+their beliefs are not delayed.
+
+**Acting on a claim.** From the fitted onset on, the faulty sensor is masked: the filter updates with
+the other sensor only, and the sensor is NaN in the manager's record, also for the samples already
+recorded since the onset (the identification and recalibration read that record). Masking, not
+subtracting the fitted fault: on a flight record calibrated for a few parameters, a fitted bias is
+off by some tenths of a kelvin (the model's remaining error), and a corrected reading that far off
+makes the fault monitor's differential test alarm on the *other* units. The claim's own cycle is
 redone: the filter goes back to its prediction and updates without the sensor; that cycle's
-innovation is withheld from every test and the fault monitor's CUSUM of that generator restarts, so
-the fault monitor never sees the faulty reading as heat. When the fault monitor changes a unit's
-believed machine first (its test alarmed before this one), the unit's record is checked for a fault
-of either sensor at once; a claim undoes the new belief, and any claim drops the effects identified
-on that unit after the fault's fitted onset. The believed machine, hence the load plan, is not
-changed by a sensor fault. The price: with the winding sensor of a unit masked, the fault monitor's
-differential winding test has no reading of that unit (with two units, no test at all) for the rest
-of the flight.
+innovation is withheld from every test. Any claim drops the effects identified on that unit after
+the fault's onset. The believed machine, hence the load plan, is not changed by a sensor fault.
+The price: a unit with a masked sensor leaves the fault monitor's test and is no reference for the
+others (with one sensor the filter cannot tell its two heat flows apart: with the iron sensor of
+one unit masked, its winding statistic alarmed three times and moved the plan), so with two units
+there is no fault test for the rest of the flight, and the opposite-flow test stops too.
+
+Input sensors (coolant inlet, ambient) are not covered in flight: the filter and the record read
+the true inlet and the mission's ambient (:mod:`genthermal.diagnose.input_sensors` covers them in
+``diagnose``).
 """
 
 from __future__ import annotations
@@ -67,11 +91,11 @@ class SensorWatchSettings:
         differential innovations (standard deviation about :math:`\\sqrt 2`) rarely stay above
         1 σ: no check on the healthy Fig. 7.7 flight nor on the blockage_large flight. A drift is
         absorbed by the filter's disturbance states faster than it builds an innovation: it is not
-        seen at these settings.
+        seen at these settings (the opposite-heat-flow test is there for it).
     min_check_interval_s : float
         Shortest time between two record checks of one generator, s.
     max_checks : int
-        Record checks per generator and flight.
+        Record checks per generator and flight (10: a held belief is checked every cycle).
     identify_dt_s : float
         Sample period of the record handed to the check, s.
     lookback_s : float
@@ -94,13 +118,15 @@ class SensorWatchSettings:
         already improbable.
     pattern_drift, pattern_threshold : float
         :math:`\nu, h` of the one-sided CUSUM on the opposite-heat-flow statistic :math:`m_g`
-        (:mod:`~genthermal.schedule.sensor_patterns`, in standard deviations): above the healthy
-        flight's largest :math:`m_g` (0.45) and the values at the alarms of real faults (< 0.1);
-        a 1.5 K/h iron drift builds 2 within about an hour.
+        (:mod:`~genthermal.schedule.sensor_patterns`, in standard deviations): ν is near the
+        largest :math:`m_g` of the healthy flight and of the faulty flights measured there (0.42,
+        0.44); a 1.5 K/h iron drift (0.5-0.7 a cycle) builds h = 2 in about an hour.
     max_defer_s : float
         A new belief of the fault monitor on a generator whose heat flows show the sensor
         pattern (its CUSUM above zero) is held back, and its record checked every cycle, for at
-        most this long, s; then the belief is taken (the plan changes one or more cycles late).
+        most this long, s; then the belief is taken (the plan changes up to 30 min late). 30 min:
+        a 1.5 K/h winding drift was claimed 10 min after the fault monitor's belief and a 3 K/h
+        one 25 min after it, on the Fig. 7.7 flight at 88 °C.
     enabled : bool
         False: faults are injected but not looked for (the comparison case).
     """
