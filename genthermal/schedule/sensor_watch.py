@@ -73,7 +73,7 @@ import numpy as np
 from ..conditions import checked_number, reject_unknown_keys
 from ..errors import InputError
 from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
-from .monitor import Cusum
+from .monitor import Cusum, believed_model
 from .sensor_patterns import frozen_since, opposite_flows
 
 SCENARIO_KEY = "sensor_faults"
@@ -332,7 +332,8 @@ class SensorWatch:
                     claimed.append(g)
                     continue
             elif pattern and self._may_check(g, t_s):
-                if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0, since_s=self._pattern_since[g]):
+                if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0, since_s=self._pattern_since[g],
+                               peers=True):
                     claimed.append(g)
                     continue
             alarmed = []
@@ -394,6 +395,11 @@ class SensorWatch:
         if not self.settings.enabled:
             return []
         undone = []
+        recalibrated = previous_model is not None and monitor.calibrations and \
+            monitor.calibrations[-1]["time_s"] == t_s
+        alarmed = {a["generator"] for a in monitor.alarms if a["time_s"] == t_s}
+        if recalibrated and any(not previous_beliefs[g] and self._suspicious(g, t_s) for g in alarmed):
+            monitor.model = previous_model  # an alarm of the sensor pattern: its recalibration waits too
         for g, (before, now) in enumerate(zip(previous_beliefs, monitor.beliefs)):
             if now == before:
                 continue
@@ -403,14 +409,17 @@ class SensorWatch:
                 continue
             beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
             monitor.beliefs[g] = before  # the record is checked on the machine as believed before
+            # on the model before this cycle's recalibration: that ran on another unit's record,
+            # which may hold the faulty sensor
             if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
-                           since_s=self._pattern_since.get(g) if suspicious else None):
+                           since_s=self._pattern_since.get(g) if suspicious else None, base_model=previous_model,
+                           peers=suspicious):
                 undone.append(g)
                 estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
                 self.deferred.pop(g, None)
             elif suspicious:  # the heat flows say "sensor": hold the new belief back, check again
                 self.deferred[g] = (now, self.deferred.get(g, (None, t_s))[1])
-                if previous_model is not None and monitor.calibrations and monitor.calibrations[-1]["time_s"] == t_s:
+                if recalibrated:
                     monitor.model = previous_model  # the alarm's recalibration waits with its belief
                 self.deferrals.append({"generator": g, "time_s": t_s, "belief": [name for name, _ in now[-1:]],
                                        "outcome": "held"})
@@ -467,7 +476,7 @@ class SensorWatch:
         on a claim."""
         belief, since_s = self.deferred[g]
         if self._checks_left(g) and self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
-                                                since_s=self._pattern_since.get(g, since_s)):
+                                                since_s=self._pattern_since.get(g, since_s), peers=True):
             self.deferred.pop(g, None)
             self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "sensor fault claimed"})
             return True
@@ -485,10 +494,37 @@ class SensorWatch:
         return self._checks_left(g) and t_s - self._last_check[g] >= self.settings.min_check_interval_s
 
     def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None,
-               since_s: float | None = None) -> bool:
+               since_s: float | None = None, base_model=None, peers: bool = False) -> bool:
         """Fit the alarmed sensor's faults (onset within :attr:`SensorWatchSettings.lookback_s` of
-        the alarm, or of ``since_s``, s, when earlier: the start of the heat-flow pattern) against the heating faults on generator ``g``'s record, the model first
-        calibrated on the record before that window; claim and correct."""
+        the alarm, or of ``since_s``, s, when earlier: the start of the heat-flow pattern; on
+        ``base_model`` with the unit's beliefs when given, else the monitor's model) against the
+        heating faults on generator ``g``'s record, the model first calibrated on the record before
+        that window; claim and correct. With ``peers`` (the heat-flow pattern, which the units a
+        unit is compared with show mirrored), the other units without a masked sensor are fitted
+        the same way and the fault is claimed on the unit where it is strongest, only when it beats
+        every other unit's by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`. Returns
+        True when a fault of ``g`` was claimed."""
+        from ..diagnose.sensor_faults import PREFERENCE_BIC
+
+        self._last_check[g] = t_s
+        found = self._fit(g, t_s, alarmed, monitor, delay_s, since_s, base_model)
+        if not found or not peers:
+            return self._claim(g, t_s, found, monitor)
+        others = [h for h in range(len(self._last_check)) if h != g
+                  and not any((h, r) in self.corrections for r in range(len(self.outputs)))]
+        rivals = {h: self._fit(h, t_s, alarmed, monitor, delay_s, since_s, base_model) for h in others}
+        rivals = {h: f for h, f in rivals.items() if f}
+        strongest = min(rivals, key=lambda h: rivals[h][0].delta_bic, default=None)
+        if strongest is None or found[0].delta_bic < rivals[strongest][0].delta_bic - PREFERENCE_BIC:
+            return self._claim(g, t_s, found, monitor)
+        runners_up = [found[0].delta_bic] + [f[0].delta_bic for h, f in rivals.items() if h != strongest]
+        if rivals[strongest][0].delta_bic < min(runners_up) - PREFERENCE_BIC:
+            self._claim(strongest, t_s, rivals[strongest], monitor)
+        return False
+
+    def _fit(self, g: int, t_s: float, alarmed, monitor, delay_s, since_s, base_model) -> list:
+        """The check of :meth:`_check` on generator ``g``'s record, recorded in :attr:`checks`;
+        the hypotheses to claim (onsets since the mission start), not acted on."""
         import time
 
         from ..diagnose.calibrate import calibrate
@@ -496,10 +532,9 @@ class SensorWatch:
         from ..diagnose.search import EffectSearch
         from ..diagnose.sensor_screen import SensorScreen
 
-        self._last_check[g] = t_s
         started = time.perf_counter()
         record = monitor.frame(g)
-        model = monitor.flown_model(g)
+        model = monitor.flown_model(g) if base_model is None else believed_model(base_model, monitor.beliefs[g])
         alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
         window_s = min(alarm_s, t_s if since_s is None else since_s) - self.settings.lookback_s
         before = record[record["time_s"] < window_s]
@@ -521,14 +556,18 @@ class SensorWatch:
         found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True, inputs=False)
                  if outputs and onsets.size else None)
         noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
-        new = [found] if found is not None else noisy[:1]
-        start_s = float(series.time_s[0])
+        start_s = float(series.time_s[0])  # onsets from the mission start, sensors named by output
+        new = [dataclasses.replace(h, fault=dataclasses.replace(h.fault, sensor=h.output, onset_s=start_s + h.fault.onset_s))
+               for h in ([found] if found is not None else noisy[:1])]
         self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": bool(new),
                             "best_machine_fault": ranked[0].effect if ranked else None,
                             "solve_s": time.perf_counter() - started})
+        return new
+
+    def _claim(self, g: int, t_s: float, new, monitor) -> bool:
+        """Act on the hypotheses ``new`` of :meth:`_fit` on generator ``g``: mask, record."""
         for hypothesis in new:
-            fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
-                                        onset_s=start_s + hypothesis.fault.onset_s)
+            fault = hypothesis.fault
             self._mask(g, self.outputs.index(fault.sensor), fault, fault.onset_s, monitor)
             self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                 "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
@@ -543,6 +582,10 @@ class SensorWatch:
         monitor.mask(g, row, from_s)
         self._undo_beliefs_since(g, from_s, monitor)
         self.deferred.pop(g, None)
+        for other in list(self.deferred):  # a belief held on a unit compared with this sensor's
+            self.deferred.pop(other)
+            self.deferrals.append({"generator": other, "time_s": self.claims[-1]["claimed_at_s"] if self.claims
+                                   else from_s, "outcome": f"dropped: a sensor of unit {g + 1} was claimed"})
 
     def to_dict(self, names) -> dict:
         """The flight JSON ``sensor_faults`` entry: injected, claimed (with the action) and checks."""
