@@ -170,7 +170,8 @@ class SensorScreen:
         else:
             candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
             claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
-            if not claimed and on_top and candidate.evidence != "input":  # the record may hold a machine effect (or model error) and a sensor fault
+            # the record may hold a machine effect (or model error) and a sensor fault
+            if not claimed and on_top and candidate.evidence != "input":
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
                                               self.elapsed_s, self.output_names, self.columns, exclude,
                                               outputs, onsets)

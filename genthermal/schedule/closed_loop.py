@@ -512,7 +512,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 if detectors is not estimators:
                     detectors[g].update(measured[g])
             if not settings.tell_fault:
-                watch.cycle(t, estimators, measured, before, monitor, detectors)  # sensor faults first: never seen as heat
+                # sensor faults first: never seen as heat
+                watch.cycle(t, estimators, measured, before, monitor, detectors)
                 believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
                 watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing

@@ -467,7 +467,8 @@ class SensorWatch:
     def _suspicious(self, g: int, t_s: float) -> bool:
         """Generator ``g``'s heat flows show the sensor pattern: its CUSUM is building, or it
         alarmed within :attr:`SensorWatchSettings.max_defer_s`."""
-        recent = [a for a in self.pattern_alarms if a["generator"] == g and t_s - a["time_s"] <= self.settings.max_defer_s]
+        recent = [a for a in self.pattern_alarms
+                  if a["generator"] == g and t_s - a["time_s"] <= self.settings.max_defer_s]
         return self.patterns[g].high > 0.0 or bool(recent)
 
     def _check_deferred(self, g: int, t_s: float, monitor) -> bool:
@@ -557,7 +558,8 @@ class SensorWatch:
                  if outputs and onsets.size else None)
         noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
         start_s = float(series.time_s[0])  # onsets from the mission start, sensors named by output
-        new = [dataclasses.replace(h, fault=dataclasses.replace(h.fault, sensor=h.output, onset_s=start_s + h.fault.onset_s))
+        new = [dataclasses.replace(h, fault=dataclasses.replace(h.fault, sensor=h.output,
+                                                                 onset_s=start_s + h.fault.onset_s))
                for h in ([found] if found is not None else noisy[:1])]
         self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": bool(new),
                             "best_machine_fault": ranked[0].effect if ranked else None,
