@@ -38,6 +38,15 @@ reproducible. JSON keys:
 ``median_flight_s``              median wall-clock time of one flight, s
 ``scheduler``                    the scheduler (``none``: no re-planning)
 ``wall_s``                       wall-clock time of the benchmark, s
+``provenance``                   the command line and the git commit it ran at
+``baseline``                     the same flights judged by the detector the disturbance detector replaced
+                                 (:mod:`genthermal.schedule.innovation_detector`, a CUSUM on the linear
+                                 Kalman filter's differential winding innovations, run on each flight's
+                                 record): ``false_alarms``, ``false_alarms_healthy``, ``detected``,
+                                 ``detect_delay_s`` (median, max), ``per_type`` delays, ``flights_with_false_alarms``
+``versus_baseline``              disturbance detector / baseline: ratios of the median and max delays
+                                 and of the false alarms (None where the baseline's figure is 0 or missing),
+                                 and the faulty flights each detects that the other misses
 
 Usage::
 
@@ -56,7 +65,9 @@ import time
 import numpy as np
 
 from genthermal.mission import Mission
+from genthermal.commands.sweep import source_commit
 from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
+from genthermal.schedule.innovation_detector import innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.schedule.sweep import MISMATCH_PARAMETERS, random_actions
@@ -90,6 +101,41 @@ def detection_case(index: int, kind: str | None, seed: int = 0) -> dict:
             "generators": {"count": count, "plant_mismatch": mismatch}, "faults": faults}
 
 
+def flight_record(result):
+    """``(currents_A, inlet_C, measured_C)`` (n_generators, ..., n) of a flight: what its manager
+    applied and measured, from the fault monitor's record."""
+    system, monitor = result.system, result.monitor
+    interface = system.planning_model.spec.interface
+    frames = [monitor.frame(g) for g in range(system.n_generators)]
+    currents = np.array([f[interface.generator.phase_inputs[0]].to_numpy() for f in frames])
+    inlet = np.array([f[interface.generator.coolant_input].to_numpy() for f in frames])
+    measured = np.array([[f[sensor.columns[0]].to_numpy() for sensor in interface.sensors] for f in frames])
+    return currents, inlet, measured
+
+
+def judge_alarms(system, alarms: list) -> dict:
+    """``false_alarms`` (alarms on a generator with no fault started by then) and ``detect_delay_s``
+    (first alarm on a generator whose fault had started, minus that fault's onset; None: none) of
+    ``alarms`` (``time_s``, ``generator``), as :func:`genthermal.schedule.report.detection_summary`
+    judges the flight's own."""
+    def onset(g, t_s):
+        started = [f.onset_s for f in system.faults if f.generator == g and f.onset_s <= t_s + 1e-9]
+        return min(started) if started else None
+    true = [(a["time_s"], onset(a["generator"], a["time_s"])) for a in alarms
+            if onset(a["generator"], a["time_s"]) is not None]
+    first = min(true, default=None)
+    return {"false_alarms": len(alarms) - len(true), "detect_delay_s": None if first is None else float(first[0] - first[1])}
+
+
+def baseline_detection(result, settings: ManagerSettings) -> dict:
+    """The baseline detector run on ``result``'s record, judged by :func:`judge_alarms`."""
+    system = result.system
+    alarms = innovation_cusum_alarms(system.design_generator_for(()), *flight_record(result),
+                                     system.mission.T_ambient_C, settings.dt_s,
+                                     max(int(round(settings.cycle_s / settings.dt_s)), 1))
+    return {**judge_alarms(system, alarms), "alarms": alarms}
+
+
 def fly_case(document: dict, k_flow_tolerance: float, scheduler: str = "none") -> dict:
     """Fly one case (``scheduler`` ``none``: no re-planning); its detection record."""
     system = PowerSystem.from_mission(Mission.from_dict(document))
@@ -98,10 +144,13 @@ def fly_case(document: dict, k_flow_tolerance: float, scheduler: str = "none") -
     result = fly(system, "engineer" if scheduler == "none" else scheduler, settings)
     summary = flight_summary(result)
     detector = result.monitor.detector
+    baseline = baseline_detection(result, settings)
     print(f"{document['name']}: {time.perf_counter() - started:.1f} s, delay {summary['detect_delay_s']}, "
-          f"false alarms {summary['false_alarms']}", file=sys.stderr, flush=True)
+          f"false alarms {summary['false_alarms']}; baseline: delay {baseline['detect_delay_s']}, false alarms "
+          f"{baseline['false_alarms']}", file=sys.stderr, flush=True)
     record = {"name": document["name"], "false_alarms": summary["false_alarms"],
               "detect_delay_s": summary["detect_delay_s"], "flight_s": time.perf_counter() - started,
+              "baseline": baseline,
               "peak_statistic": dict(zip(result.monitor.node_roles, detector.peak_statistic.tolist())),
               "peak_sum_over_threshold": dict(zip(result.monitor.node_roles,
                                                   (detector.peak_sum / detector.threshold).tolist()))}
@@ -144,6 +193,7 @@ def summarise(healthy: list, faulty: list, scheduler: str, wall_s: float) -> dic
                           "identified_correct_or_equivalent": sum(r["identified_correct_or_equivalent"]
                                                                   for r in records)}
     overall = delays(faulty)
+    baseline = baseline_summary(healthy, faulty)
     return {"healthy_flights": len(healthy), "faulty_flights": len(faulty),
             "false_alarms": int(sum(r["false_alarms"] for r in healthy + faulty)),
             "false_alarms_healthy": int(sum(r["false_alarms"] for r in healthy)),
@@ -158,7 +208,38 @@ def summarise(healthy: list, faulty: list, scheduler: str, wall_s: float) -> dic
                                                           default=None) for role in ("winding", "iron")},
             "per_type": per_type, "flights": faulty,
             "median_flight_s": float(np.median([r["flight_s"] for r in healthy + faulty])),
-            "scheduler": scheduler, "wall_s": wall_s}
+            "scheduler": scheduler, "wall_s": wall_s,
+            "baseline": baseline, "versus_baseline": versus_baseline(healthy, faulty, overall, baseline)}
+
+
+def baseline_summary(healthy: list, faulty: list) -> dict:
+    """The ``baseline`` key (module docstring) from the flights' ``baseline`` records."""
+    def delays(records):
+        values = [r["baseline"]["detect_delay_s"] for r in records if r["baseline"]["detect_delay_s"] is not None]
+        return {"median": float(np.median(values)) if values else None,
+                "max": float(max(values)) if values else None, "detected": len(values), "flights": len(records)}
+    overall = delays(faulty)
+    return {"false_alarms": int(sum(r["baseline"]["false_alarms"] for r in healthy + faulty)),
+            "false_alarms_healthy": int(sum(r["baseline"]["false_alarms"] for r in healthy)),
+            "flights_with_false_alarms": sum(r["baseline"]["false_alarms"] > 0 for r in healthy + faulty),
+            "detected": overall["detected"], "detect_delay_s": {"median": overall["median"], "max": overall["max"]},
+            "per_type": {kind: delays([r for r in faulty if r["type"] == kind])
+                         for kind in sorted({r["type"] for r in faulty})}}
+
+
+def versus_baseline(healthy: list, faulty: list, delays: dict, baseline: dict) -> dict:
+    """The ``versus_baseline`` key (module docstring): the disturbance detector's figures over the
+    baseline's."""
+    def ratio(ours, theirs):
+        return None if ours is None or not theirs else float(ours) / float(theirs)
+    ours_false = int(sum(r["false_alarms"] for r in healthy + faulty))
+    return {"median_delay_ratio": ratio(delays["median"], baseline["detect_delay_s"]["median"]),
+            "max_delay_ratio": ratio(delays["max"], baseline["detect_delay_s"]["max"]),
+            "false_alarm_ratio": ratio(ours_false, baseline["false_alarms"]),
+            "detected_only_by_disturbance_detector": [r["name"] for r in faulty if r["detect_delay_s"] is not None
+                                                      and r["baseline"]["detect_delay_s"] is None],
+            "detected_only_by_baseline": [r["name"] for r in faulty if r["detect_delay_s"] is None
+                                          and r["baseline"]["detect_delay_s"] is not None]}
 
 
 def main(argv=None) -> int:
@@ -181,6 +262,8 @@ def main(argv=None) -> int:
     faulty = [fly_case(detection_case(args.healthy + i, FAULT_TYPES[i % len(FAULT_TYPES)], args.seed),
                        args.k_flow_tolerance, args.scheduler) for i in range(args.faulty)]
     report = summarise(healthy, faulty, args.scheduler, time.perf_counter() - started)
+    report["provenance"] = {"command": " ".join(["python", "benchmarks/bench_detection.py", *sys.argv[1:]]),
+                            "commit": source_commit()}
     text = json.dumps(report, indent=2)
     print(text)
     if args.json:

@@ -67,20 +67,22 @@ EKF_DRIVER = r"""
 #include <stdio.h>
 #include <time.h>
 #include "gt.h"
+#define NZ %(nz)d
 static double work[GT_WORK_SIZE];
 int main(void)
 {
-    double z[12] = {40, 60, 58, 70, 69, 70, 35, 33, 5, -2, 3, 1}, u[6] = {5, 5, 5, 0.85, 20, 20};
-    double y[2] = {70.2, 59.9}, measured[2] = {1, 1}, P[144] = {0}, zf[12], Pf[144], zn[12], Pn[144];
+    double z[NZ] = {40, 60, 58, 70, 69, 70, 35, 33}, u[6] = {5, 5, 5, 0.85, 20, 20};
+    double y[2] = {70.2, 59.9}, measured[2] = {1, 1}, mean[2] = {0, 0}, P[NZ * NZ] = {0};
+    double zf[NZ], Pf[NZ * NZ], zn[NZ], Pn[NZ * NZ], mean_next[2], statistic;
     double checksum = 0.0;
     struct timespec start, stop;
     long k;
-    for (k = 0; k < 12; ++k) P[13 * k] = k < 8 ? 1.0 : 100.0;
+    for (k = 0; k < NZ; ++k) P[(NZ + 1) * k] = k < 8 ? 1.0 : 100.0;
     clock_gettime(CLOCK_MONOTONIC, &start);
     for (k = 0; k < %(n)d; ++k) {
-        gt_ekf_update(z, P, u, y, measured, zf, Pf, zn, Pn, work, GT_WORK_SIZE);
+        gt_ekf_update(z, P, u, y, measured, mean, zf, Pf, zn, Pn, mean_next, &statistic, work, GT_WORK_SIZE);
         z[0] = zn[0] - 1e-9 * (double)(k & 1);  /* keep the loop from being hoisted */
-        checksum += zn[3] + Pn[0];
+        checksum += zn[3] + Pn[0] + statistic;
     }
     clock_gettime(CLOCK_MONOTONIC, &stop);
     printf("%%.6f %%.17g\n", ((stop.tv_sec - start.tv_sec) * 1e9 + (stop.tv_nsec - start.tv_nsec)) / %(n)d.0, checksum);
@@ -90,11 +92,12 @@ int main(void)
 
 
 def c_update_ns(model, build: Path, extra_functions: dict, driver_source: str = DRIVER,
-                iterations: int = ITERATIONS) -> float:
-    """Time one generated-C update (ns) in a compiled C loop."""
+                iterations: int = ITERATIONS, sizes: dict | None = None) -> float:
+    """Time one generated-C update (ns) in a compiled C loop; ``sizes`` fills the driver's other
+    ``%(name)d`` fields (the EKF's state size ``nz``)."""
     generated = generate_c(model, build, dt_s=10.0, extra_functions=extra_functions)
     driver = build / "bench_driver.c"
-    driver.write_text(driver_source % {"n": iterations})
+    driver.write_text(driver_source % {"n": iterations, **(sizes or {})})
     program = build / "bench_driver"
     command = [*find_compiler(), *COMPILE_FLAGS, "-I", str(build), str(driver),
                *map(str, generated.sources), "-o", str(program), "-lm"]
@@ -134,7 +137,7 @@ def main(argv=None) -> int:
     plant = build_model()
     ekf = ExtendedKalmanFilter(plant, dt_s=10.0)
     n_disturbances = len(ekf.disturbance_names)
-    z = np.concatenate([x, [5.0, -2.0, 3.0, 1.0][:n_disturbances]])
+    z = np.concatenate([x, np.resize([5.0, -2.0, 3.0, 1.0], n_disturbances)])
     P = np.diag([1.0] * len(x) + [100.0] * n_disturbances)
 
     def ekf_python_update():
@@ -142,7 +145,8 @@ def main(argv=None) -> int:
         ekf.predict(update.x, update.P, u)
 
     with tempfile.TemporaryDirectory() as folder:
-        ekf_c_ns = c_update_ns(plant, Path(folder), ekf_functions(plant, 10.0, 1), EKF_DRIVER, ITERATIONS // 10)
+        ekf_c_ns = c_update_ns(plant, Path(folder), ekf_functions(plant, 10.0, 1), EKF_DRIVER, ITERATIONS // 10,
+                                {"nz": len(ekf.state_names)})
     result = {
         "benchmark": "kalman_update", "states": design.n_states, "sensors": len(design.output_names),
         "c_update_ns": c_ns,

@@ -33,6 +33,12 @@ from .parameters import ParameterSet
 if TYPE_CHECKING:
     from .machines.interface import MachineInterface
 
+#: Most network structures whose compiled CasADi functions are kept for reuse in one process
+#: (:class:`StructureCache`). A flight with fault identification builds a few dozen models on a
+#: handful of structures (nominal, each catalogue effect, the design variants); a robustness
+#: sweep flies many such flights in one worker process.
+STRUCTURE_CACHE_SIZE = 128
+
 #: A steady state this far below the coldest boundary temperature (K) is the non-physical root of a
 #: thermal runaway: the model has no heat sinks, and no loss cools a machine 50 K below its air.
 COLDEST_STEADY_STATE_BELOW_K = 50.0
@@ -40,6 +46,33 @@ COLDEST_STEADY_STATE_BELOW_K = 50.0
 _CASADI_FUNCTIONS = {"log": ca.log, "exp": ca.exp, "sqrt": ca.sqrt, "Abs": ca.fabs,
                      "Max": ca.fmax, "Min": ca.fmin, "Heaviside": lambda v: ca.if_else(v >= 0, 1, 0),
                      "LossFloor": lambda v: ca.fmax(v, 0)}
+
+
+#: Compiled evaluators of single sympy expressions: (expression, loss_floors) → (the symbols it
+#: reads, function of them). Models derived from one another (an effect adds a heat source or
+#: scales one link) share almost every expression, and writing each evaluator's source
+#: (``sympy.lambdify``) is most of the cost of building a model; a cached evaluator builds the same
+#: CasADi expression from the new model's symbols.
+_EVALUATORS: dict = {}
+#: Bound on the cached evaluators (the cache is emptied when it holds more).
+_MAX_EVALUATORS = 20000
+
+
+def _evaluator(expression, loss_floors: bool | None):
+    """``(symbols, sympy.lambdify(symbols, expression))``, ``symbols`` the free symbols of
+    ``expression`` by name: into CasADi functions (``loss_floors`` True or False, see
+    :func:`to_casadi`) or, for ``None``, into numpy; cached (see :data:`_EVALUATORS`)."""
+    key = (expression, loss_floors)
+    if key not in _EVALUATORS:
+        if len(_EVALUATORS) >= _MAX_EVALUATORS:
+            _EVALUATORS.clear()
+        if loss_floors is None:
+            modules = ["numpy"]
+        else:
+            modules = [_CASADI_FUNCTIONS if loss_floors else {**_CASADI_FUNCTIONS, "LossFloor": lambda v: v}, "math"]
+        symbols = tuple(sorted(expression.free_symbols, key=str))
+        _EVALUATORS[key] = (symbols, sympy.lambdify(symbols, expression, modules=modules))
+    return _EVALUATORS[key]
 
 
 def to_casadi(expressions, symbols, values, loss_floors: bool = True):
@@ -58,10 +91,18 @@ def to_casadi(expressions, symbols, values, loss_floors: bool = True):
     Returns
     -------
     list of casadi.SX
+        One per expression: what ``sympy.lambdify`` of the expression evaluates to, from an
+        evaluator cached across models (:data:`_EVALUATORS`).
     """
-    functions = _CASADI_FUNCTIONS if loss_floors else {**_CASADI_FUNCTIONS, "LossFloor": lambda v: v}
-    function = sympy.lambdify(symbols, list(expressions), modules=[functions, "math"])
-    return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in function(*values)]
+    value_of = dict(zip(symbols, values))
+    results = []
+    for expression in expressions:
+        used, evaluate = _evaluator(sympy.sympify(expression), bool(loss_floors))
+        missing = [s for s in used if s not in value_of]
+        if missing:
+            raise InputError("expression", str(expression), f"reads {', '.join(map(str, missing))}, not given a value")
+        results.append(evaluate(*(value_of[s] for s in used)))
+    return [ca.SX(v) if not isinstance(v, ca.SX) else v for v in results]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -158,6 +199,55 @@ def kron_reduce(G: dict, r: dict, massless) -> list:
     return record
 
 
+class StructureCache:
+    """Compiled CasADi functions by model structure, shared by every model of one process.
+
+    The symbolic model depends on the network, the spec without its onsets and the parameter
+    names and symbols, not on the parameter values (:meth:`ThermalModel.__init__`). Models made
+    by :meth:`ThermalModel.with_network` (every effect, every design variant, every candidate of
+    an identification) get a new network object each time; when it equals one already compiled,
+    its functions are reused instead of compiled again (sympy printing, CasADi Jacobians: about
+    0.3-1 s per model). At most ``size`` structures are kept, the least recently used dropped.
+
+    Parameters
+    ----------
+    size : int
+        Structures kept.
+    """
+
+    def __init__(self, size: int = STRUCTURE_CACHE_SIZE):
+        if int(size) != size or size < 1:
+            raise InputError("structure cache size", size, "must be an integer >= 1")
+        self.size = int(size)
+        self._entries: list[tuple[int, tuple, dict]] = []  # (hash of the network, key, functions), newest last
+        self.hits = self.misses = 0
+
+    @staticmethod
+    def key(network: Network, spec: "ModelSpec", parameters: ParameterSet) -> tuple:
+        """What the compiled functions depend on: network, spec without onsets, parameter names
+        and symbols in order."""
+        names = tuple(parameters)
+        return network, spec.structure(), names, tuple(parameters[n].symbol for n in names)
+
+    def shared(self, key: tuple) -> dict:
+        """The dict of compiled functions for ``key`` (an empty one, kept, when it is new)."""
+        network_hash = hash(key[0])
+        for i, (known_hash, known, shared) in enumerate(self._entries):
+            if known_hash == network_hash and known == key:
+                self._entries.append(self._entries.pop(i))
+                self.hits += 1
+                return shared
+        self.misses += 1
+        shared: dict = {}
+        self._entries.append((network_hash, key, shared))
+        del self._entries[:-self.size]
+        return shared
+
+
+#: The process's :class:`StructureCache`.
+STRUCTURES = StructureCache()
+
+
 class ThermalModel:
     """A thermal network with numeric parameters, compiled to CasADi functions.
 
@@ -191,11 +281,13 @@ class ThermalModel:
         self.output_names = list(spec.interface.output_names)
         self._discrete: dict = {}
         # the symbolic model depends on network and parameter order only, not on the values:
-        # a model that differs from another only in parameter values shares its CasADi functions
+        # a model that differs from another only in parameter values shares its CasADi functions,
+        # and so does one on an equal network built again (StructureCache)
         same_structure = (_share_from is not None and _share_from.network is network
                           and _share_from.spec.structure() == spec.structure()
                           and _share_from.parameter_names == self.parameter_names)
-        self._shared: dict = _share_from._shared if same_structure else {}
+        self._shared: dict = (_share_from._shared if same_structure else
+                              STRUCTURES.shared(StructureCache.key(network, spec, parameters)))
         for output, node in spec.sensors.items():
             network.node(node)
         for node, name in spec.boundary_inputs.items():
@@ -236,7 +328,22 @@ class ThermalModel:
         labelled += [(f"resistance of air stream {s.upstream}->{s.downstream} ({s.label})", s.resistance)
                      for s in net.air_streams]
         symbols = [self.parameters[n].symbol for n in self.parameter_names]
-        return labelled, sympy.lambdify(symbols, [expr for _, expr in labelled], modules=["numpy"])
+        evaluators = [_evaluator(sympy.sympify(expr), None) for _, expr in labelled]
+
+        def evaluate(*values):
+            value_of = dict(zip(symbols, values))
+            return [function(*(value_of[s] for s in used)) for used, function in evaluators]
+
+        return labelled, evaluate
+
+    def heat_capacities(self) -> np.ndarray:
+        """Heat capacity (J/K) of every state node, in ``state_names`` order, from the compiled
+        element values (substituting the parameters into the sympy expressions takes about 1 s)."""
+        labelled, evaluate = self._shared_value("elements", self._element_values)
+        values = np.asarray(evaluate(*self.p0), dtype=float)
+        by_node = {what[len("capacitance of node "):]: value for (what, _), value in zip(labelled, values)
+                   if what.startswith("capacitance of node ")}
+        return np.array([by_node[name] for name in self.state_names])
 
     def _check_physical(self) -> None:
         labelled, evaluate = self._shared_value("elements", self._element_values)

@@ -11,6 +11,7 @@ from genthermal.diagnose.catalogue import Catalogue
 from genthermal.diagnose.discover import diagnose
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.experiment import separating_experiment
+from genthermal.diagnose.fitter import OnsetFitter
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
 from genthermal.diagnose.open_search import (conductance_effect, effect_code, heat_flow_effect, heat_flow_library,
                                              node_groups)
@@ -120,10 +121,58 @@ def test_open_search_finds_form_and_group_and_writes_an_effect(plant_model, disc
                                                                       rel=1e-5)
 
 
+#: Two library terms in different node groups with different onsets: an excitation-dependent heat
+#: flow into the stator iron from 0.8 h and a constant heat flow into the frame from 2.3 h.
+TWO_TERMS = [Injection("heat_I_exc2_stator_iron", {"k_heat_I_exc2_stator_iron": 25.0}, 0.8 * 3600),
+             Injection("heat_constant_frame", {"k_heat_constant_frame": 150.0}, 2.3 * 3600)]
+
+
+def test_open_search_adds_a_second_term_in_another_node_group(plant_model, discovery):
+    """Of the iron terms alone, ΣI² fits best (the excitation follows the load); the pair search
+    picks the frame term as the partner that explains what the best single leaves, then swaps the
+    iron term for the form that explains its part better: both terms, groups, forms and onsets."""
+    library = heat_flow_library(plant_model)
+    case = make_hidden_effect_case(TWO_TERMS, mission="thesis_fig_7_7", dt_s=DT_S, seed=5, plant=plant_model,
+                                   catalogue=library)
+    result = discovery.with_settings(candidates=Catalogue.of(library), design_experiment=False).fit(
+        plant_model, case.data)
+    found = {f.effect: f for f in result.found}
+    assert set(found) == {i.effect for i in TWO_TERMS}, result.verdict
+    for injection in TWO_TERMS:
+        assert abs(found[injection.effect].onset_s - injection.onset_s) <= 600.0
+        (name, value), = injection.values.items()
+        assert found[injection.effect].values[name] == pytest.approx(value, rel=0.1)
+    assert result.iterations[0].rmse_after <= 1.5 * SENSOR_NOISE_STD and not result.unexplained
+    # one term alone leaves many times the noise: the second term is needed
+    assert result.iterations[0].ranked[0].rmse_after > 5 * SENSOR_NOISE_STD
+
+
+def test_residual_screen_prefers_the_missing_shape_over_a_look_alike():
+    """The screen scores what a candidate adds beyond the chosen effect's own shape."""
+    from genthermal.diagnose.joint import screen
+    from genthermal.diagnose.search import Candidate, OnsetResponses
+
+    time = np.linspace(0.0, 1.0, 50)
+    chosen_shape, missing_shape = np.vstack([time, time]), np.vstack([np.sin(6 * time), 0 * time])
+
+    def candidate(name, shape):
+        return Candidate(name, {}, 0.0, 0, 1.0, 1, 1.0, 1.0, 0.0, {}, np.zeros((2, 50)),
+                         onset_responses=OnsetResponses(np.array([0]), shape[None]))
+
+    other_shape = np.vstack([0 * time, np.cos(3 * time)])
+    look_alike, missing = candidate("look_alike", chosen_shape + 0.01 * other_shape), candidate("missing", missing_shape)
+    residual = 2.0 * chosen_shape + missing_shape  # what a refit of the chosen effect takes, and what it cannot
+    assert [c.effect for c in screen(residual, [look_alike, missing], [chosen_shape])] == ["missing", "look_alike"]
+    assert [c.effect for c in screen(residual, [look_alike, missing])][0] == "look_alike"
+
+
 @pytest.mark.parametrize("call, field", [
     (lambda model: heat_flow_effect("rotor", ("rotor",), "I_cubed"), "form"),
     (lambda model: conductance_effect("shaft_bearing"), "conductance"),
     (lambda model: diagnose(model, None, effects=["no_such_effect"]), "effects"),
+    (lambda model: OnsetFitter(pair_starts=(("coolant_flow_reduction", -60.0, "end_winding_stray_loss", 0.0),)),
+     "pair_starts"),
+    (lambda model: make_hidden_effect_case([Injection("heat_I2_rotor", {}, 0.0)], catalogue={}), "effect"),
 ])
 def test_bad_inputs_name_the_field(call, field, plant_model):
     with pytest.raises(InputError) as error:

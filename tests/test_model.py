@@ -177,3 +177,48 @@ def test_linear_step_is_exact_zoh(design_model):
     assert dm.exact
     assert design_model.discretise(10.0) is dm  # cached per step length
     assert dm.A.shape == (8, 8) and dm.B.shape == (8, 6)
+
+
+def test_equal_networks_built_again_share_compiled_functions_not_values(plant_model):
+    """Two models of one effect with different values: one compilation (StructureCache), their
+    own parameter values (a blockage of 0.3 heats more than one of 0.8)."""
+    from genthermal.model import StructureCache
+
+    mild = plant_model.with_effect("coolant_flow_reduction", k_flow=0.8)
+    severe = plant_model.with_effect("coolant_flow_reduction", k_flow=0.3)
+    assert severe.network is not mild.network and severe.network == mild.network
+    assert severe._shared is mild._shared
+    u = plant_model.input_vector(**RATED)
+    x = np.full(plant_model.n_states, 80.0)
+    assert np.all(severe.rhs(x, u) >= mild.rhs(x, u)) and np.any(severe.rhs(x, u) > mild.rhs(x, u) + 1e-6)
+    cache = StructureCache(size=1)
+    first = cache.shared(StructureCache.key(mild.network, mild.spec, mild.parameters))
+    assert cache.shared(StructureCache.key(severe.network, severe.spec, severe.parameters)) is first
+    cache.shared(StructureCache.key(plant_model.network, plant_model.spec, plant_model.parameters))
+    assert cache.shared(StructureCache.key(mild.network, mild.spec, mild.parameters)) is not first  # evicted
+    assert (cache.hits, cache.misses) == (1, 3)
+    with pytest.raises(Exception, match="structure cache size"):
+        StructureCache(size=0)
+
+
+def test_heat_capacities_are_the_capacitance_expressions_evaluated(plant_model):
+    values = {plant_model.parameters[n].symbol: plant_model.parameters.value(n) for n in plant_model.parameter_names}
+    expected = [float(plant_model.network.node(n).capacitance.subs(values)) for n in plant_model.state_names]
+    np.testing.assert_allclose(plant_model.heat_capacities(), expected, rtol=1e-12)
+
+
+def test_to_casadi_reuses_evaluators_and_names_an_unknown_symbol():
+    """Evaluators are cached per expression across models: the same expression evaluates with
+    each call's own values; an expression reading a symbol given no value is refused by name."""
+    import casadi as ca
+
+    from genthermal.errors import InputError
+    from genthermal.model import to_casadi
+
+    a, b = sympy.symbols("a_test b_test")
+    expression = a ** 2 / (1 + b)
+    first = to_casadi([expression], [a, b], [ca.SX(3.0), ca.SX(1.0)])[0]
+    second = to_casadi([expression], [b, a], [ca.SX(0.0), ca.SX(2.0)])[0]
+    assert float(ca.evalf(first)) == pytest.approx(4.5) and float(ca.evalf(second)) == pytest.approx(4.0)
+    with pytest.raises(InputError, match="b_test"):
+        to_casadi([expression], [a], [ca.SX(1.0)])

@@ -8,6 +8,7 @@ from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.mission import Mission
 from genthermal.schedule.closed_loop import ManagerSettings, fly
+from genthermal.schedule.monitor import FLIGHT_EKF_SETTINGS
 from genthermal.schedule.detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
@@ -24,7 +25,7 @@ def _mission(faults):
 
 
 def test_extra_heat_flow_combines_constant_and_load_scaled_disturbances(plant_model, design_model):
-    ekf = ExtendedKalmanFilter(plant_model, 10.0)
+    ekf = ExtendedKalmanFilter(plant_model, 10.0, **FLIGHT_EKF_SETTINGS)
     nx = plant_model.n_states
     z = np.zeros(len(ekf.state_names))
     z[nx:] = [5.0, 1.0, 20.0, 4.0]  # q_winding, q_iron, q_load_winding, q_load_iron
@@ -35,6 +36,9 @@ def test_extra_heat_flow_combines_constant_and_load_scaled_disturbances(plant_mo
     np.testing.assert_allclose(variance, [1.0 + 0.25**2 + 2 * 0.25 * 0.5, 1.0 + 0.25**2])
     with pytest.raises(InputError, match="extended Kalman"):
         extra_heat_flow(KalmanFilter(design_model, 10.0), z, P, 0.25)
+    estimate_filter = ExtendedKalmanFilter(plant_model, 10.0)  # coolant-scaled states: not for the detector
+    with pytest.raises(InputError, match="state-dependent"):
+        extra_heat_flow(estimate_filter, np.zeros(len(estimate_filter.state_names)), None, 0.25)
 
 
 def test_statistic_compares_with_the_healthy_median_and_the_cusum_is_one_sided():

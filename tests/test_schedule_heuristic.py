@@ -83,3 +83,17 @@ def test_forward_sweep_handles_each_segment(faulty, healthy):
     result = heuristic_plan(p)
     assert result.feasible and result.peak_C <= limit + 1e-6
     assert result.schedule.displaced_A.shape == (2, 2)
+
+
+@pytest.mark.parametrize("n_steps", [0, 1, 2, 5, 64, 361])
+def test_affine_states_is_the_step_by_step_recurrence(n_steps):
+    from genthermal.schedule.plan import affine_states
+
+    rng = np.random.default_rng(n_steps)
+    E = 0.9 * np.eye(4) + 0.02 * rng.random((4, 4))  # stable, coupled, not symmetric
+    forced, x0 = rng.normal(size=(n_steps, 4)), rng.normal(size=4) * 50.0
+    expected, state = np.empty((n_steps, 4)), x0
+    for i in range(n_steps):
+        state = E @ state + forced[i]
+        expected[i] = state
+    np.testing.assert_allclose(affine_states(E, forced, x0), expected, rtol=1e-12, atol=1e-10)

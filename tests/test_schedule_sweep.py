@@ -21,7 +21,8 @@ def test_cases_cover_the_grid_and_differ_from_the_planning_model():
 
 
 def run(breach, rest, delay=None, alarms=0):
-    return {"breach_s": breach, "added_rest_s": rest, "detect_delay_s": delay, "false_alarms": alarms}
+    return {"status": "ok", "wall_s": 1.0, "breach_s": breach, "added_rest_s": rest, "detect_delay_s": delay,
+            "false_alarms": alarms}
 
 
 def test_summary_keys_and_the_best_baseline_ratio():
@@ -30,14 +31,52 @@ def test_summary_keys_and_the_best_baseline_ratio():
                                                "optimal": run(20, 150, 300.0)}},
         {"name": "b", "faulty": False, "runs": {"heuristic": run(0, 0), "engineer": run(0, 0),
                                                 "optimal": run(0, 0, None, 1)}},
+        {"name": "c", "faulty": True, "runs": {"heuristic": run(0, 0), "engineer": run(0, 4.0),  # rounding, no rest
+                                               "optimal": run(0, 120, 600.0)}},
     ]
     summary = summarise(records, ("heuristic", "engineer", "optimal"))
-    assert summary["robustness"]["cases"] == 2
+    assert summary["robustness"]["cases"] == 3
     assert summary["robustness"]["breach_s"]["optimal"] == 20
-    assert summary["robustness"]["breach_free_fraction"]["optimal"] == pytest.approx(0.5)
-    assert summary["rest_vs_best_baseline"] == [pytest.approx(0.5)]  # against the engineer, not the thesis heuristic
-    assert summary["detect_delay_s"]["median"] == 300.0
+    assert summary["robustness"]["breached_cases"]["optimal"] == {"a": 20}
+    assert summary["robustness"]["breach_free_fraction"]["optimal"] == pytest.approx(2 / 3)
+    rest = summary["rest_vs_best_baseline"]
+    assert rest["per_case"][0] == {"case": "a", "optimal_rest_s": 150.0, "best_baseline": "engineer",
+                                   "best_baseline_rest_s": 300.0, "ratio": pytest.approx(0.5)}  # not the thesis heuristic
+    assert rest["per_case"][1]["ratio"] is None and rest["cases_optimal_rests_more"] == ["c"]
+    assert rest["mean_ratio"] == pytest.approx(270 / 300)
+    assert summary["detect_delay_s"]["median"] == 450.0 and summary["detect_delay_s"]["max"] == 600.0
+    assert {"case": "a", "scheduler": "heuristic"} in summary["detect_delay_s"]["not_detected"]
     assert summary["false_alarms"]["on_healthy_flights"] == 1
+
+
+def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
+    import genthermal.schedule.closed_loop as closed_loop
+    import genthermal.schedule.sweep as sweep
+
+    document = robustness_case(6)  # 2 generators, 4.5 h
+
+    def broken(system, scheduler, settings):
+        raise ZeroDivisionError("division by zero in a planner")
+    monkeypatch.setattr(closed_loop, "fly", broken)
+    failed = sweep.fly_flight(document, "engineer")
+    assert failed["status"] == "error" and "ZeroDivisionError" in failed["error"] and failed["wall_s"] >= 0
+    monkeypatch.undo()
+    stopped = sweep.fly_flight(document, "engineer", cpu_limit_s=1e-3)
+    assert stopped["status"] == "timeout" and "limit 0.001 s" in stopped["error"]
+    records = sweep.case_records([document, robustness_case(9)], [failed, stopped], ("engineer", "optimal"))
+    runs = records[0]["runs"]
+    assert runs["engineer"]["status"] == "timeout" and runs["optimal"]["status"] == "unfinished"
+    summary = summarise(records, ("engineer", "optimal"))
+    assert summary["robustness"]["breach_free_fraction"] == {"engineer": 0.0, "optimal": 0.0}
+    assert {(f["case"], f["scheduler"], f["status"]) for f in summary["robustness"]["failed_flights"]} >= {
+        (document["name"], "engineer", "timeout"), (document["name"], "optimal", "unfinished")}
+
+
+def test_cpu_limit_must_be_positive():
+    from genthermal.schedule.closed_loop import ManagerSettings
+
+    with pytest.raises(ValueError, match="cpu_limit_s"):
+        ManagerSettings(cpu_limit_s=0.0)
 
 
 def test_sweep_rejects_an_unknown_scheduler(tmp_path, capsys):
@@ -54,8 +93,25 @@ def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsy
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer"]) == 0
     printed = json.loads(capsys.readouterr().out)
     assert printed["cases"] == records and printed["robustness"]["cases"] == 1
+    assert printed["provenance"]["command"].startswith("genthermal sweep --cases 1 --schedulers engineer")
     target = tmp_path / "s.json"
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target)]) == 0
     assert json.loads(target.read_text())["cases"] == records
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target)]) == 2  # no --force
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer", "--json", str(target), "--force"]) == 0
+
+
+def test_a_flight_without_a_re_plan_is_every_schedulers_flight():
+    """The scheduler is called only to re-plan: a flight that never re-planned, flown again with
+    another scheduler, is the same flight (the sweep then reuses it)."""
+    import genthermal.schedule.sweep as sweep
+
+    document = {"name": "case900:healthy:2gen:1.0h", "actions": [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 5)],
+                "generators": {"count": 2, "plant_mismatch": {"h_end_air": 1.2, "R0": 0.8}}, "faults": []}
+    first, second = sweep.fly_case(document, ("heuristic", "engineer"))
+    assert first["status"] == "ok" and first["summary"]["replans"] == 0
+    assert second["same_flight_as"] == "heuristic" and second["summary"]["scheduler"] == "engineer"
+    flown = sweep.fly_flight(document, "engineer")
+    assert flown["summary"] == second["summary"]
+    runs = sweep.case_records([document], [first, second], ("heuristic", "engineer"))[0]["runs"]
+    assert runs["engineer"]["same_flight_as"] == "heuristic" and "same_flight_as" not in runs["heuristic"]

@@ -168,6 +168,7 @@ def print_summary(report: dict, result) -> None:
     print("\nestimated unmeasured temperatures at the end [°C]: "
           + ", ".join(f"{node} {value:.1f}" for node, value in unmeasured))
     if result.disturbance_names:
-        print("estimated disturbance heat flows at the end [W; q_load_*: W at rated current, scaled by load²]: "
+        print("estimated disturbances at the end [W; q_load_*: W at rated current, scaled by load²; "
+              "q_coolant_*: W at 50 K above the coolant inlet; dT_inlet: K]: "
               + ", ".join(f"{name} {value:+.1f}" for name, value in zip(result.disturbance_names,
                                                                         result.disturbances[-1])))

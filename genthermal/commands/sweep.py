@@ -8,10 +8,16 @@ flown with each scheduler on Dask — a local cluster by default, or an existing
 from __future__ import annotations
 
 import json
+import math
+import shlex
+import subprocess
+import time
+from pathlib import Path
 
 from ..errors import InputError
 from ..outputs import finite_document, report_json
 from ..schedule.closed_loop import SCHEDULERS
+from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S
 
 
 def register(subparsers) -> None:
@@ -27,6 +33,11 @@ def register(subparsers) -> None:
     parser.add_argument("--json", metavar="FILE", help="write the summary and every case to FILE as well "
                         "(default: the whole document goes to standard output)")
     parser.add_argument("--force", action="store_true", help="replace the --json file if it exists")
+    parser.add_argument("--flight-limit-s", default=DEFAULT_FLIGHT_CPU_LIMIT_S, type=float,
+                        help="processor-time limit of one flight, s: a flight past it is recorded as a timeout "
+                             f"(default {DEFAULT_FLIGHT_CPU_LIMIT_S:g})")
+    parser.add_argument("--timeout-s", type=float, help="wall-clock limit of the whole sweep, s: flights not "
+                        "done by then are recorded as unfinished (default: none)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
@@ -43,9 +54,18 @@ def run(args) -> int:
         raise InputError("--cases", args.cases, "must be a whole number >= 1")
     if args.workers < 1:
         raise InputError("--workers", args.workers, "must be a whole number >= 1")
+    for option, value in (("--flight-limit-s", args.flight_limit_s), ("--timeout-s", args.timeout_s)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise InputError(option, value, "must be a number of seconds > 0")
     documents = [robustness_case(i, args.seed) for i in range(args.cases)]
-    records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress)
-    report = {**summarise(records, schedulers), "cases": records}
+    started = time.perf_counter()
+    records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress,
+                        args.flight_limit_s, args.timeout_s)
+    report = {**summarise(records, schedulers),
+              "provenance": {"command": equivalent_command(args),
+                             "commit": source_commit(), "workers": None if args.cluster else args.workers,
+                             "cluster": args.cluster, "seed": args.seed, "sweep_wall_s": time.perf_counter() - started},
+              "cases": records}
     if not args.json:
         print(json.dumps(finite_document(report), indent=2, default=str, allow_nan=False))
         return 0
@@ -53,3 +73,27 @@ def run(args) -> int:
                      allow_nan=False))
     report_json(args.json, report)
     return 0
+
+
+def source_commit() -> str | None:
+    """The git commit of the genthermal source tree run (with ``+dirty`` when it has uncommitted
+    changes), or None outside a git work tree."""
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True,
+                                check=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+                               capture_output=True, text=True, check=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return commit + ("+dirty" if dirty else "")
+
+
+def equivalent_command(args) -> str:
+    """The ``genthermal sweep`` command line that runs this sweep again (every option spelt out)."""
+    words = ["genthermal", "sweep", "--cases", str(args.cases), "--schedulers", args.schedulers,
+             "--seed", str(args.seed), "--flight-limit-s", f"{args.flight_limit_s:g}"]
+    words += ["--cluster", args.cluster] if args.cluster else ["--workers", str(args.workers)]
+    words += ["--timeout-s", f"{args.timeout_s:g}"] if args.timeout_s is not None else []
+    words += ["--json", args.json, "--force"] if args.json else []
+    return " ".join(shlex.quote(w) for w in words)

@@ -23,6 +23,7 @@ of the same length builds them once. The memo's keys hold the model object itsel
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable, Sequence
 
 import numpy as np
@@ -36,6 +37,7 @@ from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosi
                        choose_pair, explain, explain_pair, is_significant, rival, series_for)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
+from .joint import JointCandidate
 from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
@@ -170,7 +172,11 @@ class Discovery:
         names = list(dict.fromkeys([*_explanations(chosen), *_explanations(other)]))
         self._report(f"look-alikes {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))}: "
                      "refitting them with one winding node per phase sensor")
-        resolved = self.with_settings(candidates=self.candidates.only(names), phases="resolved", iterate=False)
+        # pairs warm-started from their fits on the lumped winding (the same record, other sensors)
+        starts = tuple((a, pair.onsets_s[a], b, pair.onsets_s[b]) for pair in (chosen, other)
+                       if isinstance(pair, JointCandidate) for a, b in [pair.effects])
+        resolved = self.with_settings(candidates=self.candidates.only(names), phases="resolved", iterate=False,
+                                      fitter=dataclasses.replace(self.fitter, pair_starts=starts))
         diagnosis = resolved.fit(model, measured, dt_s=dt_s)
         if diagnosis.verdict == "none" or rival(diagnosis.iterations[0]) is not None:
             return None
@@ -284,6 +290,11 @@ class Discovery:
                                   viewed.spec.interface)
         self._report(residual["summary"])
         experiment, other = None, rival(iterations[0])
+        if other is not None and not residual["level_ok"]:
+            # neither explanation accounts for the data: separating them would tell nothing
+            self._report(f"{' + '.join(_explanations(other))} fits about as well, but neither explains the data: "
+                         "no look-alike test")
+            other = None
         phase_sensor_faulty = screen is not None and any(h.evidence == "redundancy" for h in screen.found)
         # a phase sensor already claimed faulty would be refitted as a phase's heat: no tie-break on it
         if other is not None and not phase_sensor_faulty and self._can_resolve_phases(model, measured, view):

@@ -34,13 +34,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ..design import linear_design_model
-from ..effects import CATALOGUE, apply_effect, get_effect
+from ..effects import CATALOGUE, Effect, apply_effect, get_effect
 from ..errors import InputError
 from ..machines import build_model
 from ..mission import load_mission
@@ -120,10 +120,12 @@ def plant_for(effect: str | None, nonlinear: ThermalModel | None = None) -> Ther
     return linear_design_model(nonlinear)
 
 
-def random_injection(effect: str, duration_s: float, rng: np.random.Generator) -> Injection:
-    """Draw clearly active values and an onset for ``effect`` (see the module docstring)."""
+def random_injection(effect: str, duration_s: float, rng: np.random.Generator,
+                     catalogue: Mapping[str, Effect] | None = None) -> Injection:
+    """Draw clearly active values and an onset for ``effect`` (looked up in ``catalogue``, default
+    the registered one; see the module docstring)."""
     values = {}
-    for p in get_effect(effect).parameters:
+    for p in (get_effect(effect) if catalogue is None else catalogue[effect]).parameters:
         u = rng.uniform(*ACTIVITY_RANGE)
         typical = p.typical if p.typical is not None else p.upper
         value = typical ** u if p.neutral == 1.0 else p.neutral + u * (typical - p.neutral)
@@ -133,12 +135,16 @@ def random_injection(effect: str, duration_s: float, rng: np.random.Generator) -
 
 
 def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.DataFrame, seed: int,
-           noise_var=THESIS_NOISE_VARIANCE_K2, phase_resolved: bool = False) -> pd.DataFrame:
+           noise_var=THESIS_NOISE_VARIANCE_K2, phase_resolved: bool = False,
+           catalogue: Mapping[str, Effect] | None = None) -> pd.DataFrame:
     """Noisy record of ``plant`` on ``inputs`` with ``injections`` switched on at their onsets.
 
     With ``phase_resolved``, the plant's slot winding is one node per phase
     (:func:`genthermal.diagnose.phase_winding.phase_resolved`, taken after the effects) and each
-    ``T_winding_<phase>`` column reads its own phase node."""
+    ``T_winding_<phase>`` column reads its own phase node. The injected effects are looked up by
+    name in ``catalogue`` (default: the registered catalogue), e.g. the open-search library
+    (:func:`genthermal.diagnose.open_search.heat_flow_library`)."""
+    catalogue = CATALOGUE if catalogue is None else catalogue
     dt_s = float(inputs["time_s"].iloc[1] - inputs["time_s"].iloc[0])
     # the outlet PT100 is a channel of the iron PT100s kind: it shares their variance
     record = synthesize(plant, inputs, dt_s=dt_s, seed=seed, noise_var=(*noise_var, noise_var[-1]))
@@ -147,7 +153,7 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
     view = split_by_phase if phase_resolved else (lambda model: model)
     switches, model = [], plant
     for injection in sorted(injections, key=lambda i: i.onset_s):
-        model = apply_effect(model, injection.effect, provenance="assumed", source="hidden-effect test data",
+        model = apply_effect(model, catalogue[injection.effect], provenance="assumed", source="hidden-effect test data",
                              **injection.values)
         switches.append((float(inputs["time_s"].iloc[0] + injection.onset_s), view(model)))
     healthy = simulate(plant, inputs)  # what the record was synthesized from
@@ -166,7 +172,8 @@ def inject(plant: ThermalModel, injections: Sequence[Injection], inputs: pd.Data
 def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "random",
                             mission: str = "thesis_fig_7_7", dt_s: float = 10.0, seed: int = 0,
                             noise_var=THESIS_NOISE_VARIANCE_K2, plant: ThermalModel | None = None,
-                            unbalance: float = 0.0, phase_resolved: bool = False) -> HiddenEffectCase:
+                            unbalance: float = 0.0, phase_resolved: bool = False,
+                            catalogue: Mapping[str, Effect] | None = None) -> HiddenEffectCase:
     """Build a hidden-effect test case.
 
     Parameters
@@ -191,6 +198,9 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
         Simulate the plant with one slot-winding node per phase
         (:mod:`genthermal.diagnose.phase_winding`): each phase sensor reads its own phase, so an
         effect in one phase (a shorted turn) shows as a spread between the phase readings.
+    catalogue : mapping of str to Effect, optional
+        Where the effect names are looked up (default: the registered catalogue); the open-search
+        library gives records with library terms (their Injections given with values).
     """
     rng = np.random.default_rng(seed)
     nonlinear = build_model() if plant is None else plant
@@ -203,17 +213,20 @@ def make_hidden_effect_case(effects: Sequence[str | Injection] | str | None = "r
         effects = [effects]
     names = [e.effect if isinstance(e, Injection) else e for e in effects]
     for name in names:
-        get_effect(name)
+        if catalogue is None:
+            get_effect(name)
+        elif name not in catalogue:
+            raise InputError("effect", name, f"not in the catalogue given: {', '.join(catalogue)}")
     if plant is None:
-        plant = plant_for(names[0] if names else None, nonlinear)
+        plant = plant_for(names[0] if names else None, nonlinear) if catalogue is None else nonlinear
     inputs = load_mission(mission).to_inputs(dt_s)
     if unbalance:
         elapsed = inputs["time_s"] - inputs["time_s"].iloc[0]
         inputs[plant.spec.interface.generator.phase_inputs[0]] *= 1.0 + unbalance * ((elapsed % UNBALANCE_PERIOD_S) >= UNBALANCE_PERIOD_S / 2)
     duration = float(inputs["time_s"].iloc[-1] - inputs["time_s"].iloc[0])
-    injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng) for e in effects]
+    injections = [e if isinstance(e, Injection) else random_injection(e, duration, rng, catalogue) for e in effects]
     for injection in injections:
         if not 0.0 <= injection.onset_s <= duration:
             raise InputError(f"{injection.effect}.onset_s", injection.onset_s, f"must lie in [0, {duration:g}] s")
-    data = inject(plant, injections, inputs, seed, noise_var, phase_resolved)
+    data = inject(plant, injections, inputs, seed, noise_var, phase_resolved, catalogue)
     return HiddenEffectCase(data, injections, plant, mission, float(dt_s), seed, tuple(noise_var), unbalance)

@@ -6,26 +6,37 @@ an end-winding loss present from the start warms the winding too), and the secon
 undo it. Here every pair of the best single effects is fitted as one model:
 
 1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
-   effect with each of the next ones up to rank :data:`PARTNER_RANKS` (pruning: an effect that
-   explains little alone belongs to the answer mostly next to the effect that dominates the
-   record, as a slow insulation change under a strong excitation-dependent iron loss does; the
-   bound keeps a library of twenty terms at a dozen pairs);
+   effect with the :data:`PARTNER_RANKS` − :data:`PAIR_POOL` others that explain most of what it
+   leaves (:func:`residual_partners`: a forward-stepwise screen, orthogonal matching pursuit over
+   what each effect does from each onset, made orthogonal to the best effect's own change). An
+   effect that explains little alone belongs to the answer mostly next to the effect that
+   dominates the record, as a slow insulation change under a strong excitation-dependent iron loss
+   does; in a library of twenty terms the next ranks alone are look-alikes of the best (the same
+   form into a neighbouring node group), and the screen passes over them;
 2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
    the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
    effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
-   neighbour: the grid only has to find the basin);
-3. coordinate descent over the two onsets, each searched over the whole record (grid, then golden
-   section) with both effects' values refitted, then within one grid step until neither moves;
-   started from the :data:`_DESCENTS` best of: the best grid point, both onsets where each effect
-   was fitted alone, and each of those with the other effect present from the start. The onset
-   landscape of a pair has valleys: fitted alone, a blockage from 80 min takes an onset that lets
-   it absorb a stray loss present from the start, and from there, descent over one onset at a
-   time cannot reach the truth; starting from "this onset, the other effect from the start"
-   does;
+   neighbour: the grid only has to find the basin), and at both onsets where each effect was
+   fitted alone and each of those with the other effect present from the start;
+3. for the :data:`DESCENDED_PAIRS` pairs of least RSS at their best starting point: coordinate
+   descent over the two onsets, each searched over the whole record (grid, then golden section)
+   with both effects' values refitted, then within one grid step until neither moves; started
+   from the :data:`_DESCENTS` best starting points. The onset landscape of a pair has valleys:
+   fitted alone, a blockage from 80 min takes an onset that lets it absorb a stray loss present
+   from the start, and from there, descent over one onset at a time cannot reach the truth;
+   starting from "this onset, the other effect from the start" does. The other pairs keep their
+   best starting point (the descent costs about four times the grid);
 4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
    the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
    stay on the decimated grid, a resolution of one minute); the others are scored on the full
-   series at their values from the decimated fit.
+   series at their values from the decimated fit;
+5. when the best pair is near the answer but not at it (between
+   :data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` and
+   :data:`~genthermal.diagnose.residual.LEVEL_FACTOR` times the noise), each member is swapped for
+   the :data:`SWAPS_PER_MEMBER` effects that best explain its own part plus what the pair leaves
+   (:meth:`PairSearch.swaps`), and those pairs go through steps 2-4: of the heat flows into the
+   iron, ΣI² may fit best alone where the truth is I_exc², and only next to the second term does
+   the difference show.
 
 The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
 effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
@@ -46,6 +57,7 @@ from ..errors import InputError
 from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
 from .parallel import map_in_workers
+from .residual import LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR
 from .trajectory import ParametricSimulator
 
 #: Single effects (best ΔBIC first) whose pairs are fitted.
@@ -56,8 +68,13 @@ PARTNER_RANKS = 8
 PAIR_GRID = 5
 #: Levenberg-Marquardt iterations per grid point (warm-started: the grid only locates the basin).
 _GRID_ITERATIONS = 2
+#: Pairs (least RSS at their best starting point first) whose onsets are refined by the descent of
+#: step 3; the others keep their best starting point (the grid and the onsets fitted alone).
+DESCENDED_PAIRS = 3
 #: Pairs (least RSS on the decimated series first) whose values are refitted on the full series.
 POLISHED_PAIRS = 3
+#: Replacements tried for each member of the best pair when it is near the answer (:meth:`PairSearch.swaps`).
+SWAPS_PER_MEMBER = 2
 #: Rounds of coordinate descent over the two onsets (the first over the whole record).
 _DESCENT_ROUNDS = 3
 #: Starting points of the descent kept (least RSS first) among the best grid point, both onsets
@@ -120,6 +137,69 @@ def _start(scaling, value: float, parameter) -> float:
     return float(np.clip(value, scaling.lower, scaling.upper))
 
 
+def _coarse_rows(search: EffectSearch, full: np.ndarray) -> np.ndarray:
+    """``full`` (n_outputs, N) on the full series at the samples of the decimated series."""
+    factor = int(round(search.coarse.dt_s / search.series.dt_s))
+    return full[:, ::factor][:, :search.coarse.time_s.size]
+
+
+def screen(residual: np.ndarray, candidates: Sequence[Candidate], directions: Sequence[np.ndarray] = ()) -> list:
+    r"""``candidates`` ordered by how much of ``residual`` each removes to first order: orthogonal
+    matching pursuit over their onset responses.
+
+    With :math:`d_j` the change a candidate makes switched on at grid onset :math:`j`
+    (:attr:`~genthermal.diagnose.search.Candidate.onset_responses`), made orthogonal to
+    ``directions`` (what a refit of the effects already chosen absorbs), its score is
+    :math:`\max_j (r\cdot d_j)^2 / (d_j\cdot d_j)`, the share of :math:`\lVert r\rVert^2` it
+    removes. Effects alike in shape to a chosen one score high alone but low here. Candidates
+    without onset responses come last, in their order.
+
+    Parameters
+    ----------
+    residual : numpy.ndarray
+        Measured minus modelled outputs on the decimated series, K, (n_outputs, N); NaN where a
+        sensor has no sample.
+    candidates : sequence of Candidate
+    directions : sequence of numpy.ndarray
+        Output changes (n_outputs, N) on the decimated series to make the responses orthogonal to.
+    """
+    valid = np.isfinite(residual)
+    r = np.where(valid, residual, 0.0).ravel()
+    basis = []
+    for direction in directions:
+        v = np.where(valid, np.nan_to_num(direction), 0.0).ravel()
+        for u in basis:
+            v = v - (v @ u) * u
+        if np.linalg.norm(v) > 1e-12:
+            basis.append(v / np.linalg.norm(v))
+
+    def score(candidate: Candidate) -> float:
+        if candidate.onset_responses is None:
+            return -math.inf
+        changes = np.where(valid[None], np.nan_to_num(candidate.onset_responses.changes), 0.0)
+        changes = changes.reshape(changes.shape[0], -1)
+        for u in basis:
+            changes = changes - np.outer(changes @ u, u)
+        norms = np.einsum("ij,ij->i", changes, changes)
+        useful = norms > 1e-12 * max(float(norms.max()), 1e-300)
+        return float(np.max(np.where(useful, (changes @ r) ** 2 / np.where(useful, norms, 1.0), 0.0)))
+
+    return sorted(candidates, key=score, reverse=True)
+
+
+def residual_partners(search: EffectSearch, best: Candidate, others: Sequence[Candidate], count: int) -> list:
+    """The ``count`` effects of ``others`` that explain most of what ``best`` leaves (:func:`screen`
+    on the decimated series, orthogonal to the change ``best`` makes from its nearest grid onset:
+    a refit of ``best`` absorbs what lies along it): a forward-stepwise choice of its partners."""
+    residual = _coarse_rows(search, search.series.outputs - best.predicted)
+    directions = []
+    if best.onset_responses is not None:
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        nearest = int(np.argmin(np.abs(best.onset_responses.onsets - best.onset_index // factor)))
+        directions.append(best.onset_responses.changes[nearest])
+    return screen(residual, others, directions)[:count]
+
+
 class PairSearch:
     """Fit pairs of catalogue effects jointly on the series of a first-round :class:`EffectSearch`.
 
@@ -163,15 +243,14 @@ class PairSearch:
         """(value fitted alone, EffectParameter) of each parameter of ``single``."""
         return [(single.values[p.name], p) for p in self.search.effect(single.effect).parameters]
 
-    def _coarse_fit(self, first: Candidate, second: Candidate):
-        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
+    def _starting_points(self, first: Candidate, second: Candidate) -> list:
+        """Step 2 on the decimated series: the starting points of the descent, least RSS first, as
+        (coarse onset indices, z, coarse RSS)."""
         search = self.search
         coarse = self._structure((first.effect, second.effect), search.coarse)
         z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
                       zip(coarse.problem.scalings, [*self._starts(first), *self._starts(second)])])
-        n = search.coarse.time_s.size
-        last = n - max(3, int(0.05 * n))
-        grid = np.unique(np.linspace(0, last, PAIR_GRID).round().astype(int))
+        grid = self._onset_grid()
         best, z_alone = (math.inf, None, z), z
         for i, a in enumerate(grid):
             z_row = z
@@ -185,20 +264,34 @@ class PairSearch:
         alone = (first.onset_index // factor, second.onset_index // factor)
         for onsets in {alone, (alone[0], 0), (0, alone[1])} - {starts[0][0]}:
             starts.append((onsets, *coarse.fit(list(onsets), z_alone, search.x0_coefficients)))
-        starts.sort(key=lambda start: start[2])
+        return sorted(starts, key=lambda start: start[2])
+
+    def _onset_grid(self) -> np.ndarray:
+        """Coarse onset indices of the pair grid (:data:`PAIR_GRID` per effect)."""
+        n = self.search.coarse.time_s.size
+        return np.unique(np.linspace(0, n - max(3, int(0.05 * n)), PAIR_GRID).round().astype(int))
+
+    def _descents(self, pair: tuple, starts: Sequence) -> tuple:
+        """Step 3 from the :data:`_DESCENTS` best ``starts``: (coarse onsets, z, coarse RSS) of least RSS."""
+        coarse = self._structure(pair, self.search.coarse)
+        grid = self._onset_grid()
         step = int(grid[1] - grid[0])
         return min((self._descend(coarse, list(onsets), z_start, step) for onsets, z_start, _ in starts[:_DESCENTS]),
                    key=lambda result: result[2])
 
-    def _descend(self, coarse: _Structure, onsets: list, z, step: int):
+    def _coarse_fit(self, first: Candidate, second: Candidate):
+        """Steps 2-3 on the decimated series: (onsets as coarse indices, z, coarse RSS)."""
+        return self._descents((first.effect, second.effect), self._starting_points(first, second))
+
+    def _descend(self, coarse: _Structure, onsets: list, z, step: int, whole_record: bool = True):
         """Coordinate descent from ``onsets``: each onset searched over the whole record (grid, then
-        golden section) with the values refitted, then within ± ``step`` samples until a round moves
-        neither; returns (onsets, z, RSS)."""
+        golden section; not with ``whole_record`` False) with the values refitted, then within
+        ± ``step`` samples until a round moves neither; returns (onsets, z, RSS)."""
         n, rss = coarse.series.time_s.size, math.inf
         for round_ in range(_DESCENT_ROUNDS):
             before = list(onsets)
             for position in range(2):
-                bounds = ((None, None) if round_ == 0 else
+                bounds = ((None, None) if round_ == 0 and whole_record else
                           (max(onsets[position] - step, 0), min(onsets[position] + step, n - 1)))
                 onsets[position], z, rss = coarse.search_onset(onsets, position, z, self.search.x0_coefficients,
                                                                *bounds)
@@ -240,31 +333,123 @@ class PairSearch:
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
+    def refit(self, singles: Sequence[Candidate], starts: Sequence[tuple]) -> list[JointCandidate]:
+        """Pairs fitted from known onsets (warm starts): for each ``(effect, onset s, effect, onset s)``
+        of ``starts`` (e.g. a pair fitted to the same record on other sensors), the values of both
+        effects fitted at those onsets from their single fits, the onsets refined within one grid
+        step of the pair grid by coordinate descent (step 3 without the search over the whole
+        record), then step 4; best ΔBIC first. Pairs of an effect not among ``singles`` are skipped."""
+        search, by_name = self.search, {c.effect: c for c in singles}
+        factor = int(round(search.coarse.dt_s / search.series.dt_s))
+        grid = self._onset_grid()
+        ranked = []
+        for first, first_onset_s, second, second_onset_s in starts:
+            if first not in by_name or second not in by_name:
+                continue
+            coarse = self._structure((first, second), search.coarse)
+            z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
+                          zip(coarse.problem.scalings, [*self._starts(by_name[first]), *self._starts(by_name[second])])])
+            onsets = [int(np.argmin(np.abs(search.series.time_s - search.series.time_s[0] - t))) // factor
+                      for t in (first_onset_s, second_onset_s)]
+            z, _ = coarse.fit(onsets, z, search.x0_coefficients)
+            onsets, z, _ = self._descend(coarse, onsets, z, int(grid[1] - grid[0]), whole_record=False)
+            ranked.append(self._finish((first, second), onsets, z, polish=True))
+        return sorted(ranked, key=lambda c: c.delta_bic)
+
+    def member_changes(self, pair: JointCandidate) -> dict:
+        """Effect → what it changes in the outputs of ``pair`` (the full series, K, at the pair's
+        values and onsets; the initial state of the search)."""
+        search = self.search
+        full = self._structure(pair.effects, search.series)
+        simulator = full.problem.simulator
+        indicator = _indicator(search.series.time_s.size, [pair.onset_indices[e] for e in pair.effects])
+        theta = [v for e in pair.effects for v in pair.values[e].values()]
+        both = simulator.outputs(np.array(theta), search.x0_coefficients, indicator)
+        changes, position = {}, 0
+        for effect in pair.effects:
+            without = list(theta)
+            for i, parameter in enumerate(search.effect(effect).parameters):
+                without[position + i] = parameter.neutral
+            position += len(search.effect(effect).parameters)
+            changes[effect] = both - simulator.outputs(np.array(without), search.x0_coefficients, indicator)
+        return changes
+
+    def swaps(self, pair: JointCandidate, singles: Sequence[Candidate], count: int = SWAPS_PER_MEMBER) -> list:
+        """Pairs with one member of ``pair`` replaced: for each member, the ``count`` other effects
+        that best explain what it explained plus what the pair leaves (:func:`screen`, orthogonal to
+        the kept member's change); a list of (kept single, new single)."""
+        search = self.search
+        by_name = {c.effect: c for c in singles}
+        changes = self.member_changes(pair)
+        others = [c for c in singles if c.effect not in pair.effects]
+        swapped = []
+        for member, kept in (pair.effects, pair.effects[::-1]):
+            residual = _coarse_rows(search, search.series.outputs - pair.predicted + changes[member])
+            swapped += [(by_name[kept], c) for c in
+                        screen(residual, others, [_coarse_rows(search, changes[kept])])[:count]]
+        return swapped
+
+    def _fit(self, pairs: Sequence[tuple], workers: int, progress, stage: str = "") -> list[JointCandidate]:
+        """Steps 2-4 for ``pairs`` of single candidates: every starting point, the descent for the
+        :data:`DESCENDED_PAIRS` of least RSS there, the :data:`POLISHED_PAIRS` best polished."""
+
+        def start_pair(pair):
+            starts = self._starting_points(*pair)[:_DESCENTS]
+            onsets, z, rss = starts[0]
+            names = (pair[0].effect, pair[1].effect)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return starts, (list(onsets), z, rss, scored)
+
+        def descend_pair(item):
+            names, starts = item
+            onsets, z, rss = self._descents(names, starts)
+            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
+            return onsets, z, rss, scored
+
+        started = map_in_workers(start_pair, pairs, workers, progress and (
+            lambda done, total, pair: progress(done, total, f"{stage}{pair[0].effect} + {pair[1].effect} "
+                                                            "(onset grid)")))
+        order = sorted(range(len(pairs)), key=lambda m: started[m][1][2])[:DESCENDED_PAIRS]
+        refined = map_in_workers(descend_pair, [((pairs[m][0].effect, pairs[m][1].effect), started[m][0])
+                                                for m in order], workers, progress and (
+            lambda done, total, item: progress(done, total, f"{stage}{' + '.join(item[0])} (onsets refined)")))
+        descended = dict(zip(order, refined))
+        coarse = []
+        for m, (first, second) in enumerate(pairs):
+            onsets, z, rss, scored = descended.get(m, started[m][1])
+            coarse.append(((first.effect, second.effect), onsets, z, rss, scored))
+        coarse.sort(key=lambda item: item[3])
+        return [scored if rank >= POLISHED_PAIRS and scored is not None else
+                self._finish(names, onsets, z, rank < POLISHED_PAIRS)
+                for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
+
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
              workers: int = 1) -> list[JointCandidate]:
         """Fit every pair of the ``pool`` best ``singles`` (ranked by ΔBIC) and the best single with
-        each next one up to rank :data:`PARTNER_RANKS` on the decimated series,
-        polish the :data:`POLISHED_PAIRS` of least coarse RSS on the full series, score the others
-        there at their coarse values; best ΔBIC first.
+        the :data:`PARTNER_RANKS` − ``pool`` others that explain most of its residual
+        (:func:`residual_partners`) on the decimated series, refine the onsets of the
+        :data:`DESCENDED_PAIRS` most promising, polish the :data:`POLISHED_PAIRS` of least coarse
+        RSS on the full series and score the others there at their coarse values. When the best
+        pair leaves more than :data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` but at
+        most :data:`~genthermal.diagnose.residual.LEVEL_FACTOR` times the noise (near the answer,
+        not at it), its members are swapped for the effects that explain their part better
+        (:meth:`swaps`) and those pairs fitted too. Best ΔBIC first.
 
         ``progress(done, total, label)`` is called after each pair when given. With ``workers`` > 1
         the pairs are fitted in forked processes (:mod:`genthermal.diagnose.parallel`); the result
         is the same."""
         ranked_singles = sorted(singles, key=lambda c: c.delta_bic)
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
-        pairs += [(ranked_singles[0], other) for other in ranked_singles[pool:max(pool, PARTNER_RANKS)]]
-
-        def fit_pair(pair):
-            first, second = pair
-            onsets, z, rss = self._coarse_fit(first, second)
-            names = (first.effect, second.effect)
-            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
-            return names, onsets, z, rss, scored
-
-        coarse = map_in_workers(fit_pair, pairs, workers, progress and (
-            lambda done, total, pair: progress(done, total, f"{pair[0].effect} + {pair[1].effect}")))
-        coarse.sort(key=lambda item: item[3])
-        ranked = [scored if rank >= POLISHED_PAIRS and scored is not None else
-                  self._finish(names, onsets, z, rank < POLISHED_PAIRS)
-                  for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
-        return sorted(ranked, key=lambda c: c.delta_bic)
+        partners = residual_partners(self.search, ranked_singles[0], ranked_singles[pool:],
+                                     max(PARTNER_RANKS - pool, 0))
+        pairs += [(ranked_singles[0], other) for other in partners]
+        ranked = sorted(self._fit(pairs, workers, progress), key=lambda c: c.delta_bic)
+        noise = self.search.noise
+        if ranked and STRUCTURE_LEVEL_FACTOR * noise < ranked[0].rmse_after <= LEVEL_FACTOR * noise:
+            tried = {frozenset((a.effect, b.effect)) for a, b in pairs}
+            swapped = [p for p in self.swaps(ranked[0], ranked_singles)
+                       if frozenset((p[0].effect, p[1].effect)) not in tried]
+            swapped = list({frozenset((a.effect, b.effect)): (a, b) for a, b in swapped}.values())
+            if swapped:
+                ranked = sorted(ranked + self._fit(swapped, workers, progress, "swap: "), key=lambda c: c.delta_bic)
+        return ranked

@@ -74,6 +74,24 @@ class FoundEffect:
     onset_index: int
 
 
+@dataclasses.dataclass(frozen=True)
+class OnsetResponses:
+    """Change of the sensor outputs an effect makes when it switches on at each onset of a grid.
+
+    Attributes
+    ----------
+    onsets : numpy.ndarray
+        Onset sample indices on the decimated series (:data:`GRID_DT_S`), shape (n_onsets,).
+    changes : numpy.ndarray
+        Outputs with the effect at its typical value (the fitted one when it has none) minus the
+        outputs without it, K, shape (n_onsets, n_outputs, N) on the decimated series; NaN where
+        the sensor has no sample.
+    """
+
+    onsets: np.ndarray
+    changes: np.ndarray
+
+
 @dataclasses.dataclass
 class Candidate:
     """One catalogue effect fitted to the data.
@@ -99,6 +117,9 @@ class Candidate:
     found_onsets : dict
         Re-searched onset indices of earlier found effects (effect → index).
     significant : bool
+    onset_responses : OnsetResponses or None
+        What the effect alone does to the sensors from each onset of the coarse grid (the residual
+        screen of the pair search, :func:`genthermal.diagnose.joint.residual_partners`).
     """
 
     effect: str
@@ -114,6 +135,7 @@ class Candidate:
     predicted: np.ndarray
     found_onsets: dict = dataclasses.field(default_factory=dict)
     significant: bool = False
+    onset_responses: "OnsetResponses | None" = None
 
     def to_dict(self) -> dict:
         """The JSON entry of the ranking."""
@@ -472,7 +494,24 @@ class EffectSearch:
                                                    full.indicator([*self._found_onsets, onset]))
         rss = float(np.nansum((predicted - self.series.outputs) ** 2))
         values = {p.name: float(v) for p, v in zip(effect.parameters, theta)}
-        return self._candidate(effect_name, values, onset, rss, predicted, dict(self.found_values))
+        candidate = self._candidate(effect_name, values, onset, rss, predicted, dict(self.found_values))
+        candidate.onset_responses = self._onset_responses(coarse, effect, z, onsets)
+        return candidate
+
+    def _onset_responses(self, coarse: _Structure, effect: Effect, z, onsets) -> OnsetResponses:
+        """What ``effect`` alone changes in the outputs from each onset of the coarse grid, at its
+        typical value (fitted value ``z`` for a parameter without one); ``onsets`` are the coarse
+        onsets of the found effects and the candidate's (last)."""
+        problem = coarse.problem
+        fitted = problem.theta(z)
+        theta = np.array([p.typical if p.typical is not None else v for p, v in zip(effect.parameters, fitted)])
+        n = self.coarse.time_s.size
+        grid = np.unique(np.linspace(0, n - max(3, int(MIN_TAIL_FRACTION * n)), COARSE_ONSETS).round().astype(int))
+        without = problem.simulator.outputs(theta, self.x0_coefficients, coarse.indicator([*onsets[:-1], n]))
+        changes = np.stack([problem.simulator.outputs(theta, self.x0_coefficients,
+                                                      coarse.indicator([*onsets[:-1], int(onset)])) - without
+                            for onset in grid])
+        return OnsetResponses(grid, np.where(problem.mask[None], changes, np.nan))
 
     def polish(self, candidate: Candidate) -> Candidate:
         """Refine the onset on the full series (±one grid step, values refitted), then refit the
@@ -508,9 +547,11 @@ class EffectSearch:
         values = dict(zip(names, (float(v) for v in problem.theta(z))))
         found_values = {f.effect: {n: values[n] for n in f.values} for f in self.found}
         predicted = simulator.outputs(problem.theta(z), problem.initial(z, self.x0_coefficients), indicator)
-        return self._candidate(candidate.effect, {p.name: values[p.name] for p in effect.parameters},
-                               onsets[-1], rss, predicted, found_values,
-                               {f.effect: o for f, o in zip(self.found, onsets)})
+        polished = self._candidate(candidate.effect, {p.name: values[p.name] for p in effect.parameters},
+                                   onsets[-1], rss, predicted, found_values,
+                                   {f.effect: o for f, o in zip(self.found, onsets)})
+        polished.onset_responses = candidate.onset_responses
+        return polished
 
     def _candidate(self, name, values, onset, rss, predicted, found_values, found_onsets=None) -> Candidate:
         k = len(values) + 1

@@ -1,53 +1,81 @@
 r"""Extended Kalman filter on the nonlinear model, with disturbance states (offset-free prediction).
 
-The filter state is :math:`z = (x, d, m)`: the node temperatures :math:`x` (°C), one unknown
-heat flow :math:`d_j` (W) into each sensor node (for the thesis generator: into the stator winding
-and into the stator iron) and, for the same nodes, one unknown loss :math:`m_j` (W at rated
-current) that scales with the load squared, :math:`\ell(u) = \overline{I^2}/I_{rated}^2` (mean
-over the phases). They stand for what the model lacks: :math:`d` for a blockage or a wrong
-convection coefficient, :math:`m` for a wrong copper or load-dependent iron loss, which a
-constant heat flow cannot carry from one load to another. They enter the nodes as
-:math:`\dot x_i \mathrel{+}= (d_j + \ell(u) m_j)/C_i` and drift as random walks,
+The filter state is :math:`z = (x, \theta, \delta)`: the node temperatures :math:`x` (°C), for
+each sensor node j (for the thesis generator: the stator winding and the stator iron) the
+coefficients :math:`\theta_{bj}` of an unknown heat flow on three bases :math:`b`, and an offset
+:math:`\delta` (K) of the coolant inlet temperature. They stand for what a calibrated model
+typically lacks, each scaled so its coefficient is a heat flow in W at a stated condition:
+
+* ``constant`` (:math:`\phi = 1`, state ``q_<node>``, W): a heat flow the model does not remove or
+  add at any load (a convection coefficient off at the operating point, a stray loss);
+* ``load`` (:math:`\phi = \ell(u) = \overline{I^2}/I_{rated}^2`, mean over the phases,
+  ``q_load_<node>``, W at rated current): a wrong copper or load-dependent iron loss, which a
+  constant heat flow cannot carry from one load to another;
+* ``coolant`` (:math:`\phi = (x_j - T_{in})/\Delta T_{ref}`, :math:`\Delta T_{ref}` =
+  :data:`COOLANT_REFERENCE_RISE_K`, ``q_coolant_<node>``, W at 50 K above the inlet): a wrong
+  conductance to the coolant. A cooling fault (a blockage) removes less heat the hotter the
+  machine gets, which neither a constant nor a load-scaled flow carries into the future;
+* ``dT_inlet`` (K): the coolant reaches the machine hotter than measured (less flow heats the
+  air more on its way), acting through every convective link of the model.
+
+They enter as :math:`\dot x_j \mathrel{+}= \sum_b \theta_{bj}\phi_b(x, u)/C_j` and
+:math:`T_{in} \to T_{in} + \delta`, and drift as random walks:
 
 .. math::
-    x_{k+1} = \Phi(x_k, u_k, M (d_k + \ell(u_k) m_k)) + w_k, \qquad
-    (d, m)_{k+1} = (d, m)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
+    x_{k+1} = \Phi(x_k, u_k + \delta_k e_{in}, M q(x_k, u_k, \theta_k)) + w_k, \qquad
+    (\theta, \delta)_{k+1} = (\theta, \delta)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
 
 :math:`\Phi` the *same* discrete step that simulation uses (:attr:`DiscreteModel.forced_step` of
-:mod:`genthermal.discretise`, with the forcing :math:`w = M(d + \ell(u) m)`, :math:`M_{ij} = 1/C_i`
-for node i of disturbance j), so filter and simulation cannot drift apart. The Jacobian
-:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact
-(CasADi automatic differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`.
-Update and prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place
-of :math:`A` (Joseph-form covariance update; missing sensors drop their rows).
+:mod:`genthermal.discretise`, forcing :math:`M q`, :math:`M_{ij} = 1/C_i` for node i of
+disturbance node j), so filter and simulation cannot drift apart. The Jacobian
+:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact (CasADi automatic
+differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`. Update and
+prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place of
+:math:`A` (Joseph-form covariance update; missing sensors drop their rows).
 
-Process noise, in K² and W² per step:
+Two time scales. What a calibrated model lacks on a healthy machine is a few W that change little
+from one flight to the next; a random walk fast enough to follow a fault would chase the sensor
+noise the rest of the time, and the disturbances it learns from a few noisy minutes cost more
+than they gain. So the walks are slow (an online calibration) and a fault is announced by the
+innovation change test of :mod:`genthermal.estimation.change_detection`, which adds
+:data:`DEFAULT_JUMP_STD` ² to the disturbance covariance when the exponentially weighted mean
+of the innovations (over about :data:`DEFAULT_CHANGE_WINDOW_MIN` minutes), normalised by its
+covariance, exceeds :data:`DEFAULT_CHANGE_THRESHOLD` (:meth:`RecursiveFilter.run`, and in the
+generated C update, :meth:`ExtendedKalmanFilter.update_function`).
+
+Process noise, in K² and W² (K² for :math:`\delta`) per step:
 
 * nodes: :math:`Q_x = \mathrm{diag}((T_s\sigma_P/C_i)^2)` with :math:`\sigma_P` =
   :data:`DEFAULT_NODE_HEAT_NOISE_W` (an unmodelled heat flow at every node, as the linear filter,
-  but smaller because the systematic part now has its own states);
-* disturbances: :math:`Q_d = \sigma_d^2\,T_s/3600\,I`, a random walk that moves by
-  :math:`\sigma_d` = :data:`DEFAULT_DISTURBANCE_DRIFT_W` (W) in one hour, and the same for
-  :math:`m` with :data:`DEFAULT_LOAD_SCALED_DRIFT_W`; initial standard deviation
-  :data:`DEFAULT_INITIAL_DISTURBANCE_W` for both. The scale: the winding's copper loss at rated
-  current is about 180 W; a model calibrated on a healthy record is typically a few W to a few
-  tens of W off at a load it was not fitted at, and the thesis's large blockage removes some tens
-  of W of cooling.
+  but smaller because the systematic part has its own states);
+* each basis: :math:`\sigma_b^2\,T_s/3600`, a walk that moves by :math:`\sigma_b` in one hour:
+  :data:`DEFAULT_DISTURBANCE_DRIFT_W` (1 W), :data:`DEFAULT_LOAD_SCALED_DRIFT_W` (2 W),
+  :data:`DEFAULT_COOLANT_DRIFT_W` (1 W), :data:`DEFAULT_INLET_DRIFT_K` (0.2 K); initial standard
+  deviation :data:`DEFAULT_INITIAL_DISTURBANCE_W` (10 W) and :data:`DEFAULT_INITIAL_INLET_K` (2 K).
+  Scale: the winding's copper loss at rated current is about 180 W; a model calibrated on one
+  healthy record is a few W off at a load it was not fitted at.
+* a change: :data:`DEFAULT_JUMP_STD`, 10 W on the constant and load-scaled flows, 40 W (at 50 K)
+  on the coolant-scaled flows and 20 K on the inlet: the thesis's large blockage (flow to 20 %,
+  inlet +31 K) removes some tens of W of cooling and heats the air by tens of K.
 
-The values were chosen by measurement on the plants of ``benchmarks/bench_prediction.py``
-(calibrated model, three records it was not fitted on; winding RMS at 15/30/60 min). With the
-constant heat flows alone (15 W/h, initial 30 W) the varying-load record gave 0.48/1.06/1.03 K,
-worse than the open loop's 0.57/0.48/0.49 K at 30-60 min: the heat flow learnt at one load was
-carried to the next. Adding :math:`m` (15 W/h) with initial 10 W and the constant walk at 8 W/h
-gives 0.41/0.68/0.55 K there, 0.17/0.34/0.43 K (was 0.19/0.39/0.57) on the Fig. 3.2 flight and
-an unchanged 1.0/2.6/6.3 K on the large blockage. A larger node noise (10 W) brings the
-varying-load record to 0.39/0.53/0.48 K but the blockage to 1.2/2.8/6.5 K; an initial 30 W on
-:math:`m` lets it wander (30 min: 1.2 K). A disturbance that decays (first-order Markov, 10-30
-min) loses the blockage (30 min: 6.6-9.6 K); unknown conductances to the coolant were worse on
-the Fig. 3.2 flight (60 min: 0.7-1.3 K). Both are left out.
+Provenance: measured with ``benchmarks/bench_prediction.py`` on two plants (parameters off by
+15-30 % in opposite directions, each with a different effect the model lacks), a model calibrated
+on one healthy record of each and scored on three others (winding RMS at 15/30/60 min). With the
+earlier fast walks (8 and 15 W per hour on constant and load-scaled flows, no coolant states, no
+change test; kept for the flight filter, ``schedule.monitor.FLIGHT_EKF_SETTINGS``) the filter was
+worse than the open loop at 30-60 min on both healthy rig records (varying load 0.68/0.55 K
+against 0.48/0.49 K). Slowing the walks alone (1-2 W per hour) fixed that (0.46/0.43 K) but lost
+the blockage (30 min: 4.1 K, open loop 13.5 K); coolant-scaled flows with a fast walk (30 W per
+hour) followed the blockage (1.9 K) but chased noise on healthy records (varying load 0.76 K at
+30 min). Slow walks on all bases with the change test give both (module
+``benchmarks/bench_prediction.py`` figures in the README). The change threshold is a
+:math:`\chi^2_2` quantile at 1e-3 (13.8); on the benchmark's healthy records the statistic
+reached at most 8.7, on the blockages 20-38. The unmeasured inlet offset alone, without the
+coolant-scaled flows, barely helped (blockage 30 min: 2.5 K at 5 K per hour).
 
-Predictions hold the disturbance at its last estimate (:meth:`ExtendedKalmanFilter.forecast`):
-a constant model error is carried into the future, which is what makes them offset-free.
+Predictions hold the disturbances at their last estimate (:meth:`ExtendedKalmanFilter.forecast`):
+a constant model error is carried into the future, which is what makes them offset-free, and a
+coolant-scaled one grows with the temperature it multiplies.
 """
 
 from __future__ import annotations
@@ -59,6 +87,7 @@ import scipy.linalg
 from ..discretise import check_step_accuracy
 from ..errors import InputError
 from ..model import ThermalModel
+from .change_detection import InnovationChangeDetector, forgetting_factor
 from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
@@ -72,18 +101,36 @@ from .kalman import (
 #: Standard deviation of the unmodelled heat flow at every node, W (held over a step).
 DEFAULT_NODE_HEAT_NOISE_W = 5.0
 #: How far each disturbance heat flow may drift in one hour (1 sigma of the random walk), W.
-DEFAULT_DISTURBANCE_DRIFT_W = 8.0
+DEFAULT_DISTURBANCE_DRIFT_W = 1.0
 #: How far each load-scaled disturbance (W at rated current, scaled by the load squared) may drift
 #: in one hour, W; 0 leaves those states out.
-DEFAULT_LOAD_SCALED_DRIFT_W = 15.0
+DEFAULT_LOAD_SCALED_DRIFT_W = 2.0
 #: Initial standard deviation of each disturbance heat flow, W.
 DEFAULT_INITIAL_DISTURBANCE_W = 10.0
+#: How far each coolant-scaled disturbance (W at COOLANT_REFERENCE_RISE_K above the coolant inlet)
+#: may drift in one hour, W; 0 leaves those states out.
+DEFAULT_COOLANT_DRIFT_W = 1.0
+#: Temperature rise above the coolant inlet at which a coolant-scaled disturbance is quoted, K.
+COOLANT_REFERENCE_RISE_K = 50.0
+#: How far the coolant inlet offset may drift in one hour, K; 0 leaves it out.
+DEFAULT_INLET_DRIFT_K = 0.2
+#: Initial standard deviation of the coolant inlet offset, K.
+DEFAULT_INITIAL_INLET_K = 2.0
+#: Alarm level of the innovation change test (chi-square, n_y dof); None: no change detection.
+DEFAULT_CHANGE_THRESHOLD = 13.8
+#: Window of the innovation change test (the window with the same variance as its weighted mean), min.
+DEFAULT_CHANGE_WINDOW_MIN = 5.0
+#: Standard deviation added to each disturbance when a change is detected (W; inlet K).
+DEFAULT_JUMP_STD = {"constant": 10.0, "load": 10.0, "coolant": 40.0, "inlet": 20.0}
+#: The disturbance bases, in state order.
+DISTURBANCE_BASES = ("constant", "load", "coolant")
+#: State name prefix of each basis (then the node name).
+BASIS_PREFIX = {"constant": "q_", "load": "q_load_", "coolant": "q_coolant_"}
 
 
 def node_heat_capacities(model: ThermalModel) -> np.ndarray:
     """Heat capacity :math:`C_i` (J/K) of every state node, in ``state_names`` order."""
-    values = {model.parameters[name].symbol: model.parameters.value(name) for name in model.parameter_names}
-    return np.array([float(model.network.node(name).capacitance.subs(values)) for name in model.state_names])
+    return model.heat_capacities()
 
 
 class ExtendedKalmanFilter(RecursiveFilter):
@@ -104,29 +151,46 @@ class ExtendedKalmanFilter(RecursiveFilter):
     disturbance_nodes : sequence of str, optional
         Nodes that receive an unknown heat flow; default the sensor nodes
         (``model.spec.sensors``), one per measured output, so the disturbances are observable.
-    load_scaled_drift_W : float
-        Hourly drift of each load-scaled loss :math:`m_j`, W at rated current; 0 leaves those
-        states out.
+    load_scaled_drift_W, coolant_drift_W : float
+        Hourly drift of each load-scaled flow (W at rated current) and each coolant-scaled flow (W
+        at :data:`COOLANT_REFERENCE_RISE_K` above the inlet); 0 leaves those states out.
     node_heat_noise_W, disturbance_drift_W, initial_disturbance_W : float
-        :math:`\\sigma_P`, :math:`\\sigma_d` and the initial standard deviation of :math:`d`
-        and :math:`m`, W.
+        :math:`\\sigma_P`, the hourly drift of each constant heat flow and the initial standard
+        deviation of every heat-flow coefficient, W.
+    inlet_drift_K, initial_inlet_K : float
+        Hourly drift and initial standard deviation of the coolant inlet offset ``dT_inlet``, K;
+        a drift of 0 leaves it out.
+    change_threshold : float or None
+        Alarm level of the innovation change test (:mod:`~genthermal.estimation.change_detection`),
+        a :math:`\\chi^2_{n_y}` value; None: no test (the disturbances only drift).
+    change_window_min : float
+        Window of that test, min.
+    jump_std : dict, optional
+        Standard deviation added on an alarm per basis (``constant``, ``load``, ``coolant``: W;
+        ``inlet``: K); missing keys take :data:`DEFAULT_JUMP_STD`.
     R : array_like, optional
         Measurement noise covariance, K², output order; default thesis eq. 6.10.
     P0 : array_like, optional
         Initial covariance of the whole state; default :data:`DEFAULT_INITIAL_STD_K` ² on the
-        nodes and ``initial_disturbance_W`` ² on the disturbances.
+        nodes, ``initial_disturbance_W`` ² on the heat-flow coefficients and ``initial_inlet_K`` ²
+        on the inlet offset.
     """
 
     def __init__(self, model: ThermalModel, dt_s: float = 10.0, disturbance_nodes=None,
                  load_scaled_drift_W: float = DEFAULT_LOAD_SCALED_DRIFT_W,
                  node_heat_noise_W: float = DEFAULT_NODE_HEAT_NOISE_W,
                  disturbance_drift_W: float = DEFAULT_DISTURBANCE_DRIFT_W,
-                 initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None):
+                 initial_disturbance_W: float = DEFAULT_INITIAL_DISTURBANCE_W, R=None, P0=None,
+                 coolant_drift_W: float = DEFAULT_COOLANT_DRIFT_W,
+                 inlet_drift_K: float = DEFAULT_INLET_DRIFT_K, initial_inlet_K: float = DEFAULT_INITIAL_INLET_K,
+                 change_threshold: float | None = DEFAULT_CHANGE_THRESHOLD,
+                 change_window_min: float = DEFAULT_CHANGE_WINDOW_MIN, jump_std=None):
         for name, value in (("node_heat_noise_W", node_heat_noise_W), ("disturbance_drift_W", disturbance_drift_W),
-                            ("load_scaled_drift_W", load_scaled_drift_W),
-                            ("initial_disturbance_W", initial_disturbance_W)):
+                            ("load_scaled_drift_W", load_scaled_drift_W), ("coolant_drift_W", coolant_drift_W),
+                            ("initial_disturbance_W", initial_disturbance_W), ("inlet_drift_K", inlet_drift_K),
+                            ("initial_inlet_K", initial_inlet_K)):
             if not (np.isfinite(value) and value >= 0):
-                raise InputError(name, value, "must be a heat flow in W >= 0")
+                raise InputError(name, value, "must be >= 0 (a heat flow in W; the inlet offset in K)")
         check_step_accuracy(model, dt_s)
         discrete = model.discretise(dt_s)
         self.model, self.dt_s = model, float(dt_s)
@@ -136,13 +200,19 @@ class ExtendedKalmanFilter(RecursiveFilter):
             raise InputError("disturbance_nodes", unknown or nodes,
                              f"must be capacitive nodes of {model.name}: {', '.join(model.state_names)}")
         self.disturbance_nodes = nodes
-        self.load_scaled = load_scaled_drift_W > 0
-        self.disturbance_names = tuple(f"q_{node}" for node in nodes) + \
-            (tuple(f"q_load_{node}" for node in nodes) if self.load_scaled else ())
+        drifts = {"constant": disturbance_drift_W, "load": load_scaled_drift_W, "coolant": coolant_drift_W}
+        #: The bases in use, in state order: ``"constant"`` always, ``"load"`` and ``"coolant"``
+        #: when their drift is > 0 (module docstring).
+        self.bases = tuple(b for b in DISTURBANCE_BASES if b == "constant" or drifts[b] > 0)
+        self.load_scaled = "load" in self.bases
+        self.inlet_offset = inlet_drift_K > 0
+        self.disturbance_names = tuple(f"{BASIS_PREFIX[b]}{node}" for b in self.bases for node in nodes) + \
+            (("dT_inlet",) if self.inlet_offset else ())
         self.output_names = list(model.output_names)
         self.state_names = [*model.state_names, *self.disturbance_names]
         nx, nd, ny = model.n_states, len(self.disturbance_names), len(self.output_names)
         self.rated_current_A = float(model.spec.rated_current_A)
+        self.coolant_input = model.spec.interface.coolant_input
         capacity = node_heat_capacities(model)
         self.M = np.zeros((nx, len(nodes)))
         for j, node in enumerate(nodes):
@@ -152,27 +222,75 @@ class ExtendedKalmanFilter(RecursiveFilter):
         self.C = C
         self.H = np.hstack([C, np.zeros((ny, nd))])
         self.transition, self.state_step = self._transition_functions(discrete)
-        drift = np.repeat([disturbance_drift_W, load_scaled_drift_W][:1 + self.load_scaled], len(nodes))
+        drift = np.concatenate([np.repeat([drifts[b] for b in self.bases], len(nodes)),
+                                [inlet_drift_K] if self.inlet_offset else []])
         self.Q = scipy.linalg.block_diag(heat_flow_process_noise(model, dt_s, node_heat_noise_W),
                                          np.diag(drift**2 * self.dt_s / 3600.0))
         self.R = _covariance("R", model.spec.interface.noise_variances_K2 if R is None else R, ny)
         if np.min(np.linalg.eigvalsh(self.R)) <= 0:
             raise InputError("R", self.R.tolist(), "the measurement noise covariance must be positive definite")
-        default_P0 = np.concatenate([np.full(nx, DEFAULT_INITIAL_STD_K**2), np.full(nd, initial_disturbance_W**2)])
+        default_P0 = np.concatenate([np.full(nx, DEFAULT_INITIAL_STD_K**2),
+                                     np.full(len(self.bases) * len(nodes), initial_disturbance_W**2),
+                                     [initial_inlet_K**2] if self.inlet_offset else []])
         self.P0 = _covariance("P0", default_P0 if P0 is None else P0, nx + nd)
         self._forecasters: dict = {}
+        if change_threshold is not None and not (np.isfinite(change_threshold) and change_threshold > 0):
+            raise InputError("change_threshold", change_threshold, "must be a positive chi-square value or None")
+        if not (np.isfinite(change_window_min) and change_window_min * 60.0 >= dt_s):
+            raise InputError("change_window_min", change_window_min, f"must be at least one step ({dt_s:g} s)")
+        unknown_bases = sorted(set(jump_std or {}) - set(DEFAULT_JUMP_STD))
+        if unknown_bases:
+            raise InputError("jump_std", unknown_bases[0], f"unknown basis; use {', '.join(DEFAULT_JUMP_STD)}")
+        jump = dict(DEFAULT_JUMP_STD, **(jump_std or {}))
+        if not all(np.isfinite(v) and v >= 0 for v in jump.values()):
+            raise InputError("jump_std", jump, "each must be >= 0 (W; inlet K)")
+        self.change_threshold, self.change_window_min = change_threshold, float(change_window_min)
+        self.jump_covariance = np.diag(np.concatenate([
+            np.zeros(nx), np.repeat([jump[b] for b in self.bases], len(nodes)),
+            [jump["inlet"]] if self.inlet_offset else []]) ** 2)
+
+    def change_detector(self):
+        """The jump detector of :mod:`~genthermal.estimation.change_detection` with this filter's
+        settings, or None when ``change_threshold`` is None."""
+        if self.change_threshold is None:
+            return None
+        return InnovationChangeDetector(self.change_window_samples, self.change_threshold, self.jump_covariance)
+
+    @property
+    def change_window_samples(self) -> int:
+        """:math:`W` of the change test, samples."""
+        return max(1, int(round(self.change_window_min * 60.0 / self.dt_s)))
+
+    def basis_values(self, x_nodes, u):
+        """:math:`\\phi_b(x, u)` of every disturbance state (state order): 1 for ``constant``,
+        :math:`\\ell(u)` for ``load``, :math:`(x_j - T_{in})/\\Delta T_{ref}` for ``coolant``.
+        Works on numbers and on CasADi symbols."""
+        values = []
+        for basis in self.bases:
+            for node in self.disturbance_nodes:
+                if basis == "constant":
+                    values.append(1.0)
+                elif basis == "load":
+                    phases = [u[self.model.input_names.index(name)]
+                              for name in self.model.spec.interface.load_currents]
+                    values.append(sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2))
+                else:
+                    inlet = u[self.model.input_names.index(self.coolant_input)]
+                    values.append((x_nodes[self.model.state_names.index(node)] - inlet) / COOLANT_REFERENCE_RISE_K)
+        return values
 
     def _transition_functions(self, discrete) -> tuple[ca.Function, ca.Function]:
         """``(z, u) -> (z_next, F)``, the discrete step with the disturbances and its exact
         Jacobian, and ``(z, u) -> z_next`` alone (for forecasts)."""
         nx, nd, n_nodes = self.model.n_states, len(self.disturbance_names), self.M.shape[1]
         z, u = ca.SX.sym("z", nx + nd), ca.SX.sym("u", len(self.model.input_names))
-        heat = z[nx:nx + n_nodes]
-        if self.load_scaled:
-            phases = [u[self.model.input_names.index(name)] for name in self.model.spec.interface.load_currents]
-            load_squared = sum(current**2 for current in phases) / (len(phases) * self.rated_current_A**2)
-            heat = heat + load_squared * z[nx + n_nodes:]
-        z_next = ca.vertcat(discrete.forced_step(z[:nx], u, ca.DM(self.M) @ heat), z[nx:])
+        phi = self.basis_values(z[:nx], u)  # the coolant basis uses the measured inlet
+        heat = ca.vertcat(*[sum(z[nx + b * n_nodes + j] * phi[b * n_nodes + j] for b in range(len(self.bases)))
+                            for j in range(n_nodes)])
+        u_model = u  # the inputs the model sees: the inlet raised by the offset state, if any
+        if self.inlet_offset:
+            u_model = u + z[-1] * ca.DM([float(name == self.coolant_input) for name in self.model.input_names])
+        z_next = ca.vertcat(discrete.forced_step(z[:nx], u_model, ca.DM(self.M) @ heat), z[nx:])
         return (ca.Function("ekf_transition", [z, u], [z_next, ca.jacobian(z_next, z)], ["z", "u"], ["z_next", "F"]),
                 ca.Function("ekf_state_step", [z, u], [z_next], ["z", "u"], ["z_next"]))
 
@@ -218,30 +336,50 @@ class ExtendedKalmanFilter(RecursiveFilter):
 
     # --- CasADi functions for code generation ----------------------------------------------
     def update_function(self) -> ca.Function:
-        """``(z_pred, P_pred, u, y, measured) -> (z, P, z_next_pred, P_next_pred)``: one update
-        with the measurement and the prediction to the next sample, as :meth:`update` then
-        :meth:`predict`.
+        """``(z_pred, P_pred, u, y, measured, change_mean) -> (z, P, z_next_pred, P_next_pred,
+        change_mean_next, change_statistic)``: one update with the measurement, the innovation
+        change test, and the prediction to the next sample, as :meth:`run` does with
+        :meth:`update`, :meth:`change_detector` and :meth:`predict`.
 
         ``measured`` holds 1 for each sensor read at this sample and 0 for a missing one (its
         ``y`` is then ignored): the sensor's row of :math:`H` and its innovation are zeroed and its
         row and column of :math:`R` replaced by the identity's, which gives exactly the update
-        without that sensor.
+        without that sensor. ``change_mean`` is the test's memory :math:`m` (K, one per sensor;
+        zeros at the start of a record), ``change_statistic`` its :math:`T_k`
+        (:mod:`~genthermal.estimation.change_detection`); on an alarm (:math:`T_k` above
+        ``change_threshold``, every sensor read) ``P`` is the covariance already opened by the
+        jump covariance and ``change_mean_next`` is zero. Without a threshold the test is computed
+        but never fires.
         """
         nz, ny = len(self.state_names), len(self.output_names)
         z, P = ca.SX.sym("z_pred", nz), ca.SX.sym("P_pred", nz, nz)
         u, y, measured = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
+        mean = ca.SX.sym("change_mean", ny)
         mask = ca.diag(measured)
         H = mask @ ca.DM(self.H)
         R = mask @ ca.DM(self.R) @ mask + ca.diag(1 - measured)
-        innovation = measured * (y - ca.DM(self.H) @ z - ca.DM(self.e))
+        full_innovation = y - ca.DM(self.H) @ z - ca.DM(self.e)
+        innovation = measured * full_innovation
         K = ca.solve(H @ P @ H.T + R, H @ P).T
         z_filtered = z + K @ innovation
         I_KH = ca.DM.eye(nz) - K @ H
         P_filtered = I_KH @ P @ I_KH.T + K @ R @ K.T
+        # the change test on every sensor: skipped (memory held, no alarm) when one is missing
+        all_measured = ca.mmin(measured)
+        lam = forgetting_factor(self.change_window_samples)
+        candidate = lam * mean + (1.0 - lam) * full_innovation
+        S = ca.DM(self.H) @ P @ ca.DM(self.H).T + ca.DM(self.R)
+        statistic = all_measured * (1.0 + lam) / (1.0 - lam) * ca.dot(candidate, ca.solve(S, candidate))
+        threshold = np.inf if self.change_threshold is None else self.change_threshold
+        alarm = all_measured * ca.if_else(statistic > threshold, 1.0, 0.0) if np.isfinite(threshold) else 0.0
+        mean_next = ca.if_else(all_measured > 0, (1.0 - alarm) * candidate, mean)
+        P_filtered = P_filtered + alarm * ca.DM(self.jump_covariance)
         z_next, F = self.transition(z_filtered, u)
         P_next = F @ P_filtered @ F.T + ca.DM(self.Q)
-        return ca.Function("ekf_update", [z, P, u, y, measured], [z_filtered, P_filtered, z_next, P_next],
-                           ["z_pred", "P_pred", "u", "y", "measured"], ["z", "P", "z_next_pred", "P_next_pred"])
+        return ca.Function("ekf_update", [z, P, u, y, measured, mean],
+                           [z_filtered, P_filtered, z_next, P_next, mean_next, statistic],
+                           ["z_pred", "P_pred", "u", "y", "measured", "change_mean"],
+                           ["z", "P", "z_next_pred", "P_next_pred", "change_mean_next", "change_statistic"])
 
     def predict_function(self, n_steps: int) -> ca.Function:
         """``(z, U) -> Y``: outputs after each of ``n_steps`` steps from the filter state ``z``, the

@@ -24,6 +24,16 @@ class RecursiveFilter:
     #: Names of the disturbance states appended to the model's nodes (none for the linear filter).
     disturbance_names: tuple = ()
 
+    def change_detector(self):
+        """A fresh :class:`~genthermal.estimation.change_detection.InnovationChangeDetector` for
+        :meth:`run`, or None (default: no change detection)."""
+        return None
+
+    @property
+    def C_full(self) -> np.ndarray:
+        """:math:`\\partial y/\\partial z` on the whole filter state (nodes, then disturbances)."""
+        return np.hstack([self.C, np.zeros((len(self.output_names), len(self.disturbance_names)))])
+
     @property
     def n_nodes(self) -> int:
         """Number of model states (capacitive nodes), the first entries of the filter state."""
@@ -51,17 +61,21 @@ class RecursiveFilter:
         z = self.initial_state(Y[0], U[:, 0]) if x0 is None else \
             np.broadcast_to(np.asarray(x0, dtype=float), (nz,)).copy()
         P = None if steady_state else self.P0
+        detector = None if steady_state else self.change_detector()
         Z_pred, Z, gains, innovations = np.empty((n, nz)), np.empty((n, nz)), [], np.empty(Y.shape)
         for k in range(n):
             Z_pred[k] = z
             step = self.update(z, P, Y[k])
             Z[k], innovations[k] = step.x, step.innovation
             gains.append(step.gain)
-            z, P = self.predict(step.x, step.P, U[:, k])
+            P_filtered = step.P if detector is None else \
+                detector.step(step.innovation, self.C_full @ P @ self.C_full.T + self.R, step.P)
+            z, P = self.predict(step.x, P_filtered, U[:, k])
         nx = self.n_nodes
         return FilterResult(self.model, time_s, U, Z[:, :nx], Z_pred[:, :nx], Y, innovations, np.array(gains),
                             self.C, self.e, bool(steady_state), disturbances=Z[:, nx:],
-                            disturbance_names=tuple(self.disturbance_names))
+                            disturbance_names=tuple(self.disturbance_names),
+                            change_alarm_times_s=tuple(float(time_s[k]) for k in (detector.alarms if detector else ())))
 
     def _record(self, inputs_df, sensors_df):
         time_s = inputs_df["time_s"].to_numpy(dtype=float) if "time_s" in inputs_df else None

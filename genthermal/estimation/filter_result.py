@@ -43,7 +43,12 @@ class FilterResult:
     disturbances : numpy.ndarray
         Filtered disturbance states, W (n × n_disturbances; no columns for the linear filter).
     disturbance_names : tuple of str
-        Their names (``q_<node>``: unknown heat flow into that node).
+        Their names (``q_<node>``: unknown heat flow into that node; ``q_load_<node>``,
+        ``q_coolant_<node>``: scaled by the load squared or by the node's rise above the coolant
+        inlet; ``dT_inlet``: coolant inlet offset, K).
+    change_alarm_times_s : tuple of float
+        Times (s) at which the innovation change test opened the disturbance covariance
+        (:mod:`genthermal.estimation.change_detection`); empty without the test.
     """
 
     model: ThermalModel
@@ -59,6 +64,7 @@ class FilterResult:
     steady_state: bool
     disturbances: np.ndarray | None = None
     disturbance_names: tuple = ()
+    change_alarm_times_s: tuple = ()
 
     def filter_state(self, k: int) -> np.ndarray:
         """The filter's whole state after the update at sample ``k``: nodes (°C) then disturbances (W)."""

@@ -298,11 +298,7 @@ def heat_flow_process_noise(design_model: ThermalModel, dt_s: float,
     r"""Diagonal :math:`Q = \mathrm{diag}((T_s\sigma_P/C_i)^2)` in K² per step: an unknown heat flow
     of standard deviation :math:`\sigma_P` (W) at every capacitive node of heat capacity
     :math:`C_i` (J/K), held over the step."""
-    values = {design_model.parameters[name].symbol: design_model.parameters.value(name)
-              for name in design_model.parameter_names}
-    capacity = np.array([float(design_model.network.node(name).capacitance.subs(values))
-                         for name in design_model.state_names])
-    return np.diag((dt_s * heat_noise_W / capacity) ** 2)
+    return np.diag((dt_s * heat_noise_W / design_model.heat_capacities()) ** 2)
 
 
 def _covariance(name: str, value, size: int) -> np.ndarray:

@@ -284,6 +284,8 @@ class PredictionStudy:
             "improved_minutes_censored": {label[s]: list(v) for s, v in self.censored.items() if v},
             "smoothing_min": self.smoothing_min,
             "margin_K": self.margin_K,
+            "change_alarms_min": [(t - self.filter_result.time_s[0]) / 60.0
+                                  for t in self.filter_result.change_alarm_times_s],
             "definition": {
                 "prediction_rmse_by_horizon": (
                     f"RMS over starts every {self.every_min:g} min of (prediction made at the start for "
@@ -294,6 +296,9 @@ class PredictionStudy:
                 "filter_rmse": ("RMS of filtered - measured at the same sample, after the update with that very "
                                 "measurement: it says little (a filter that copies its measurement scores "
                                 "the sensor noise); use one_step_rmse and prediction_rmse_by_horizon"),
+                "change_alarms_min": ("minutes from the start of the record at which the extended Kalman "
+                                      "filter's innovation change test found a change in what the model lacks "
+                                      "and opened its disturbance covariance (a fault; none on a healthy record)"),
                 "improved_minutes": (f"minutes from the start until the {self.smoothing_min:g}-min trailing mean "
                                      "of the |prediction error| first comes within margin_K of that of the "
                                      "|open-loop error|; censored values are lower bounds (the record ended first)"),

@@ -36,6 +36,7 @@ is left of it, so a flight ends within its mission time plus the budget, after a
 from __future__ import annotations
 
 import dataclasses
+import time
 
 import numpy as np
 
@@ -109,6 +110,11 @@ class ManagerSettings:
         Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
+    cpu_limit_s : float or None
+        Processor time a flight may take, s (of this process: other load on the machine does not
+        count against it); checked at every management cycle, a flight past it raises
+        :class:`FlightTimeout` (a robustness sweep records it as such instead of waiting on it).
+        None (default): no limit.
     """
 
     cycle_s: float = 300.0
@@ -128,16 +134,38 @@ class ManagerSettings:
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
+    cpu_limit_s: float | None = None
 
     def __post_init__(self):
         if self.rest_budget_s is not None and not (np.isfinite(self.rest_budget_s) and self.rest_budget_s >= 0):
             raise ValueError(f"rest_budget_s = {self.rest_budget_s!r}: must be a number of seconds >= 0 or None")
+        if self.cpu_limit_s is not None and not (np.isfinite(self.cpu_limit_s) and self.cpu_limit_s > 0):
+            raise ValueError(f"cpu_limit_s = {self.cpu_limit_s!r}: must be a number of seconds > 0 or None")
 
     def rest_budget_for(self, mission_duration_s: float) -> float:
         """The flight's rest budget, s, for a mission of ``mission_duration_s`` (s)."""
         if self.rest_budget_s is not None:
             return float(self.rest_budget_s)
         return DEFAULT_REST_BUDGET_FRACTION * float(mission_duration_s)
+
+
+class FlightTimeout(RuntimeError):
+    """A closed-loop flight took more than ``ManagerSettings.cpu_limit_s`` of processor time.
+
+    Attributes
+    ----------
+    mission_time_s : float
+        Mission time flown when it was stopped, s.
+    cycles : int
+        Management cycles flown.
+    cpu_s : float
+        Processor time spent, s.
+    """
+
+    def __init__(self, mission_time_s: float, cycles: int, cpu_s: float, limit_s: float):
+        self.mission_time_s, self.cycles, self.cpu_s = float(mission_time_s), int(cycles), float(cpu_s)
+        super().__init__(f"flight stopped after {cpu_s:.0f} s of processor time (limit {limit_s:g} s), "
+                         f"{cycles} management cycles, at mission time {mission_time_s:.0f} s")
 
 
 @dataclasses.dataclass
@@ -478,7 +506,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     FlightResult
         True-plant temperatures, applied currents, one record per re-plan and the alarms with
         what was identified.
+
+    Raises
+    ------
+    FlightTimeout
+        When ``settings.cpu_limit_s`` is set and a management cycle starts past it.
     """
+    started = time.process_time()
     dt = settings.dt_s
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
     rng = np.random.default_rng(settings.seed)
@@ -504,6 +538,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     budget = settings.rest_budget_for(system.mission.duration_s)
     measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
     while segments:
+        if settings.cpu_limit_s is not None and time.process_time() - started > settings.cpu_limit_s:
+            raise FlightTimeout(t, cycles, time.process_time() - started, settings.cpu_limit_s)
         cycles += 1
         if measured is not None:
             before = [(e.z.copy(), None if e.P is None else e.P.copy()) for e in estimators]

@@ -109,6 +109,10 @@ def extra_heat_flow(filter_, z, P, load_factor: float):
     if not isinstance(filter_, ExtendedKalmanFilter):
         raise InputError("filter", type(filter_).__name__, "fault detection needs the extended Kalman filter's "
                          "disturbance states")
+    if set(filter_.bases) - {"constant", "load"} or filter_.inlet_offset:
+        raise InputError("filter", filter_.disturbance_names, "fault detection works on constant and load-scaled "
+                         "heat flows only (schedule.monitor.FLIGHT_EKF_SETTINGS); this filter has state-dependent "
+                         "ones")
     nx, n_nodes = filter_.model.n_states, len(filter_.disturbance_nodes)
     q, variance = np.empty(n_nodes), np.empty(n_nodes)
     for j in range(n_nodes):

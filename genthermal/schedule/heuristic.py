@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, robust_outputs
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, robust_outputs
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,16 +37,6 @@ class HeuristicSettings:
     """
 
     rest_step_s: float = 300.0
-
-
-def _run(E: np.ndarray, forced: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """States after each step of :math:`x^+ = Ex + f_i`; ``forced`` is (n_steps, n_states)."""
-    x = np.empty_like(forced)
-    state = x0
-    for i in range(forced.shape[0]):
-        state = E @ state + forced[i]
-        x[i] = state
-    return x
 
 
 class SegmentResponse:
@@ -64,11 +54,11 @@ class SegmentResponse:
         current = np.concatenate([np.full(n_rest, problem.rest_current_A),
                                   segment.current_at(np.arange(n_run) * dt)])
         u = problem.inputs(g, current)
-        x = np.vstack([x_start, _run(E, generator.forcing(u) @ G.T, x_start)])
+        x = np.vstack([x_start, affine_states(E, generator.forcing(u) @ G.T, x_start)])
         u_sample = np.vstack([u, u[-1:]])  # the input in force at each sample
         shed = np.zeros((n_rest + n_run, x_start.size))
         shed[n_rest:] = -(generator.B @ generator.e_I) @ G.T  # shedding 1 A during the segment
-        dx = np.vstack([np.zeros_like(x_start), _run(E, shed, np.zeros_like(x_start))])
+        dx = np.vstack([np.zeros_like(x_start), affine_states(E, shed, np.zeros_like(x_start))])
         du = np.zeros_like(u_sample)
         du[n_rest:] = -generator.e_I
         windows = np.concatenate([np.zeros(n_rest, dtype=int),

@@ -47,9 +47,18 @@ from ..estimation.kalman import KalmanFilter
 from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 
+#: Noise settings of the flight EKF: constant and load-scaled heat flows only, as random walks
+#: of 8 and 15 W per hour, no coolant-scaled states, no change detection. The fault detector's
+#: drifts and thresholds (:class:`~genthermal.schedule.detector.DetectorSettings`) were measured
+#: on this filter (``benchmarks/bench_detection.py``), and its CUSUM is itself the flight's change
+#: detection, so the flight keeps it; ``genthermal estimate`` uses the slower defaults of
+#: :mod:`genthermal.estimation.ekf` with its own change test.
+FLIGHT_EKF_SETTINGS = {"disturbance_drift_W": 8.0, "load_scaled_drift_W": 15.0, "coolant_drift_W": 0.0,
+                       "inlet_drift_K": 0.0, "change_threshold": None}
 #: Filters the closed loop can use: name → how to build one from ``(design generator, flown
 #: model, step s)``: ``ekf`` on the flown nonlinear model, ``kf`` on the design model.
-FLIGHT_FILTERS = {"ekf": lambda generator, flown_model, dt_s: ExtendedKalmanFilter(flown_model, dt_s),
+FLIGHT_FILTERS = {"ekf": lambda generator, flown_model, dt_s: ExtendedKalmanFilter(flown_model, dt_s,
+                                                                                   **FLIGHT_EKF_SETTINGS),
                   "kf": lambda generator, flown_model, dt_s: KalmanFilter(generator.model, dt_s)}
 #: Catalogue effects the manager watches for (heating faults).
 FAULT_EFFECTS = ("coolant_flow_reduction", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")

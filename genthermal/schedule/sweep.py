@@ -5,17 +5,45 @@ Each case draws (seeded) a mission of 2-8 h, 2-4 generators, plant parameters of
 fault the manager is not told, at a random onset on a random generator: a coolant blockage (flow
 factor 0.15-0.6 and an inlet rise), a shorted turn, an end-winding stray loss or an excitation
 iron loss; a share of the cases are healthy (for the false-alarm rate). Every case is flown with
-every scheduler. Keys of :func:`summarise` (benchmark JSON):
+every scheduler, one Dask task per case (the longest expected first, so that the long cases do
+not finish last on an otherwise idle cluster). The closed loop calls the scheduler only to
+re-plan (:func:`~genthermal.schedule.closed_loop.fly`); a flight that never re-planned is
+therefore the flight of every scheduler (same plant, same seeded noise, same detector), and the
+other schedulers' records are that flight's, marked ``same_flight_as`` (most cases of the grid:
+a fault the manager finds in time or a plant that stays cool needs no re-plan), which saves
+flying it again. A flight that raises is recorded with
+``status`` ``error`` and the error; one that runs past ``flight_cpu_limit_s`` of processor time
+with ``timeout`` (:class:`~genthermal.schedule.closed_loop.FlightTimeout`, checked every
+management cycle; processor time, so that a machine busy with other work does not turn slow
+flights into timeouts); one
+still running when the whole sweep passes ``timeout_s`` with ``unfinished``: none is lost.
+
+Keys of :func:`summarise` (benchmark JSON):
 
 ``robustness.cases``                 number of cases
 ``robustness.breach_s``              per scheduler: the longest time above θmax over the cases (any generator), s
-``robustness.breach_free_fraction``  per scheduler: share of cases with no time above θmax
-``rest_vs_best_baseline``            per faulty case: optimal added rest / best of heuristic and engineer (None when both are 0)
-``detect_delay_s``                   median and max over the faulty cases detected, and how many were detected
+``robustness.breach_free_fraction``  per scheduler: share of cases flown to the end with no time above θmax
+                                     (a flight that did not finish counts as not breach-free)
+``robustness.breached_cases``        per scheduler: the cases with time above θmax and how long, s
+``robustness.failed_flights``        flights that did not finish: case, scheduler, status, error
+``rest_vs_best_baseline``            ``per_case`` (faulty cases): optimal added rest, the best baseline
+                                     (heuristic or engineer, the one with less added rest) and its rest,
+                                     their ratio (None when the baseline does not rest); ``mean_ratio``: total
+                                     optimal rest / total best-baseline rest over those cases;
+                                     ``cases_optimal_rests_more``: cases where the optimal scheduler
+                                     rests more than the best baseline (by more than one step)
+``detect_delay_s``                   median and max over the faulty flights detected, how many were
+                                     detected, and the faulty flights not detected (case, scheduler)
 ``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
+``wall_s``                           per flight: median and max wall-clock time, s; ``total_flight_cpu``: the
+                                     flights' processor time added up, s (over the workers: the sweep's
+                                     wall-clock time on an otherwise idle machine, less the Dask overhead)
 """
 
 from __future__ import annotations
+
+import time
+import traceback
 
 import numpy as np
 
@@ -23,6 +51,14 @@ from ..mission import Mission
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss", "healthy")
+#: Default processor-time limit of one flight in a sweep, s. Choice of this project: the slowest
+#: flights of the 60-case grid (a severe blockage that keeps a generator above θmax at rest, so
+#: the manager re-plans and sheds every cycle) take one to two minutes of processor time; ten
+#: times that still marks a flight that does not end.
+DEFAULT_FLIGHT_CPU_LIMIT_S = 900.0
+#: Added rests closer than this to zero are rounding of the last step, not rest, s (the 10-s step
+#: of the closed loop).
+REST_RESOLUTION_S = 10.0
 
 
 def random_actions(rng: np.random.Generator, hours: float) -> list:
@@ -63,66 +99,208 @@ def robustness_case(index: int, seed: int = 0) -> dict:
             "generators": {"count": count, "plant_mismatch": mismatch}, "faults": faults}
 
 
-def fly_case(document: dict, schedulers) -> dict:
-    """Fly one case with every scheduler; the flight summaries by scheduler."""
-    from .closed_loop import fly
+def expected_cost(document: dict) -> float:
+    """Relative wall-clock cost of flying ``document`` (for the order of the tasks): mission hours
+    times generators, four times that for a coolant blockage (its flights re-plan and shed)."""
+    hours = sum(a["duration_min"] for a in document["actions"]) / 60.0
+    blockage = any(f["kind"] == "coolant_blockage" for f in document["faults"])
+    return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
+
+
+def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> list:
+    """Fly case ``document`` with each of ``schedulers`` (:func:`fly_flight`); once a flight ends
+    without a re-plan, the remaining schedulers get its record (module docstring) with
+    ``same_flight_as`` naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
+    flights, shared = [], None
+    for scheduler in schedulers:
+        if shared is not None:
+            summary = dict(shared["summary"], scheduler=scheduler)
+            flights.append({**shared, "scheduler": scheduler, "summary": summary, "same_flight_as": shared["scheduler"],
+                            "wall_s": 0.0, "cpu_s": 0.0})
+            continue
+        flight = fly_flight(document, scheduler, cpu_limit_s)
+        flights.append(flight)
+        if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
+            shared = flight
+    return flights
+
+
+def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> dict:
+    """Fly case ``document`` with ``scheduler``; never raises.
+
+    Returns
+    -------
+    dict
+        ``case``, ``scheduler``, ``status`` (``ok``, ``timeout`` or ``error``), ``wall_s``, ``cpu_s``
+        (processor time of the worker process: what the flight costs without other load) and either
+        ``summary`` (:func:`~genthermal.schedule.report.flight_summary` without its warnings) or
+        ``error`` (what went wrong and, for an error, the last lines of its traceback).
+    """
+    from .closed_loop import FlightTimeout, ManagerSettings, fly
     from .power_system import PowerSystem
     from .report import flight_summary
 
-    system = PowerSystem.from_mission(Mission.from_dict(document))
-    runs = {}
-    for scheduler in schedulers:
-        summary = flight_summary(fly(system, scheduler))
+    started, cpu_started = time.perf_counter(), time.process_time()
+    record = {"case": document["name"], "scheduler": scheduler}
+    try:
+        system = PowerSystem.from_mission(Mission.from_dict(document))
+        summary = flight_summary(fly(system, scheduler, ManagerSettings(cpu_limit_s=cpu_limit_s)))
         summary.pop("warnings")
-        runs[scheduler] = summary
-    return {"name": document["name"], "faulty": bool(document["faults"]), "runs": runs}
+        record.update(status="ok", summary=summary)
+    except FlightTimeout as stopped:
+        record.update(status="timeout", error=str(stopped))
+    except Exception as error:  # noqa: BLE001 - a sweep records every failure of a flight and goes on
+        record.update(status="error", error=f"{type(error).__name__}: {error}",
+                      traceback=traceback.format_exc(limit=-4).splitlines()[-12:])
+    record.update(wall_s=time.perf_counter() - started, cpu_s=time.process_time() - cpu_started)
+    return record
 
 
-def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True) -> list:
-    """Fly every case on Dask: a :class:`distributed.LocalCluster` of ``workers`` processes, or the
-    scheduler at ``cluster`` (``tcp://host:8786``); a tqdm bar when ``progress``."""
+def case_records(documents, flights: list, schedulers) -> list:
+    """One record per case: ``name``, ``faulty``, ``faults`` and ``runs`` (per scheduler the flight
+    summary with ``status`` ``ok`` and ``wall_s``, or the failure: ``status``, ``error``, ``wall_s``)."""
+    by_key = {(f["case"], f["scheduler"]): f for f in flights}
+    records = []
+    for document in documents:
+        runs = {}
+        for scheduler in schedulers:
+            flight = by_key.get((document["name"], scheduler),
+                                {"status": "unfinished", "error": "not flown: the sweep's timeout passed", "wall_s": None})
+            if flight["status"] == "ok":
+                runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], "cpu_s": flight.get("cpu_s"),
+                                   **({"same_flight_as": flight["same_flight_as"]} if "same_flight_as" in flight else {}),
+                                   **flight["summary"]}
+            else:
+                runs[scheduler] = {k: v for k, v in flight.items() if k not in ("case", "scheduler", "summary")}
+        records.append({"name": document["name"], "faulty": bool(document["faults"]),
+                        "faults": document["faults"], "plant_mismatch": document["generators"]["plant_mismatch"],
+                        "runs": runs})
+    return records
+
+
+def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True,
+              flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None) -> list:
+    """Fly every case with every scheduler on Dask: a :class:`distributed.LocalCluster` of
+    ``workers`` single-threaded processes, or the scheduler at ``cluster`` (``tcp://host:8786``);
+    a tqdm bar when ``progress``.
+
+    Parameters
+    ----------
+    documents : sequence of dict
+        Mission documents (:func:`robustness_case`); names must be unique.
+    schedulers : sequence of str
+    cluster : str, optional
+    workers : int
+    progress : bool
+    flight_cpu_limit_s : float or None
+        Processor-time limit of one flight, s (:func:`fly_flight`).
+    timeout_s : float or None
+        Wall-clock limit of the whole sweep, s: flights not done by then are recorded as
+        ``unfinished`` and cancelled.
+
+    Returns
+    -------
+    list of dict
+        :func:`case_records`, in the order of ``documents``.
+    """
     from distributed import Client, LocalCluster, as_completed
+    from distributed.utils import TimeoutError as DaskTimeoutError
     from tqdm import tqdm
 
-    local = None if cluster else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)
+    documents = list(documents)
+    local = None if cluster else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                              dashboard_address=None)
     client = Client(cluster or local)
+    flights = []
     try:
-        futures = client.map(fly_case, list(documents), schedulers=tuple(schedulers), pure=False)
-        records = [f.result() for f in tqdm(as_completed(futures), total=len(futures), disable=not progress,
-                                            desc="flights")]
+        order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
+        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s, pure=False,
+                                 priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
+        bar = tqdm(total=len(futures), disable=not progress, desc="cases")
+        try:
+            for future in as_completed(futures, timeout=timeout_s):
+                flights += future.result()
+                bar.update()
+        except (TimeoutError, DaskTimeoutError):
+            client.cancel([f for f in futures if not f.done()])
+        finally:
+            bar.close()
     finally:
         client.close()
         if local is not None:
             local.close()
-    return sorted(records, key=lambda r: int(r["name"].split(":")[0][4:]))
+    return case_records(documents, flights, schedulers)
+
+
+def _ok(run: dict) -> bool:
+    return run.get("status", "ok") == "ok"
+
+
+def _rest(run: dict) -> float:
+    """Added rest of a flight, s, with rounding below one step taken as none."""
+    rest = float(run["added_rest_s"])
+    return rest if rest >= REST_RESOLUTION_S else 0.0
+
+
+def rest_versus_best_baseline(records: list) -> dict:
+    """The ``rest_vs_best_baseline`` key (module docstring) over the faulty cases whose optimal,
+    heuristic and engineer flights all finished."""
+    per_case, optimal_total, best_total = [], 0.0, 0.0
+    for r in records:
+        runs = r["runs"]
+        if not r["faulty"] or not all(_ok(runs[s]) for s in ("heuristic", "engineer", "optimal")):
+            continue
+        best = min(("heuristic", "engineer"), key=lambda s: _rest(runs[s]))
+        optimal, baseline = _rest(runs["optimal"]), _rest(runs[best])
+        optimal_total, best_total = optimal_total + optimal, best_total + baseline
+        ratio = optimal / baseline if baseline > 0 else None
+        per_case.append({"case": r["name"], "optimal_rest_s": optimal, "best_baseline": best,
+                         "best_baseline_rest_s": baseline, "ratio": ratio})
+    return {"per_case": per_case,
+            "mean_ratio": (optimal_total / best_total) if best_total > 0 else None,
+            "optimal_total_rest_s": optimal_total, "best_baseline_total_rest_s": best_total,
+            "cases_optimal_rests_more": [c["case"] for c in per_case
+                                         if c["optimal_rest_s"] > c["best_baseline_rest_s"] + REST_RESOLUTION_S]}
 
 
 def summarise(records: list, schedulers) -> dict:
     """The robustness keys (module docstring)."""
     faulty = [r for r in records if r["faulty"]]
     healthy = [r for r in records if not r["faulty"]]
-    ratios = []
-    if "optimal" in schedulers and {"heuristic", "engineer"} <= set(schedulers):
-        for r in faulty:
-            best = min(r["runs"]["heuristic"]["added_rest_s"], r["runs"]["engineer"]["added_rest_s"])
-            optimal = r["runs"]["optimal"]["added_rest_s"]
-            ratios.append(None if best <= 0 and optimal <= 0 else (float("inf") if best <= 0 else optimal / best))
+    finished = {s: [r for r in records if _ok(r["runs"][s])] for s in schedulers}
+    failed = [{"case": r["name"], "scheduler": s, "status": r["runs"][s]["status"], "error": r["runs"][s].get("error")}
+              for r in records for s in schedulers if not _ok(r["runs"][s])]
     delays = [r["runs"][s]["detect_delay_s"] for r in faulty for s in schedulers
-              if r["runs"][s].get("detect_delay_s") is not None]
-    return {
+              if _ok(r["runs"][s]) and r["runs"][s].get("detect_delay_s") is not None]
+    missed = [{"case": r["name"], "scheduler": s} for r in faulty for s in schedulers
+              if _ok(r["runs"][s]) and r["runs"][s].get("detect_delay_s") is None]
+    walls = [r["runs"][s]["wall_s"] for r in records for s in schedulers if r["runs"][s].get("wall_s") is not None]
+    cpus = [r["runs"][s]["cpu_s"] for r in records for s in schedulers if r["runs"][s].get("cpu_s") is not None]
+
+    def alarms(cases):
+        return int(sum(r["runs"][s]["false_alarms"] for r in cases for s in schedulers if _ok(r["runs"][s])))
+    summary = {
         "robustness": {
             "cases": len(records),
-            "breach_s": {s: max(r["runs"][s]["breach_s"] for r in records) for s in schedulers},
-            "breach_free_fraction": {s: float(np.mean([r["runs"][s]["breach_s"] == 0 for r in records]))
+            "breach_s": {s: max((r["runs"][s]["breach_s"] for r in finished[s]), default=None) for s in schedulers},
+            "breach_free_fraction": {s: float(np.mean([_ok(r["runs"][s]) and r["runs"][s]["breach_s"] == 0
+                                                       for r in records])) if records else None
                                      for s in schedulers},
+            "breached_cases": {s: {r["name"]: r["runs"][s]["breach_s"] for r in finished[s]
+                                   if r["runs"][s]["breach_s"] > 0} for s in schedulers},
+            "failed_flights": failed,
         },
-        "rest_vs_best_baseline": ratios,
         "detect_delay_s": {"median": float(np.median(delays)) if delays else None,
                            "max": float(max(delays)) if delays else None,
                            "detected_flights": len(delays),
-                           "faulty_flights": len(faulty) * len(schedulers)},
-        "false_alarms": {"total": int(sum(r["runs"][s]["false_alarms"] for r in records for s in schedulers)),
-                         "on_healthy_flights": int(sum(r["runs"][s]["false_alarms"] for r in healthy
-                                                       for s in schedulers)),
-                         "healthy_flights": len(healthy) * len(schedulers)},
+                           "faulty_flights": sum(_ok(r["runs"][s]) for r in faulty for s in schedulers),
+                           "not_detected": missed},
+        "false_alarms": {"total": alarms(records), "on_healthy_flights": alarms(healthy),
+                         "healthy_flights": sum(_ok(r["runs"][s]) for r in healthy for s in schedulers)},
+        "wall_s": {"median_flight": float(np.median(walls)) if walls else None,
+                   "max_flight": float(max(walls)) if walls else None,
+                   "total_flight_cpu": float(sum(cpus)) if cpus else None},
     }
+    if {"heuristic", "engineer", "optimal"} <= set(schedulers):
+        summary["rest_vs_best_baseline"] = rest_versus_best_baseline(records)
+    return summary

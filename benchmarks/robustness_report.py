@@ -1,0 +1,155 @@
+"""The README's robustness table and plot from a ``genthermal sweep`` JSON.
+
+Usage::
+
+    python benchmarks/robustness_report.py benchmarks/figures/robustness.json [--png benchmarks/figures/robustness.png]
+
+Prints two markdown tables: one row per scheduler (cases flown to the end, breach-free share,
+longest breach, median and max detection delay, false alarms), then the figures of the optimal
+scheduler against the best baseline (heuristic or engineer, whichever rests less in that case)
+and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
+best baseline), each with what the flight reports about it. Draws, per case and scheduler, the
+time above θmax and the added rest of the optimal scheduler over the best baseline's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red"}
+
+
+def _minutes(seconds) -> str:
+    return "–" if seconds is None else f"{seconds / 60:.1f}"
+
+
+def scheduler_table(report: dict) -> str:
+    """One row per scheduler of the sweep."""
+    robustness = report["robustness"]
+    cases = report["cases"]
+    lines = ["| scheduler | flown to the end | breach-free cases | longest breach, s | cases with a breach "
+             "| median / max detection delay, min | false alarms (healthy flights) |",
+             "|---|---|---|---|---|---|---|"]
+    for scheduler in robustness["breach_s"]:
+        runs = [c["runs"][scheduler] for c in cases]
+        ok = [r for r in runs if r.get("status", "ok") == "ok"]
+        delays = [r["detect_delay_s"] for c, r in zip(cases, runs) if c["faulty"] and r.get("status", "ok") == "ok"
+                  and r.get("detect_delay_s") is not None]
+        healthy_alarms = sum(r["false_alarms"] for c, r in zip(cases, runs)
+                             if not c["faulty"] and r.get("status", "ok") == "ok")
+        alarms = sum(r["false_alarms"] for r in ok)
+        breach = robustness["breach_s"][scheduler]
+        lines.append(f"| {scheduler} | {len(ok)}/{len(runs)} | "
+                     f"{robustness['breach_free_fraction'][scheduler] * 100:.0f} % | "
+                     f"{'–' if breach is None else f'{breach:.0f}'} | {len(robustness['breached_cases'][scheduler])} | "
+                     f"{_minutes(float(np.median(delays)) if delays else None)} / "
+                     f"{_minutes(max(delays) if delays else None)} | {alarms} ({healthy_alarms}) |")
+    return "\n".join(lines)
+
+
+def rest_lines(report: dict) -> list[str]:
+    """The optimal scheduler's added rest against the best baseline's."""
+    rest = report.get("rest_vs_best_baseline")
+    if not rest:
+        return ["(the sweep did not fly heuristic, engineer and optimal)"]
+    resting = [c for c in rest["per_case"] if c["best_baseline_rest_s"] > 0 or c["optimal_rest_s"] > 0]
+    ratio = rest["mean_ratio"]
+    return [f"Faulty cases flown to the end by all three: {len(rest['per_case'])}; with added rest by any: "
+            f"{len(resting)}. Added rest over those cases: optimal {rest['optimal_total_rest_s'] / 60:.1f} min, "
+            f"best baseline {rest['best_baseline_total_rest_s'] / 60:.1f} min (ratio "
+            f"{'–' if ratio is None else f'{ratio:.2f}'}; target ≤ 0.8). Cases where the optimal scheduler rests "
+            f"more than the best baseline: {len(rest['cases_optimal_rests_more'])} "
+            f"({', '.join(rest['cases_optimal_rests_more']) or 'none'})."]
+
+
+def missed_lines(report: dict) -> list[str]:
+    """One line per case and scheduler that misses a target, with its cause as the flight reports it."""
+    lines = []
+    for case in report["cases"]:
+        for scheduler, run in case["runs"].items():
+            if run.get("status", "ok") != "ok":
+                lines.append(f"- {case['name']} / {scheduler}: {run['status']}: {run.get('error')}")
+            elif run["breach_s"] > 0:
+                peaks = {**run["max_T_winding"]}
+                hottest = max(peaks, key=peaks.get)
+                response = "; ".join(run.get("manager_response") or []) or "no infeasible plan reported"
+                lines.append(f"- {case['name']} / {scheduler}: {run['breach_s']:.0f} s above θmax (hottest "
+                             f"{hottest} {peaks[hottest]:.1f} °C, feasible {run['feasible']}, lowest reachable "
+                             f"peak {run['lowest_reachable_peak_C'] if run['lowest_reachable_peak_C'] is None else round(run['lowest_reachable_peak_C'], 1)} °C, "
+                             f"detected after {_minutes(run.get('detect_delay_s'))} min; manager: {response[:160]})")
+    return lines
+
+
+def plot(report: dict, path: Path) -> None:
+    """Breach (s) per case and scheduler, and the optimal/best-baseline added-rest ratio per case."""
+    cases = report["cases"]
+    schedulers = list(report["robustness"]["breach_s"])
+    x = np.arange(len(cases))
+    width = 0.8 / len(schedulers)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(13, 7), sharex=True)
+    failure_labelled = False
+    for i, scheduler in enumerate(schedulers):
+        runs = [c["runs"][scheduler] for c in cases]
+        breach = [r["breach_s"] if r.get("status", "ok") == "ok" else np.nan for r in runs]
+        offsets = x + (i - (len(schedulers) - 1) / 2) * width
+        top.bar(offsets, breach, width, label=scheduler, color=SCHEDULER_COLOURS.get(scheduler))
+        failed = [o for o, r in zip(offsets, runs) if r.get("status", "ok") != "ok"]
+        top.plot(failed, [0] * len(failed), "kx", ms=8, label=None if failure_labelled or not failed else "did not finish")
+        failure_labelled = failure_labelled or bool(failed)
+    top.set_ylabel("time above θmax [s]")
+    top.set_yscale("symlog", linthresh=10)
+    top.legend(ncol=4, fontsize=8)
+    top.grid(alpha=0.3, axis="y")
+    top.set_title(f"Robustness grid: {len(cases)} cases (plant ±30 %, unknown fault, 2-4 generators, 2-8 h)")
+    rest = {c["case"]: c for c in (report.get("rest_vs_best_baseline") or {}).get("per_case", [])}
+    ratios = [rest[c["name"]]["ratio"] if c["name"] in rest and rest[c["name"]]["ratio"] is not None else np.nan
+              for c in cases]
+    only_optimal = [i for i, c in enumerate(cases) if c["name"] in rest and rest[c["name"]]["ratio"] is None
+                    and rest[c["name"]]["optimal_rest_s"] > 0]
+    bottom.bar(x, ratios, 0.6, color="tab:green", label="optimal / best baseline added rest")
+    bottom.plot(only_optimal, [1.0] * len(only_optimal), "r^", label="optimal rests, baseline does not")
+    bottom.axhline(1.0, color="k", lw=0.8)
+    bottom.axhline(0.8, color="k", lw=0.8, ls="--", label="target 0.8 (grid mean)")
+    bottom.set_ylabel("rest ratio [-]")
+    bottom.legend(fontsize=8)
+    bottom.grid(alpha=0.3, axis="y")
+    bottom.set_xticks(x, [c["name"].split(":")[0] + ":" + c["name"].split(":")[1][:8] for c in cases],
+                      rotation=90, fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("json", help="a genthermal sweep --json file")
+    parser.add_argument("--png", help="write the plot here (default: next to the JSON, .png)")
+    args = parser.parse_args(argv)
+    path = Path(args.json)
+    report = json.loads(path.read_text())
+    if "cases" not in report or "robustness" not in report:
+        print(f"{path}: not a genthermal sweep JSON (needs 'robustness' and 'cases')", file=sys.stderr)
+        return 2
+    print(scheduler_table(report))
+    print()
+    print("\n".join(rest_lines(report)))
+    missed = missed_lines(report)
+    print(f"\nTargets missed ({len(missed)}):" if missed else "\nNo target missed.")
+    print("\n".join(missed))
+    png = Path(args.png) if args.png else path.with_suffix(".png")
+    plot(report, png)
+    print(f"\nwrote {png}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,66 @@
+"""The baseline detector (differential-innovation CUSUM) on synthetic flight records."""
+
+import numpy as np
+import pytest
+
+from genthermal.errors import InputError
+from genthermal.estimation.kalman import KalmanFilter
+from genthermal.mission import Mission
+from genthermal.schedule.innovation_detector import InnovationCusumSettings, innovation_cusum_alarms
+from genthermal.schedule.power_system import PowerSystem
+
+DT, CYCLE = 10.0, 30  # 10-s steps, 5-min cycles
+
+
+@pytest.fixture(scope="module")
+def generator():
+    mission = Mission.from_dict({"name": "baseline_test", "generators": {"count": 3},
+                                 "actions": [{"condition": 5, "duration_min": 60}]})
+    return PowerSystem.from_mission(mission).design_generator_for(())
+
+
+def _record(generator, currents, heat_from_step=None, extra_K=0.0, ambient=20.0):
+    """Sensors of the design model itself for ``currents`` (n_gen, n); generator 0's winding reads
+    ``extra_K`` more from step ``heat_from_step`` on."""
+    kalman = KalmanFilter(generator.model, DT)
+    n_gen, n = currents.shape
+    inlet = np.full((n_gen, n), 20.0)
+    measured = np.empty((n_gen, 2, n))
+    for g in range(n_gen):
+        x = np.full(generator.model.n_states, ambient)
+        for i in range(n):
+            x, _ = kalman.predict(x, None, generator.input(currents[g, i], inlet[g, i], ambient))
+            measured[g, :, i] = kalman.C @ x + kalman.e
+    if heat_from_step is not None:
+        measured[0, 0, heat_from_step:] += extra_K
+    return currents, inlet, measured
+
+
+def test_a_generator_reading_hotter_than_the_others_alarms_and_only_it(generator):
+    n = 20 * CYCLE
+    currents = np.full((3, n), 5.0)
+    record = _record(generator, currents, heat_from_step=8 * CYCLE, extra_K=3.0)
+    alarms = innovation_cusum_alarms(generator, *record, 20.0, DT, CYCLE)
+    assert alarms and {a["generator"] for a in alarms} == {0}
+    assert alarms[0]["time_s"] == pytest.approx(9 * CYCLE * DT)  # the first update that sees it
+    healthy = innovation_cusum_alarms(generator, *_record(generator, currents), 20.0, DT, CYCLE)
+    assert healthy == []
+
+
+def test_a_generator_carrying_more_than_the_others_is_not_tested(generator):
+    n = 12 * CYCLE
+    currents = np.full((3, n), 4.0)
+    currents[0] = 6.0
+    record = _record(generator, currents, heat_from_step=2 * CYCLE, extra_K=5.0)
+    assert innovation_cusum_alarms(generator, *record, 20.0, DT, CYCLE) == []
+
+
+def test_bad_records_and_settings_name_the_field(generator):
+    currents = np.full((1, 60), 5.0)
+    with pytest.raises(InputError, match="at least 2 generators"):
+        innovation_cusum_alarms(generator, *_record(generator, currents), 20.0, DT, CYCLE)
+    currents = np.full((2, 60), 5.0)
+    with pytest.raises(InputError, match="cycle_steps"):
+        innovation_cusum_alarms(generator, *_record(generator, currents), 20.0, DT, 0)
+    with pytest.raises(InputError, match="drift_K"):
+        InnovationCusumSettings(drift_K=-1.0)
