@@ -42,7 +42,7 @@ from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
-from .sensor_screen import SensorScreen
+from .sensor_screen import SensorScreen, corrected_record
 
 
 class Discovery:
@@ -215,6 +215,14 @@ class Discovery:
         if not isinstance(model, ThermalModel):
             raise InputError("model", type(model).__name__, "expected a ThermalModel")
         measured = data if isinstance(data, MeasuredSeries) else as_measurements(data, model.spec.interface)
+        prior = []
+        if self.sensor_faults and not isinstance(measured, MeasuredSeries):
+            # redundant sensors first, on the model's own sensor schema: a view that splits the
+            # winding per phase would take a faulty phase sensor for that phase's heat
+            own = series_for(model, measured, dt_s)
+            prior = [h for h in SensorScreen(measured, own, model.spec.interface).found if h.evidence == "redundancy"]
+            if prior:
+                measured = corrected_record(measured, own, prior)
         view = self._view(model, measured)
         calibration = None
         if baseline is not None:
@@ -232,7 +240,7 @@ class Discovery:
                          + (" (one winding node per phase)" if view.phases else ""))
         screen = None
         if self.sensor_faults:
-            screen = SensorScreen(measured, series, viewed.spec.interface)
+            screen = SensorScreen(measured, series, viewed.spec.interface, prior)
             series = screen.corrected_series()
         catalogue = self.candidates
         evidence = self.criterion.evidence_limit
@@ -287,7 +295,9 @@ class Discovery:
             self._report(f"{' + '.join(_explanations(other))} fits about as well, but neither explains the data: "
                          "no look-alike test")
             other = None
-        if other is not None and self._can_resolve_phases(model, measured, view):
+        phase_sensor_faulty = screen is not None and any(h.evidence == "redundancy" for h in screen.found)
+        # a phase sensor already claimed faulty would be refitted as a phase's heat: no tie-break on it
+        if other is not None and not phase_sensor_faulty and self._can_resolve_phases(model, measured, view):
             separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other)
             if separated is not None:
                 return separated

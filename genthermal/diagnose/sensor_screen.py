@@ -11,7 +11,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
    detector names the sensor and the time, also when fitted on top of the best physical effect
    it still passes the four tests against that effect alone); the round is then run again on the
-   record with that sensor corrected, so what the machine does is still judged.
+   record with that sensor corrected, so what the machine does is still judged. The faults of the
+   input sensors (coolant inlet, ambient: :mod:`~genthermal.diagnose.input_sensors`) compete in
+   the same step; a claimed one is corrected in the inputs the model is driven with.
+
+Redundant sensors are screened on the model's own sensor schema before the record's sensor view
+is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
+phase would otherwise take a faulty phase sensor for that phase's heat.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
+from .input_sensors import corrected_inputs, screen_inputs
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
                             screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
@@ -51,6 +58,24 @@ def record_readings(data, series: MeasuredSeries, interface) -> dict:
     return readings
 
 
+def corrected_record(measurements, series: MeasuredSeries, hypotheses):
+    """``measurements`` (MeasurementData) with the faults of ``hypotheses`` (fitted on the grid of
+    ``series``) removed from their record columns: the fitted signal subtracted (interpolated to
+    the record's times), or the column NaN from the onset for a stuck or noisy sensor of an
+    output that has other sensors (:func:`~genthermal.diagnose.sensor_faults.corrected_readings`)."""
+    frame = measurements.frame.copy()
+    time_s = measurements.time_s
+    for hypothesis in hypotheses:
+        drop = hypothesis.fault.kind in ("stuck", "noise") and hypothesis.evidence == "redundancy"
+        onset_s = float(series.time_s[0]) + hypothesis.fault.onset_s
+        for column in (c for c in hypothesis.columns if c in frame):
+            if drop:
+                frame.loc[time_s >= onset_s, column] = np.nan
+            elif hypothesis.fault.kind != "noise":
+                frame[column] = frame[column].to_numpy(float) - np.interp(time_s, series.time_s, hypothesis.signal)
+    return dataclasses.replace(measurements, frame=frame)
+
+
 class SensorScreen:
     """Sensor faults of one record (module docstring).
 
@@ -62,6 +87,9 @@ class SensorScreen:
         Its model outputs on the diagnosis grid.
     interface : MachineInterface
         The machine's interface (sensor schema, phase currents).
+    prior : sequence of SensorHypothesis
+        Faults claimed before (on the model's own sensors, before a sensor view split them:
+        :func:`corrected_record`); ``data`` is already corrected for them.
 
     Attributes
     ----------
@@ -71,29 +99,32 @@ class SensorScreen:
         The best single-sensor fault tried against the model, claimed or not.
     """
 
-    def __init__(self, data, series: MeasuredSeries, interface):
+    def __init__(self, data, series: MeasuredSeries, interface, prior=()):
         self.output_names = list(interface.output_names)
         self.columns = sensor_columns(interface)
         self.series = series
         self.elapsed_s = series.time_s - series.time_s[0]
         self.readings = record_readings(data, series, interface)
-        self.found: list[SensorHypothesis] = []
+        self.found: list[SensorHypothesis] = list(prior)
+        self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
-        noisy = screen_noise(corrected_readings(self.readings, self.found), self.elapsed_s, self.columns)
+        noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
+                             self.columns)
         self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
 
     def corrected_series(self) -> MeasuredSeries:
         """The series with the claimed sensor faults removed from its outputs."""
-        if not self.found:
+        new = self.found[len(self.prior):]  # the data are already corrected for the prior faults
+        if not new:
             return self.series
-        outputs = outputs_from(corrected_readings(self.readings, self.found), self.output_names, self.columns)
-        return dataclasses.replace(self.series, outputs=outputs)
+        outputs = outputs_from(corrected_readings(self.readings, new), self.output_names, self.columns)
+        return dataclasses.replace(self.series, outputs=outputs, inputs=corrected_inputs(self.series.inputs, new))
 
     def against_model(self, search, ranked, noise: float, outputs=None, onsets=None,
-                      on_top: bool = False) -> SensorHypothesis | None:
+                      on_top: bool = False, inputs: bool = True) -> SensorHypothesis | None:
         """Claim the best single-sensor fault if it beats the physical effects (module docstring).
 
         Parameters
@@ -112,6 +143,10 @@ class SensorScreen:
             tests against that effect alone. Only where a detector has already said which sensor
             moved and when (in flight): on a record searched blind, a second physical effect that
             moves one sensor most (an iron loss after a blockage) passes it too.
+        inputs : bool
+            Also fit the faults of the input sensors (coolant inlet, ambient:
+            :mod:`~genthermal.diagnose.input_sensors`) when every output is looked at; the
+            better of the two kinds is the candidate.
         """
         from .discover import passes_tests
 
@@ -120,6 +155,11 @@ class SensorScreen:
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
                                          self.elapsed_s, self.output_names, self.columns, exclude,
                                          outputs, onsets)
+        if inputs and (outputs is None or set(outputs) >= set(self.output_names)):
+            through_input = screen_inputs(search.viewed(search.model), search.series,
+                                          search.series.outputs - search.predicted_before, self.output_names, onsets)
+            if through_input is not None and (candidate is None or through_input.delta_bic < candidate.delta_bic):
+                candidate = through_input
         self.alternative = candidate
         if candidate is None:
             return None
@@ -130,7 +170,8 @@ class SensorScreen:
         else:
             candidate.alternative = f"{best_physical.effect} ΔBIC {best_physical.delta_bic:.0f}"
             claimed = alone and candidate.delta_bic < best_physical.delta_bic - PREFERENCE_BIC
-            if not claimed and on_top:  # the record may hold a machine effect (or model error) and a sensor fault
+            # the record may hold a machine effect (or model error) and a sensor fault
+            if not claimed and on_top and candidate.evidence != "input":
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
                                               self.elapsed_s, self.output_names, self.columns, exclude,
                                               outputs, onsets)

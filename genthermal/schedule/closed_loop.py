@@ -694,10 +694,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 if detectors is not estimators:
                     detectors[g].update(measured[g])
             if not settings.tell_fault:
-                watch.cycle(t, estimators, measured, before, monitor)  # sensor faults first: never seen as heat
-                believed = list(monitor.beliefs)
+                # sensor faults first: never seen as heat
+                watch.cycle(t, estimators, measured, before, monitor, detectors)
+                believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
-                watch.review(t, believed, estimators, monitor)  # a new belief may be a sensor's doing
+                watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing
         beliefs = _told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
             if settings.tell_fault:

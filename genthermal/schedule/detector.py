@@ -145,9 +145,9 @@ class DisturbanceDetector:
         self.peak_statistic = np.full(len(node_roles), -np.inf)
         self.peak_sum = np.zeros(len(node_roles))
 
-    def statistics(self, extra, load_factors, believed_healthy) -> np.ndarray:
+    def statistics(self, extra, load_factors, believed_healthy, masked=frozenset()) -> np.ndarray:
         """:math:`r_{gj}` (n_generators, n_nodes); NaN where g is not tested (no healthy generator to
-        compare with, or more load than its references).
+        compare with, or more load than its references, or its sensor of node j masked).
 
         Parameters
         ----------
@@ -157,6 +157,10 @@ class DisturbanceDetector:
             :math:`\\ell_g` of the cycle flown.
         believed_healthy : sequence of bool
             Per generator, True when no fault has been identified on it.
+        masked : collection of (int, int)
+            ``(generator, node index)`` whose sensor is masked (a claimed sensor fault): the
+            filter no longer observes that node's heat flow, so it is neither tested nor a
+            reference.
         """
         n = len(load_factors)
         r = np.full(self.sums.shape, np.nan)
@@ -166,10 +170,14 @@ class DisturbanceDetector:
                     np.median([load_factors[h] for h in references]):
                 continue
             q, variance = extra(g, load_factors[g])
-            others = [extra(h, load_factors[g]) for h in references]
-            q_ref = np.median([o[0] for o in others], axis=0)
-            variance_ref = np.median([o[1] for o in others], axis=0)
-            r[g] = (q - q_ref) / np.sqrt(variance + variance_ref)
+            others = {h: extra(h, load_factors[g]) for h in references}
+            for j in range(r.shape[1]):
+                observed = [others[h] for h in references if (h, j) not in masked]
+                if (g, j) in masked or not observed:
+                    continue
+                q_ref = np.median([o[0][j] for o in observed])
+                variance_ref = np.median([o[1][j] for o in observed])
+                r[g, j] = (q[j] - q_ref) / np.sqrt(variance[j] + variance_ref)
         return r
 
     def update(self, t_s: float, r) -> list:

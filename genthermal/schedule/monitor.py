@@ -435,6 +435,9 @@ class FaultMonitor:
         self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
         self.model, self.beliefs = system.planning_model, [()] * n
         self.alarms, self.identifications, self.calibrations = [], [], []
+        #: ``(generator, node index)`` out of the fault test after a sensor of the generator was
+        #: masked by the sensor watch (:meth:`mask`, :meth:`DisturbanceDetector.statistics`).
+        self.masked: set = set()
         self._time, self._currents, self._measured = [], [], []
 
     def record(self, t0: float, currents_A, measured_C) -> None:
@@ -443,6 +446,17 @@ class FaultMonitor:
         self._time.append(t0 + self.dt_s * np.arange(currents_A.shape[1]))
         self._currents.append(currents_A)
         self._measured.append(measured_C)
+
+    def mask(self, g: int, row: int, from_s: float) -> None:
+        """Take generator ``g`` out of the fault test and its sensor ``row`` out of its record from
+        ``from_s`` (s since the mission start) on: a sensor fault was claimed, and neither the
+        identification nor a recalibration may read the faulty samples as heat. The whole
+        generator leaves the test: with one sensor the filter cannot tell the heat flows of the
+        two nodes apart (on the Fig. 7.7 flight with the iron sensor of one unit masked, its
+        winding statistic alarmed three times, recalibrated the model and moved the plan)."""
+        self.masked.update((g, j) for j in range(self.detector.sums.shape[1]))
+        for times, measured in zip(self._time, self._measured):
+            measured[g, row, times + self.dt_s >= from_s] = np.nan
 
     def frame(self, g: int) -> pd.DataFrame:
         """Generator ``g``'s record so far in the measurement schema."""
@@ -482,13 +496,7 @@ class FaultMonitor:
         detection_estimators = estimators if detection_estimators is None else detection_estimators
         z = np.array([e.innovation[0] / e.innovation_std[0] for e in estimators])
         healthy = [g for g in range(len(z)) if not self.beliefs[g]]
-        mean_square = np.mean(self._currents[-1] ** 2, axis=1)
-        load_factors = mean_square / self.system.rated_current_A ** 2
-
-        def extra(g, load_factor):
-            e = detection_estimators[g]
-            return extra_heat_flow(e.filter, e.z, e.P, load_factor)
-        r = self.detector.statistics(extra, load_factors, [not b for b in self.beliefs])
+        r = self.statistics(detection_estimators)
         for g, node in self.detector.update(t_s, r):
             if not any(a["time_s"] == t_s and a["generator"] == g for a in self.alarms):
                 self._fault_alarm(g, t_s, z, node, float(r[g, node]))
@@ -498,9 +506,30 @@ class FaultMonitor:
                 len(self.calibrations) < self.settings.max_recalibrations:
             self._recalibrate(t_s, healthy, z)
 
+    def statistics(self, detection_estimators) -> np.ndarray:
+        """The fault test's :math:`r_{gj}` (n_generators, n_nodes) of the cycle just recorded, from
+        the extended Kalman filters ``detection_estimators`` (just updated); the test's sums are
+        not touched (NaN before two cycles are recorded)."""
+        if len(self._time) < 2:
+            return np.full(self.detector.sums.shape, np.nan)
+        load_factors = np.mean(self._currents[-1] ** 2, axis=1) / self.system.rated_current_A ** 2
+
+        def extra(g, load_factor):
+            e = detection_estimators[g]
+            return extra_heat_flow(e.filter, e.z, e.P, load_factor)
+        return self.detector.statistics(extra, load_factors, [not b for b in self.beliefs], self.masked)
+
+    def readings(self, g: int) -> tuple:
+        """Generator ``g``'s sensor readings so far: (time_s (N,), readings (n_sensors, N) °C) as
+        recorded (masked sensors NaN)."""
+        return (np.concatenate(self._time) + self.dt_s, np.concatenate(self._measured, axis=2)[g])
+
     def _recalibrate(self, t_s: float, candidates, z) -> None:
         from ..diagnose import calibrate
 
+        candidates = [h for h in candidates if (h, 0) not in self.masked]  # a masked sensor: not a reference
+        if not candidates:
+            return
         g = min(candidates, key=lambda h: z[h])
         names = [n for n in self.settings.calibrate_parameters if n in self.system.planning_model.parameters]
         result = calibrate(self.system.planning_model, self.frame(g), names, self.settings.identify_dt_s)

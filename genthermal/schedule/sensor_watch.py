@@ -12,31 +12,55 @@ thesis generator); ``kind`` and ``value`` as
 :class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
 is held). The faulty readings go to the filter and to the manager's record, as on a real aircraft.
 
-**Telling them apart.** After each measurement update, the normalised innovation of every sensor,
-taken relative to the median of the other generators (what the units share is the model's error,
-as in :mod:`~genthermal.schedule.monitor`), feeds a two-sided CUSUM per generator and sensor
-(:data:`SensorWatchSettings`). When one sensor alone alarms, it is held out of the filter for one
-cycle and the generator's record since the mission start, now a cycle past the change, goes to
-:func:`genthermal.diagnose.diagnose` on the manager's model, which fits the single-sensor faults
+**Telling them apart**, every cycle, before the fault monitor sees the cycle
+(:mod:`~genthermal.schedule.sensor_patterns` for the first two):
+
+1. *a frozen reading*: a sensor whose last :attr:`SensorWatchSettings.stuck_min_samples` samples are
+   equal after noisy ones is claimed stuck at once, no model asked (a stuck winding sensor used to
+   be believed a shorted turn, with a re-plan, 25 min before its claim);
+2. *opposite heat flows*: a drift is absorbed by the filter's disturbance states faster than it
+   builds an innovation, but to follow one sensor the filter must heat that node and cool the
+   other; a one-sided CUSUM on that pattern alarms, and the unit's record goes to the check below
+   with the onset searched from before the pattern began;
+3. *innovations*: the normalised innovation of every sensor, taken relative to the median of the
+   other generators (what the units share is the model's error) and only as far as the unit's own
+   innovation moves the same way (with two units, a real fault on one gives the other the mirrored
+   difference), feeds a two-sided CUSUM per generator and sensor. When one sensor alone alarms, it
+   is held out of the filter for one cycle and then checked.
+
+The check hands the generator's record since the mission start to the diagnosis on the manager's
+model (calibrated on the record before the onset window), which fits the single-sensor faults
 (:mod:`genthermal.diagnose.sensor_faults`) against the heating faults the manager watches for on one
 criterion: a machine fault moves both sensors as the model couples them, a sensor fault moves one in
 a way no heat flow can. Only a claimed sensor fault is acted on here; machine faults stay with the
 fault monitor.
 
-**Acting on it.** From the fitted onset on, the faulty sensor is masked: the filter updates with the
-other sensor only and the sensor is NaN in the manager's record. Masking, not subtracting the fitted
-fault: on a flight record calibrated for a few parameters, a fitted bias is off by some tenths of a
-kelvin (the model's remaining error), and a corrected reading that far off makes the fault monitor's
-differential test, whose threshold is 0.2 K, alarm on the *other* units. The claim's own cycle is
+**Gating the plan.** When the fault monitor changes the believed machine of a unit believed healthy
+(its test alarmed first), the unit's record is checked for a fault of either sensor at once; a claim
+undoes the new belief. Without a claim, if the unit's heat flows show the sensor pattern (its
+CUSUM is building or alarmed lately), the new belief *and* the recalibration its alarm made are
+held back and the record is checked every cycle, for at most :attr:`SensorWatchSettings.max_defer_s`;
+the plan, made on the believed machine, does not move meanwhile. Real faults do not show the
+pattern when they alarm (shorted turn, stray loss, blockage, iron loss on the Fig. 7.7 flight), so
+their beliefs are not delayed.
+
+**Acting on a claim.** From the fitted onset on, the faulty sensor is masked: the filter updates with
+the other sensor only, and the sensor is NaN in the manager's record, also for the samples already
+recorded since the onset (the identification and recalibration read that record). Masking, not
+subtracting the fitted fault: on a flight record calibrated for a few parameters, a fitted bias is
+off by some tenths of a kelvin (the model's remaining error), and a corrected reading that far off
+makes the fault monitor's differential test alarm on the *other* units. The claim's own cycle is
 redone: the filter goes back to its prediction and updates without the sensor; that cycle's
-innovation is withheld from every test and the fault monitor's CUSUM of that generator restarts, so
-the fault monitor never sees the faulty reading as heat. When the fault monitor changes a unit's
-believed machine first (its test alarmed before this one), the unit's record is checked for a fault
-of either sensor at once; a claim undoes the new belief, and any claim drops the effects identified
-on that unit after the fault's fitted onset. The believed machine, hence the load plan, is not
-changed by a sensor fault. The price: with the winding sensor of a unit masked, the fault monitor's
-differential winding test has no reading of that unit (with two units, no test at all) for the rest
-of the flight.
+innovation is withheld from every test. Any claim drops the effects identified on that unit after
+the fault's onset. The believed machine, hence the load plan, is not changed by a sensor fault.
+The price: a unit with a masked sensor leaves the fault monitor's test and is no reference for the
+others (with one sensor the filter cannot tell its two heat flows apart: with the iron sensor of
+one unit masked, its winding statistic alarmed three times and moved the plan), so with two units
+there is no fault test for the rest of the flight, and the opposite-flow test stops too.
+
+Input sensors (coolant inlet, ambient) are not covered in flight: the filter and the record read
+the true inlet and the mission's ambient (:mod:`genthermal.diagnose.input_sensors` covers them in
+``diagnose``).
 """
 
 from __future__ import annotations
@@ -49,7 +73,8 @@ import numpy as np
 from ..conditions import checked_number, reject_unknown_keys
 from ..errors import InputError
 from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
-from .monitor import Cusum
+from .monitor import Cusum, believed_model
+from .sensor_patterns import frozen_since, opposite_flows
 
 SCENARIO_KEY = "sensor_faults"
 
@@ -66,11 +91,11 @@ class SensorWatchSettings:
         differential innovations (standard deviation about :math:`\\sqrt 2`) rarely stay above
         1 σ: no check on the healthy Fig. 7.7 flight nor on the blockage_large flight. A drift is
         absorbed by the filter's disturbance states faster than it builds an innovation: it is not
-        seen at these settings.
+        seen at these settings (the opposite-heat-flow test is there for it).
     min_check_interval_s : float
         Shortest time between two record checks of one generator, s.
     max_checks : int
-        Record checks per generator and flight.
+        Record checks per generator and flight (10: a held belief is checked every cycle).
     identify_dt_s : float
         Sample period of the record handed to the check, s.
     lookback_s : float
@@ -86,6 +111,22 @@ class SensorWatchSettings:
         85 min, after a re-plan and a shorted turn believed (``tests/test_sensor_watch.py``).
     check_delay_s : float
         The check runs this long after the alarm (one management cycle), s.
+    stuck_min_samples : int
+        A reading equal over this many consecutive samples, after a noisy one, is a frozen
+        channel (:func:`~genthermal.schedule.sensor_patterns.frozen_since`): 12 samples, 2 min at
+        the 10-s step; with the thesis noise (σ ≈ 0.09 K) two equal samples of a live PT100 are
+        already improbable.
+    pattern_drift, pattern_threshold : float
+        :math:`\nu, h` of the one-sided CUSUM on the opposite-heat-flow statistic :math:`m_g`
+        (:mod:`~genthermal.schedule.sensor_patterns`, in standard deviations): ν is near the
+        largest :math:`m_g` of the healthy flight and of the faulty flights measured there (0.42,
+        0.44); a 1.5 K/h iron drift (0.5-0.7 a cycle) builds h = 2 in about an hour.
+    max_defer_s : float
+        A new belief of the fault monitor on a generator whose heat flows show the sensor
+        pattern (its CUSUM above zero) is held back, and its record checked every cycle, for at
+        most this long, s; then the belief is taken (the plan changes up to 30 min late). 30 min:
+        a 1.5 K/h winding drift was claimed 10 min after the fault monitor's belief and a 3 K/h
+        one 25 min after it, on the Fig. 7.7 flight at 88 °C.
     enabled : bool
         False: faults are injected but not looked for (the comparison case).
     """
@@ -93,12 +134,16 @@ class SensorWatchSettings:
     drift: float = 1.0
     threshold: float = 4.0
     min_check_interval_s: float = 900.0
-    max_checks: int = 6
+    max_checks: int = 10
     identify_dt_s: float = 60.0
     lookback_s: float = 1800.0
     min_calibration_s: float = 1200.0
     calibrate_parameters: tuple = ("R0", "h_end_air")
     check_delay_s: float = 300.0
+    stuck_min_samples: int = 12
+    pattern_drift: float = 0.4
+    pattern_threshold: float = 2.0
+    max_defer_s: float = 1800.0
     enabled: bool = True
 
 
@@ -226,8 +271,16 @@ class SensorWatch:
         self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
                       for _ in range(n)]
         self.corrections: dict[tuple[int, int], SensorFault] = {}
+        #: ``(generator, row)`` → time the mask starts, s (a drift's: the start of its check window).
+        self.mask_from: dict[tuple[int, int], float] = {}
         self.claims, self.checks = [], []
         self.suspects: dict[int, int] = {}
+        self.patterns = [Cusum(settings.pattern_drift, settings.pattern_threshold) for _ in range(n)]
+        self._pattern_since: dict[int, float] = {}
+        self.pattern_alarms: list[dict] = []
+        #: Generator → (held-back belief, since s): new beliefs waiting for the sensor check.
+        self.deferred: dict[int, tuple] = {}
+        self.deferrals: list[dict] = []
         self._last_check = [-math.inf] * n
 
     def correct(self, sample_times_s, sensed, only=None) -> np.ndarray:
@@ -237,11 +290,12 @@ class SensorWatch:
         times = np.asarray(sample_times_s, dtype=float)
         for (g, row), fault in self.corrections.items():
             if only is None or (g, row) in only:
-                corrected[g, row, times >= fault.onset_s] = np.nan
+                corrected[g, row, times >= self.mask_from.get((g, row), fault.onset_s)] = np.nan
         return corrected
 
-    def cycle(self, t_s: float, estimators, measured, before, monitor) -> list:
-        """Run the tests on the cycle's innovations; check alarmed generators' records; act on claims.
+    def cycle(self, t_s: float, estimators, measured, before, monitor, detectors=None) -> list:
+        """Run the tests on the cycle's readings, innovations and heat flows; check alarmed
+        generators' records; act on claims; take or keep holding deferred beliefs.
 
         Parameters
         ----------
@@ -255,6 +309,8 @@ class SensorWatch:
             Each estimator's predicted state and covariance before the update.
         monitor : FaultMonitor
             Its record is checked; its fault test of a generator restarts on a claim.
+        detectors : list of StateEstimator, optional
+            The extended Kalman filters of the fault test (default ``estimators``).
 
         Returns
         -------
@@ -265,12 +321,29 @@ class SensorWatch:
             return []
         z = np.array([[e.innovation[r] / e.innovation_std[r] for r in range(len(self.outputs))] for e in estimators])
         claimed, known = [], set(self.corrections)
+        flows = opposite_flows(monitor.statistics(estimators if detectors is None else detectors))
         for g in range(len(estimators)):
+            if self._frozen(g, t_s, monitor):  # a frozen channel needs no model: claimed at once
+                claimed.append(g)
+                continue
+            pattern = self._pattern_alarm(g, t_s, flows[g])
+            if g in self.deferred:
+                if self._check_deferred(g, t_s, monitor):
+                    claimed.append(g)
+                    continue
+            elif pattern and self._may_check(g, t_s):
+                if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0, since_s=self._pattern_since[g],
+                               peers=True):
+                    claimed.append(g)
+                    continue
             alarmed = []
             for r in range(len(self.outputs)):
                 others = np.delete(z[:, r], g)
                 others = others[np.isfinite(others)]
                 d = z[g, r] - (float(np.median(others)) if others.size else 0.0)
+                # the unit's own innovation must move too: with two units, one with a real fault
+                # gives the other the mirrored difference while its own innovation stays small
+                d = math.copysign(min(abs(d), abs(z[g, r])), d) if d * z[g, r] > 0 else 0.0
                 if self.tests[g][r].update(d):
                     alarmed.append(self.outputs[r])
             if g in self.suspects:  # alarmed a cycle ago: the record now holds a cycle after the change
@@ -291,6 +364,7 @@ class SensorWatch:
                 monitor.detector.restart(g)
                 for test in self.tests[g]:
                     test.high = test.low = 0.0
+                self.patterns[g].high = 0.0
             estimators[g].update(y)
             # this cycle's innovation mixes the fault and its correction: no test compares against it
             estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
@@ -304,10 +378,14 @@ class SensorWatch:
         monitor.beliefs = list(monitor.beliefs)
         monitor.beliefs[g] = kept[-1].effects if kept else ()
 
-    def review(self, t_s: float, previous_beliefs, estimators, monitor) -> list:
+    def review(self, t_s: float, previous_beliefs, estimators, monitor, previous_model=None) -> list:
         """After the fault monitor's cycle: a unit whose believed machine just changed is checked
         for a sensor fault of either sensor first; a claim undoes the new belief (the change of
-        the reading was the sensor's, not the machine's) and masks the sensor.
+        the reading was the sensor's, not the machine's) and masks the sensor. Without a claim, a
+        unit whose heat flows show the sensor pattern (:meth:`_suspicious`) has the new belief held
+        back, with the recalibration its alarm made (the model goes back to ``previous_model``),
+        and is checked every cycle (:meth:`_check_deferred`): the plan does not move until the
+        sensor is cleared or :attr:`SensorWatchSettings.max_defer_s` has passed.
 
         Returns
         -------
@@ -317,26 +395,137 @@ class SensorWatch:
         if not self.settings.enabled:
             return []
         undone = []
+        recalibrated = previous_model is not None and monitor.calibrations and \
+            monitor.calibrations[-1]["time_s"] == t_s
+        alarmed = {a["generator"] for a in monitor.alarms if a["time_s"] == t_s}
+        if recalibrated and any(not previous_beliefs[g] and self._suspicious(g, t_s) for g in alarmed):
+            monitor.model = previous_model  # an alarm of the sensor pattern: its recalibration waits too
         for g, (before, now) in enumerate(zip(previous_beliefs, monitor.beliefs)):
-            if now == before or not self._may_check(g, t_s):
+            if now == before:
+                continue
+            # only a unit believed healthy: the misfit of an identified effect can take any pattern
+            suspicious = not before and self._suspicious(g, t_s)
+            if not (self._may_check(g, t_s) or (suspicious and self._checks_left(g))):
                 continue
             beliefs, monitor.beliefs = list(monitor.beliefs), list(monitor.beliefs)
             monitor.beliefs[g] = before  # the record is checked on the machine as believed before
-            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0):
+            # on the model before this cycle's recalibration: that ran on another unit's record,
+            # which may hold the faulty sensor
+            if self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
+                           since_s=self._pattern_since.get(g) if suspicious else None, base_model=previous_model,
+                           peers=suspicious):
                 undone.append(g)
                 estimators[g].innovation = np.full_like(estimators[g].innovation, np.nan)
+                self.deferred.pop(g, None)
+            elif suspicious:  # the heat flows say "sensor": hold the new belief back, check again
+                self.deferred[g] = (now, self.deferred.get(g, (None, t_s))[1])
+                if recalibrated:
+                    monitor.model = previous_model  # the alarm's recalibration waits with its belief
+                self.deferrals.append({"generator": g, "time_s": t_s, "belief": [name for name, _ in now[-1:]],
+                                       "outcome": "held"})
+                undone.append(g)
             else:
                 monitor.beliefs = beliefs
         return undone
 
-    def _may_check(self, g: int, t_s: float) -> bool:
-        done = sum(1 for c in self.checks if c["generator"] == g)
-        return done < self.settings.max_checks and t_s - self._last_check[g] >= self.settings.min_check_interval_s
+    def _frozen(self, g: int, t_s: float, monitor) -> bool:
+        """Claim every sensor of generator ``g`` whose reading froze (module
+        :mod:`~genthermal.schedule.sensor_patterns`); True when one was claimed."""
+        times, readings = monitor.readings(g)
+        found = False
+        for row, output in enumerate(self.outputs):
+            if (g, row) in self.corrections:
+                continue
+            start_s = frozen_since(times, readings[row], self.settings.stuck_min_samples)
+            if start_s is None:
+                continue
+            held = float(readings[row][-1])
+            fault = SensorFault(output, "stuck", held, start_s)
+            run = int(np.count_nonzero(times >= start_s))
+            self._mask(g, row, fault, start_s, monitor)
+            self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault, "delta_bic": None,
+                                "alternative": f"reading frozen at {held:.2f} °C for {run} samples (a live sensor "
+                                               "is noisy): no heat flow holds a temperature exactly",
+                                "action": "masked", "evidence": "frozen reading"})
+            found = True
+        return found
 
-    def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None) -> bool:
+    def _pattern_alarm(self, g: int, t_s: float, flow: float) -> bool:
+        """Feed generator ``g``'s opposite-heat-flow statistic to its CUSUM; True on an alarm. Not
+        run once any sensor is masked: one sensor left has no pattern, and a generator compared with
+        one whose sensor is masked shows that one's unobserved heat flow mirrored."""
+        if self.corrections:
+            return False
+        test = self.patterns[g]
+        if test.high == 0.0:
+            self._pattern_since[g] = t_s
+        alarm = test.update(flow)
+        if alarm:
+            self.pattern_alarms.append({"time_s": t_s, "generator": g, "since_s": self._pattern_since[g]})
+        return alarm
+
+    def _suspicious(self, g: int, t_s: float) -> bool:
+        """Generator ``g``'s heat flows show the sensor pattern: its CUSUM is building, or it
+        alarmed within :attr:`SensorWatchSettings.max_defer_s`."""
+        recent = [a for a in self.pattern_alarms
+                  if a["generator"] == g and t_s - a["time_s"] <= self.settings.max_defer_s]
+        return self.patterns[g].high > 0.0 or bool(recent)
+
+    def _check_deferred(self, g: int, t_s: float, monitor) -> bool:
+        """Check generator ``g``'s record again while its new belief is held back; take the belief
+        when the pattern is gone or it has waited :attr:`SensorWatchSettings.max_defer_s`. True
+        on a claim."""
+        belief, since_s = self.deferred[g]
+        if self._checks_left(g) and self._check(g, t_s, list(self.outputs), monitor, delay_s=0.0,
+                                                since_s=self._pattern_since.get(g, since_s), peers=True):
+            self.deferred.pop(g, None)
+            self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "sensor fault claimed"})
+            return True
+        if not self._suspicious(g, t_s) or t_s - since_s >= self.settings.max_defer_s:
+            self.deferred.pop(g)
+            monitor.beliefs = list(monitor.beliefs)
+            monitor.beliefs[g] = belief
+            self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "belief taken"})
+        return False
+
+    def _checks_left(self, g: int) -> bool:
+        return sum(1 for c in self.checks if c["generator"] == g) < self.settings.max_checks
+
+    def _may_check(self, g: int, t_s: float) -> bool:
+        return self._checks_left(g) and t_s - self._last_check[g] >= self.settings.min_check_interval_s
+
+    def _check(self, g: int, t_s: float, alarmed, monitor, delay_s: float | None = None,
+               since_s: float | None = None, base_model=None, peers: bool = False) -> bool:
         """Fit the alarmed sensor's faults (onset within :attr:`SensorWatchSettings.lookback_s` of
-        the alarm) against the heating faults on generator ``g``'s record, the model first
-        calibrated on the record before that window; claim and correct."""
+        the alarm, or of ``since_s``, s, when earlier: the start of the heat-flow pattern; on
+        ``base_model`` with the unit's beliefs when given, else the monitor's model) against the
+        heating faults on generator ``g``'s record, the model first calibrated on the record before
+        that window; claim and correct. With ``peers`` (the heat-flow pattern, which the units a
+        unit is compared with show mirrored), the other units without a masked sensor are fitted
+        the same way and the fault is claimed on the unit where it is strongest, only when it beats
+        every other unit's by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`. Returns
+        True when a fault of ``g`` was claimed."""
+        from ..diagnose.sensor_faults import PREFERENCE_BIC
+
+        self._last_check[g] = t_s
+        found = self._fit(g, t_s, alarmed, monitor, delay_s, since_s, base_model)
+        if not found or not peers:
+            return self._claim(g, t_s, found, monitor)
+        others = [h for h in range(len(self._last_check)) if h != g
+                  and not any((h, r) in self.corrections for r in range(len(self.outputs)))]
+        rivals = {h: self._fit(h, t_s, alarmed, monitor, delay_s, since_s, base_model) for h in others}
+        rivals = {h: f for h, f in rivals.items() if f}
+        strongest = min(rivals, key=lambda h: rivals[h][0].delta_bic, default=None)
+        if strongest is None or found[0].delta_bic < rivals[strongest][0].delta_bic - PREFERENCE_BIC:
+            return self._claim(g, t_s, found, monitor)
+        runners_up = [found[0].delta_bic] + [f[0].delta_bic for h, f in rivals.items() if h != strongest]
+        if rivals[strongest][0].delta_bic < min(runners_up) - PREFERENCE_BIC:
+            self._claim(strongest, t_s, rivals[strongest], monitor)
+        return False
+
+    def _fit(self, g: int, t_s: float, alarmed, monitor, delay_s, since_s, base_model) -> list:
+        """The check of :meth:`_check` on generator ``g``'s record, recorded in :attr:`checks`;
+        the hypotheses to claim (onsets since the mission start), not acted on."""
         import time
 
         from ..diagnose.calibrate import calibrate
@@ -344,12 +533,12 @@ class SensorWatch:
         from ..diagnose.search import EffectSearch
         from ..diagnose.sensor_screen import SensorScreen
 
-        self._last_check[g] = t_s
         started = time.perf_counter()
         record = monitor.frame(g)
-        model = monitor.flown_model(g)
+        model = monitor.flown_model(g) if base_model is None else believed_model(base_model, monitor.beliefs[g])
         alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
-        before = record[record["time_s"] < alarm_s - self.settings.lookback_s]
+        window_s = min(alarm_s, t_s if since_s is None else since_s) - self.settings.lookback_s
+        before = record[record["time_s"] < window_s]
         span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
         if span_s >= self.settings.min_calibration_s:
             model = calibrate(model, before, [p for p in self.settings.calibrate_parameters if p in model.parameters],
@@ -359,34 +548,55 @@ class SensorWatch:
         search = EffectSearch(model, series).fit_found()
         names = [n for n in search.candidates() if n in self.detection.fault_effects]
         ranked = search.rank(names) if names else []
-        onsets = np.flatnonzero((series.time_s >= alarm_s - self.settings.lookback_s)
+        onsets = np.flatnonzero((series.time_s >= window_s)
                                 & (series.time_s <= alarm_s + self.settings.identify_dt_s))
         onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
         masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
         outputs = [a for a in alarmed if a not in masked]
-        found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True)
+        # input sensors are not injected nor corrected in flight (the filter reads the true inlet)
+        found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True, inputs=False)
                  if outputs and onsets.size else None)
         noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
-        new = [found] if found is not None else noisy[:1]
-        start_s = float(series.time_s[0])
+        start_s = float(series.time_s[0])  # onsets from the mission start, sensors named by output
+        new = [dataclasses.replace(h, fault=dataclasses.replace(h.fault, sensor=h.output,
+                                                                 onset_s=start_s + h.fault.onset_s))
+               for h in ([found] if found is not None else noisy[:1])]
         self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": bool(new),
                             "best_machine_fault": ranked[0].effect if ranked else None,
                             "solve_s": time.perf_counter() - started})
+        return new
+
+    def _claim(self, g: int, t_s: float, new, monitor) -> bool:
+        """Act on the hypotheses ``new`` of :meth:`_fit` on generator ``g``: mask, record."""
         for hypothesis in new:
-            fault = dataclasses.replace(hypothesis.fault, sensor=hypothesis.output,
-                                        onset_s=start_s + hypothesis.fault.onset_s)
-            self.corrections[(g, self.outputs.index(fault.sensor))] = fault
-            self._undo_beliefs_since(g, fault.onset_s, monitor)
+            fault = hypothesis.fault
+            self._mask(g, self.outputs.index(fault.sensor), fault, fault.onset_s, monitor)
             self.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                 "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
                                 "action": "masked"})
         return bool(new)
+
+    def _mask(self, g: int, row: int, fault: SensorFault, from_s: float, monitor) -> None:
+        """Mask generator ``g``'s sensor ``row`` from ``from_s`` in the flight to come and in the
+        fault monitor's record and test; drop the beliefs its faulty samples may have caused."""
+        self.corrections[(g, row)] = fault
+        self.mask_from[(g, row)] = from_s
+        monitor.mask(g, row, from_s)
+        self._undo_beliefs_since(g, from_s, monitor)
+        self.deferred.pop(g, None)
+        for other in list(self.deferred):  # a belief held on a unit compared with this sensor's
+            self.deferred.pop(other)
+            self.deferrals.append({"generator": other, "time_s": self.claims[-1]["claimed_at_s"] if self.claims
+                                   else from_s, "outcome": f"dropped: a sensor of unit {g + 1} was claimed"})
 
     def to_dict(self, names) -> dict:
         """The flight JSON ``sensor_faults`` entry: injected, claimed (with the action) and checks."""
         return {"injected": [{"generator": names[f.generator], **f.fault.to_dict()} for f in self.injected],
                 "claimed": [{"generator": names[c["generator"]], "claimed_at_s": c["claimed_at_s"],
                              **c["fault"].to_dict(), "delta_ic": c["delta_bic"], "alternative": c["alternative"],
-                             "action": c["action"]} for c in self.claims],
+                             "evidence": c.get("evidence", "record check"), "action": c["action"]}
+                            for c in self.claims],
                 "checks": [{**c, "generator": names[c["generator"]]} for c in self.checks],
+                "pattern_alarms": [{**a, "generator": names[a["generator"]]} for a in self.pattern_alarms],
+                "beliefs_held": [{**d, "generator": names[d["generator"]]} for d in self.deferrals],
                 "load_plan": "unchanged by sensor faults: the believed machine is not changed by a claim"}
