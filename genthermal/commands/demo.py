@@ -195,7 +195,7 @@ def estimation(plant, inputs, out: Path) -> dict:
 
 
 def load_management(out: Path) -> dict:
-    """The large-blockage mission flown closed loop, heuristic (thesis ch. 7) vs optimal scheduler."""
+    """The large-blockage mission flown closed loop: thesis heuristic, engineer's heuristic, optimal scheduler."""
     from ..schedule.report import run_scheduler_demo
 
     print()
