@@ -2,7 +2,6 @@
 
 import json
 
-
 from genthermal.cli import main
 
 
