@@ -54,7 +54,7 @@ from .flown import DEFAULT_CONFIDENCE_SIGMAS, FlownPlanning
 from .engineer import EngineerSettings, engineer_plan
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
-from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model
+from .monitor import DetectionSettings, FaultMonitor, StateEstimator, believed_model, planning_generator
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
                    generator_inputs, mission_segments, predict, remaining_after, split_segments)
@@ -462,6 +462,36 @@ def _segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
     return split_segments(segments, settings.cycle_s) if settings.nonlinear else segments
 
 
+class TrustedHeatFlows:
+    """The disturbance heat flows each generator's plan may carry (offset-free planning).
+
+    While the sensor watch trusts a generator's heat flows (:meth:`SensorWatch.trusts_heat_flows
+    <genthermal.schedule.sensor_watch.SensorWatch.trusts_heat_flows>`), the plan takes the
+    filter's current ones and they are kept. While it does not (a sensor claimed faulty, or the
+    sensor pattern under check), the plan holds the last trusted ones with the filter's current node
+    temperatures: dropping them altogether made the stuck-sensor flight of
+    ``tests/test_sensor_watch.py`` re-plan at every cycle after the claim, and taking the current
+    ones re-planned on heat flows learnt from the faulty readings. A filter whose state
+    changed since (a new model) plans without them until they are trusted again.
+    """
+
+    def __init__(self, n_generators: int):
+        self._kept: list = [None] * n_generators
+
+    def planning_generator(self, g: int, estimator, trusts: bool):
+        """Generator ``g``'s design generator for the plan (see the class docstring)."""
+        if trusts:
+            self._kept[g] = (list(estimator.filter.state_names), np.array(estimator.z, dtype=float))
+            return estimator.planning_generator
+        kept = self._kept[g]
+        if kept is None or kept[0] != list(estimator.filter.state_names):
+            return estimator.generator
+        state = np.array(estimator.z, dtype=float)
+        nodes = estimator.filter.model.n_states if isinstance(estimator.filter, ExtendedKalmanFilter) else state.size
+        state[nodes:] = kept[1][nodes:]
+        return planning_generator(estimator.generator, estimator.filter, state)
+
+
 class _Recorder:
     """Collects the steps flown, from a cold machine (every node at the ambient temperature)."""
 
@@ -680,6 +710,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                                         system.planning_model.output_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
+    trusted = TrustedHeatFlows(system.n_generators)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
     measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
@@ -711,7 +742,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators],
                               [e.P for e in estimators], settings.confidence_sigmas) if settings.nonlinear else None
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [e.planning_generator for e in estimators], np.floor((budget - rested_s) / dt + 1e-9) * dt,
+                           [trusted.planning_generator(g, e, watch.trusts_heat_flows(g, t))
+                            for g, e in enumerate(estimators)], np.floor((budget - rested_s) / dt + 1e-9) * dt,
                            resting_s, flown)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]

@@ -488,6 +488,22 @@ class SensorWatch:
             self.deferrals.append({"generator": g, "time_s": t_s, "outcome": "belief taken"})
         return False
 
+    def trusts_heat_flows(self, g: int, t_s: float) -> bool:
+        """Whether the planner may take generator ``g``'s estimated disturbance heat flows at
+        ``t_s`` (offset-free planning, :func:`~genthermal.schedule.monitor.planning_generator`).
+
+        Not while one of its sensors is claimed faulty (the filter learnt them partly from the
+        faulty samples, and with the sensor masked they are no longer observed), nor while its
+        heat flows show the sensor pattern or a new belief waits for the sensor check: those heat
+        flows may be a sensor's doing. The planner then holds the last trusted ones
+        (:class:`~genthermal.schedule.closed_loop.TrustedHeatFlows`). Measured on the stuck and
+        drifting winding sensors of ``tests/test_sensor_watch.py``: with the heat flows handed over
+        regardless, the stuck sensor caused a re-plan 50 min after its claim and the drift two.
+        """
+        if any(h == g for h, _ in self.corrections) or g in self.deferred:
+            return False
+        return not self._suspicious(g, t_s)
+
     def _checks_left(self, g: int) -> bool:
         return sum(1 for c in self.checks if c["generator"] == g) < self.settings.max_checks
 
