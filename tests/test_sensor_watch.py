@@ -168,3 +168,17 @@ def test_a_machine_fault_is_not_taken_for_a_sensor_fault():
                      "heuristic sees gen1's extra heat in the plan and moves load off it sooner; the blockage then "
                      "shows less, and the four alarms on gen1 (185-220 min) identify nothing significant (before: "
                      "the blockage at 135 min)")
+
+
+@pytest.mark.slow
+def test_a_real_blockage_is_not_masked_as_a_fast_sensor_drift():
+    """Robustness grid case 0 (a k_flow 0.16 blockage the manager is not told): the record check
+    once claimed the blocked unit's winding and iron readings as +179 and +52 K/h drifts, masked
+    both and let the winding reach 255 °C. Drifts faster than ``max_drift_K_per_h`` are refused."""
+    from genthermal.schedule.sweep import fly_flight, robustness_case
+
+    flight = fly_flight(robustness_case(0), "heuristic", cpu_limit_s=None)
+    assert flight["status"] == "ok", flight
+    watch = flight["summary"]["sensor_faults"]
+    assert watch["injected"] == [] and watch["claimed"] == []
+    assert max(flight["summary"]["max_T_winding"].values()) < 200.0
