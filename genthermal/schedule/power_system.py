@@ -61,17 +61,15 @@ DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
 #: Assumed model mismatch of the true plant against the design model (parameter factors).
 DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
-#: Filters a scenario may name in ``generators.filter`` (the keys of
-#: :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`, which imports this module).
-SCENARIO_FILTERS = ("ekf", "kf")
-
-
 def _filter_name(config: Mapping) -> str | None:
-    """``generators.filter`` of a scenario, None when it names none; InputError for another value."""
+    """``generators.filter`` of a scenario, None when it names none; InputError for a name that is
+    not a key of :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`."""
+    from .monitor import FLIGHT_FILTERS  # monitor imports this module
+
     if "filter" not in config:
         return None
-    if config["filter"] not in SCENARIO_FILTERS:
-        raise InputError("generators.filter", config["filter"], f"must be one of {', '.join(SCENARIO_FILTERS)}")
+    if config["filter"] not in FLIGHT_FILTERS:
+        raise InputError("generators.filter", config["filter"], f"must be one of {', '.join(FLIGHT_FILTERS)}")
     return str(config["filter"])
 
 
