@@ -28,11 +28,22 @@ replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
-the generator and the action. When that peak is above θmax itself, rest cannot help and the manager
-**sheds** load (:mod:`genthermal.schedule.shed`): each generator carries at most what keeps it
-within the planning limit, the others take what their limits allow, the rest is not served; a
-generator too hot even when carrying nothing is switched off for the rest of the mission. The
-flight reports ``feasible: false`` and the load not served.
+the generator and the action. When that peak is above θmax itself, rest cannot help, and what the
+manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario's
+``generators.when_infeasible`` or ``ManagerSettings.when_infeasible``):
+
+* ``shed`` (default): the manager **sheds** load (:mod:`genthermal.schedule.shed`): each generator
+  carries at most what keeps it within the planning limit, the others take what their limits
+  allow, the rest is not served; a generator too hot even when carrying nothing is switched off
+  for the rest of the mission;
+* ``best_effort``: what the thesis heuristic does, which has no load shedding (thesis 7.2, Fig.
+  7.2; its large blockage breaches 110.7 and 111 °C, 7.3.3): the scheduler's own plan is flown,
+  all load served, knowing it breaches θmax by its predicted peak (the heuristic's, for a segment
+  no rest makes feasible: the longest rest left and the largest displacement the receivers can
+  take within θmax, so a healthy receiver is not planned past it; the optimal scheduler's: the
+  heuristic's, :func:`~genthermal.schedule.optimal.optimal_plan`).
+
+Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
@@ -61,7 +72,7 @@ from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, bui
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .optimal_nlp import flown_optimal_plan
-from .shed import NOT_SERVED_TOLERANCE_A, shed_plan
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
@@ -141,6 +152,11 @@ class ManagerSettings:
         count against it); checked at every management cycle, a flight past it raises
         :class:`FlightTimeout` (a robustness sweep records it as such instead of waiting on it).
         None (default): no limit.
+    when_infeasible : str
+        One of :data:`INFEASIBLE_RESPONSES`: what the manager does when even the lowest reachable
+        peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
+        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A scenario that gives
+        ``generators.when_infeasible`` flies with that instead (:func:`infeasible_response`).
     """
 
     cycle_s: float = 300.0
@@ -163,8 +179,12 @@ class ManagerSettings:
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
     cpu_limit_s: float | None = None
+    when_infeasible: str = "shed"
 
     def __post_init__(self):
+        if self.when_infeasible not in INFEASIBLE_RESPONSES:
+            raise InputError("when_infeasible", self.when_infeasible,
+                             f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
         if self.rest_budget_s is not None and not (np.isfinite(self.rest_budget_s) and self.rest_budget_s >= 0):
             raise ValueError(f"rest_budget_s = {self.rest_budget_s!r}: must be a number of seconds >= 0 or None")
         if self.cpu_limit_s is not None and not (np.isfinite(self.cpu_limit_s) and self.cpu_limit_s > 0):
@@ -285,8 +305,16 @@ def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
     return settings.margin_K if system.margin_K is None else float(system.margin_K)
 
 
+def infeasible_response(system: PowerSystem, settings: ManagerSettings) -> str:
+    """What a flight does when even the lowest reachable peak is above θmax, one of
+    :data:`INFEASIBLE_RESPONSES`: the scenario's (``generators.when_infeasible``, e.g.
+    ``best_effort`` in the thesis-reproduction scenarios, whose heuristic has no load shedding)
+    when it gives one, else ``settings.when_infeasible``."""
+    return settings.when_infeasible if system.when_infeasible is None else system.when_infeasible
+
+
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
-              previous=None, switched_off=None) -> PlanResult:
+              previous=None, switched_off=None, when_infeasible: str | None = None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
@@ -304,6 +332,9 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         Warm start of the optimal scheduler.
     switched_off : array-like of bool, optional
         (n_generators,) generators already switched off: the plan is :func:`~.shed.shed_plan`.
+    when_infeasible : str, optional
+        One of :data:`INFEASIBLE_RESPONSES`, what to do when the lowest reachable peak is above
+        θmax; None (default): ``settings.when_infeasible``.
 
     Returns
     -------
@@ -312,9 +343,14 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
         reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
         (``planned_peak_C``) and what the manager does about it (``response``); when that peak is
-        above θmax, the plan sheds load (``method`` ``shed``; ``shedding``: the generators whose
-        load is shed, ``switched_off``: the generators off).
+        above θmax and ``when_infeasible`` is ``shed``, the plan sheds load (``method`` ``shed``;
+        ``shedding``: the generators whose load is shed, ``switched_off``: the generators off); with
+        ``best_effort`` it is the scheduler's own plan, all load served (``best_effort`` True in
+        ``details``).
     """
+    response_mode = settings.when_infeasible if when_infeasible is None else when_infeasible
+    if response_mode not in INFEASIBLE_RESPONSES:
+        raise InputError("when_infeasible", response_mode, f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
     if switched_off is not None and np.any(switched_off):
         off = np.array(switched_off, dtype=bool)
         return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
@@ -336,7 +372,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
              f"action {segment.action_index + 1} ({segment.label})")
     found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
                  lowest_peak_action=segment.action_index + 1)
-    if lowest.peak_C > limit_C:
+    if lowest.peak_C > limit_C and response_mode == "shed":
         nobody = np.zeros(problem.n_generators, dtype=bool)
         if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
             shed = _flown_shed(problem, settings, previous, names, limit_C, where)
@@ -348,6 +384,10 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
+    if lowest.peak_C > limit_C:  # best effort: the scheduler's own plan, all load served
+        best = _best_effort(problem, result, names, limit_C, where, found)
+        best.solve_s += lowest.solve_s
+        return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
     relaxed = _within_budget(problem, run(within_lowest))
     if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
@@ -364,6 +404,21 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     relaxed.warnings.append(message)
     relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
     return relaxed
+
+
+def _best_effort(problem: PlanningProblem, result: PlanResult, names, limit_C: float, where: str,
+                 found: dict) -> PlanResult:
+    """The scheduler's own plan ``result`` flown although it breaches θmax (``when_infeasible``
+    ``best_effort``): every load served, the breach predicted and reported; ``details`` carry
+    ``best_effort`` True and the plan's predicted peak."""
+    rested = result.schedule.added_rest_s / 60.0
+    response = (f"best effort, no load shed: rest {rested:.1f} min, move {result.schedule.displaced_Ah(problem.segments):.2f} "
+                f"A·h to the other generators; predicted peak {result.peak_C:.1f} °C on {names[result.peak_generator]}, "
+                f"{result.peak_C - limit_C:.1f} K above θmax {limit_C:g} °C")
+    result.feasible = False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(found, planned_peak_C=result.peak_C, response=response, best_effort=True)
+    return result
 
 
 def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
@@ -633,7 +688,8 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         problem = _problem(system, settings, segments, nodes, t_plan, generators, np.floor(budget / dt + 1e-9) * dt,
                            flown=flown)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
-            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
+            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
+                               when_infeasible=infeasible_response(system, settings))
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
             recorder.plan(t_plan, result)
         table = schedule.table(segments, system.generator_names)
@@ -749,7 +805,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                               previous=schedule, switched_off=schedule.switched_off)
+                               previous=schedule, switched_off=schedule.switched_off,
+                               when_infeasible=infeasible_response(system, settings))
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)

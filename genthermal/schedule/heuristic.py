@@ -83,6 +83,17 @@ class SegmentResponse:
         return float(np.max(excess[over] / relief)) * (1.0 + 1e-9) + 1e-9
 
 
+def receiver_room(response: SegmentResponse, limit_C: float) -> float:
+    """Largest extra current (A) a receiver can take keeping its peak (back-off rows included)
+    within ``limit_C``; 0 when it is already at the limit."""
+    heating = -response.yd  # temperature rise per ampere taken on
+    slack = limit_C - response.y0
+    if np.any(slack < -LIMIT_TOLERANCE_K):
+        return 0.0
+    rising = heating > 1e-12
+    return float(np.min(np.clip(slack[rising], 0.0, None) / heating[rising])) if rising.any() else np.inf
+
+
 def _displacement(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray | None:
     """Eq. 7.2 for segment ``k``: least displacement off each violator, shared equally by the others;
     None when displacement alone cannot keep every generator within the limit."""
@@ -131,7 +142,7 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
             if d is not None:
                 break
             if rest + settings.rest_step_s > problem.max_rest_s + 1e-9:
-                d = _best_effort(problem, k, violators)
+                d = _best_effort(problem, k, responses, violators)
                 warnings.append(f"segment {k} ({problem.segments[k].label}): no rest up to "
                                 f"{problem.max_rest_s / 60:g} min keeps it within {problem.limit_C:g} °C")
                 break
@@ -142,12 +153,15 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
     return evaluate(problem, schedule, "heuristic", time.perf_counter() - started, warnings)
 
 
-def _best_effort(problem: PlanningProblem, k: int, violators) -> np.ndarray:
-    """Largest displacement off the violators that the receivers' current limit allows."""
+def _best_effort(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray:
+    """Largest displacement off the violators that the receivers can take within their current
+    limit and the planning limit, shared equally (eqs. 7.3-7.4): the receiver with the least room
+    sets each one's share, so a healthy receiver is never planned past the limit."""
     low, high = problem.displacement_bounds(k)
     receivers = [g for g in range(problem.n_generators) if g not in violators]
     d = np.zeros(problem.n_generators)
     if receivers:
-        d[violators] = max(0.0, min(high, -low * len(receivers) / len(violators)))
+        share = min([-low] + [receiver_room(responses[h], problem.limit_C) for h in receivers])
+        d[violators] = max(0.0, min(high, share * len(receivers) / len(violators)))
         d[receivers] = -np.sum(d[violators]) / len(receivers)
     return d

@@ -11,7 +11,7 @@ back in flight):
   linear design model (:class:`~genthermal.schedule.heuristic.SegmentResponse`, temperatures
   affine in its current) the least load it must shed to stay within the planning limit and,
   when it needs none, the room it has for more (current limit and thermal room, as the
-  engineer's heuristic computes it, :func:`~genthermal.schedule.engineer.receiver_room`);
+  engineer's heuristic computes it, :func:`~genthermal.schedule.heuristic.receiver_room`);
 * a generator takes on others' load only up to the planning limit minus ``receiver_margin_K``
   (the manager's margin once more, :class:`~genthermal.schedule.closed_loop.ManagerSettings`):
   load moved onto it drives it where its model has not been checked in this flight;
@@ -36,9 +36,17 @@ import time
 
 import numpy as np
 
-from .engineer import receiver_room
+from .heuristic import receiver_room
 from .heuristic import SegmentResponse
 from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict, robust_outputs
+
+#: What the load manager does when even the lowest reachable peak is above θmax
+#: (``ManagerSettings.when_infeasible``, scenario ``generators.when_infeasible``): ``shed``, shed
+#: load (this module; the project's default: no planned breach of θmax); ``best_effort``, fly the
+#: scheduler's own plan within the lowest reachable peak with all load served (the thesis
+#: heuristic, which has no load shedding: thesis 7.2, Fig. 7.2, and its large blockage breaching
+#: 110.7 and 111 °C in 7.3.3).
+INFEASIBLE_RESPONSES = ("shed", "best_effort")
 
 #: Smaller shortfalls of the total phase current are rounding of the schedulers' displacements, A.
 NOT_SERVED_TOLERANCE_A = 1e-6
