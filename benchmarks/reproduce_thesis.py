@@ -179,6 +179,7 @@ def flight_outcome(scenario, scheduler: str = "heuristic"):
             "peak_gen2_C": float(result.temperatures_C[1:, 0].max()),
             "breach_s": float(np.sum(dt[np.max(result.temperatures_C[:, 0, 1:], axis=0) > system.limit_C])),
             "added_rest_min": summary["added_rest_s"] / 60.0, "feasible": summary["feasible"],
+            "displaced_Ah": summary["displaced_Ah"],
             "lowest_reachable_peak_C": summary["lowest_reachable_peak_C"],
             "shed": [{"generators": e["shedding"], "switched_off": e["switched_off"], "at_min": e["time_s"] / 60.0,
                       "lowest_reachable_peak_C": e["lowest_reachable_peak_C"], "lowest_peak_action": e["lowest_peak_action"]}
