@@ -53,8 +53,8 @@ def add_schedule_arguments(parser) -> None:
     parser.add_argument("--when-infeasible", default=None, metavar="|".join(INFEASIBLE_RESPONSES),
                         help="when even the lowest reachable peak is above the limit — shed: shed load (each "
                         "generator carries at most what keeps it within the limit, the rest is not served); "
-                        "best_effort: fly the scheduler's plan within that peak, all load served, breaching the "
-                        "limit as predicted (the thesis heuristic has no shedding) (default: the scenario's "
+                        "best_effort: fly the scheduler's own plan, all load served, breaching the limit as "
+                        "predicted (the thesis heuristic has no shedding) (default: the scenario's "
                         f"generators.when_infeasible, else {ManagerSettings.when_infeasible})")
     parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
                         "(genthermal.model_file); default the scenario's machine")

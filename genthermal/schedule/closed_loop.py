@@ -155,8 +155,9 @@ class ManagerSettings:
     when_infeasible : str
         One of :data:`INFEASIBLE_RESPONSES`: what the manager does when even the lowest reachable
         peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
-        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A scenario that gives
-        ``generators.when_infeasible`` flies with that instead (:func:`infeasible_response`).
+        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A
+        scenario that gives ``generators.when_infeasible`` flies with that instead
+        (:func:`infeasible_response`).
     """
 
     cycle_s: float = 300.0
@@ -412,7 +413,8 @@ def _best_effort(problem: PlanningProblem, result: PlanResult, names, limit_C: f
     ``best_effort``): every load served, the breach predicted and reported; ``details`` carry
     ``best_effort`` True and the plan's predicted peak."""
     rested = result.schedule.added_rest_s / 60.0
-    response = (f"best effort, no load shed: rest {rested:.1f} min, move {result.schedule.displaced_Ah(problem.segments):.2f} "
+    moved_Ah = result.schedule.displaced_Ah(problem.segments)
+    response = (f"best effort, no load shed: rest {rested:.1f} min, move {moved_Ah:.2f} "
                 f"A·h to the other generators; predicted peak {result.peak_C:.1f} °C on {names[result.peak_generator]}, "
                 f"{result.peak_C - limit_C:.1f} K above θmax {limit_C:g} °C")
     result.feasible = False
