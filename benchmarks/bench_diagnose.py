@@ -73,7 +73,8 @@ def _stage_label(line: str) -> str | None:
     done, total, what = match.groups()
     if done != total:
         return None
-    return f"{total} pairs {'swapped ' if 'swap: ' in line else ''}{what or ''}".strip()
+    what = (what or "").split(":")[0].rstrip(")") + (")" if what else "")  # "(on the full series: polished)"
+    return f"{total} pairs {'swapped ' if 'swap: ' in line else ''}{what}".strip()
 
 
 class StageTimer:

@@ -423,8 +423,9 @@ class PairSearch:
             return self._finish(names, onsets, z, polish)
 
         def report(what):
+            """Progress of a map whose items start with the pair's names; ``what(item)`` says what was done."""
             return progress and (lambda done, total, item: progress(done, total, f"{stage}{' + '.join(item[0])} "
-                                                                                 f"({what})"))
+                                                                                 f"({what(item)})"))
 
         started = map_in_workers(start_pair, pairs, workers, progress and (
             lambda done, total, pair: progress(done, total, f"{stage}{pair[0].effect} + {pair[1].effect} "
@@ -433,7 +434,7 @@ class PairSearch:
         order = sorted(range(len(pairs)), key=lambda m: started[m][1][2])[:DESCENDED_PAIRS]
         descents = [(m, start) for m in order for start in started[m][0]]
         refined = map_in_workers(descend_from, [(names[m], start) for m, start in descents], workers,
-                                 report("onsets refined"))
+                                 report(lambda item: "onsets refined"))
         descended = {}
         for (m, _), (onsets, z, rss) in zip(descents, refined):  # least RSS, the first start on a tie
             if m not in descended or rss < descended[m][2]:
@@ -446,7 +447,7 @@ class PairSearch:
         unfinished = [rank for rank, item in enumerate(coarse) if rank < POLISHED_PAIRS or item[4] is None]
         finished = dict(zip(unfinished, map_in_workers(
             finish, [(*coarse[rank][:3], rank < POLISHED_PAIRS) for rank in unfinished], workers,
-            report("polished"))))
+            report(lambda item: f"on the full series: {'polished' if item[3] else 'scored'}"))))
         return [finished.get(rank, item[4]) for rank, item in enumerate(coarse)]
 
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
