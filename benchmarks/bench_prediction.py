@@ -133,7 +133,8 @@ def methods(calibrated, built_in, all_methods: bool) -> dict:
     chosen = {"ekf_calibrated": (calibrated, lambda: ExtendedKalmanFilter(calibrated, DT_S))}
     if all_methods:
         chosen.update({
-            "ekf_calibrated_flight": (calibrated, lambda: ExtendedKalmanFilter(calibrated, DT_S, **FLIGHT_EKF_SETTINGS)),
+            "ekf_calibrated_flight": (calibrated,
+                                      lambda: ExtendedKalmanFilter(calibrated, DT_S, **FLIGHT_EKF_SETTINGS)),
             "kf_calibrated_design": (linear_design_model(calibrated),
                                      lambda: KalmanFilter(linear_design_model(calibrated), DT_S)),
             "kf_design_low_range": (linear_design_model(calibrated, (1.9, 4.0)),
@@ -224,10 +225,11 @@ def winding_table(results: dict) -> list[str]:
     lines = []
     for plant, summary in results["summary"].items():
         for name, entry in summary.items():
-            verdicts = "; ".join(f"{h} min half open loop: " + ", ".join(v) for h, v in entry.get("half_open_loop", {}).items())
+            verdicts = "; ".join(f"{h} min half open loop: " + ", ".join(v)
+                                 for h, v in entry.get("half_open_loop", {}).items())
             lines.append(f"{plant:12s} {name:36s} EKF {entry['ekf_rmse_mean']} (worst {entry['ekf_rmse_worst']}), "
-                         f"ratio {entry['ratio_mean']} (worst {entry['ratio_worst']}), open loop {entry['open_loop_mean']}, "
-                         f"noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
+                         f"ratio {entry['ratio_mean']} (worst {entry['ratio_worst']}), "
+                         f"open loop {entry['open_loop_mean']}, noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
     return lines
 
 
