@@ -13,7 +13,7 @@ from genthermal.resources import SCENARIO_DIR
 from genthermal.schedule.closed_loop import ManagerSettings, fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sensor_watch import SensorFaultInjector, SensorWatchSettings, parse_sensor_faults
+from genthermal.schedule.sensor_watch import CORRECTED, SensorFaultInjector, SensorWatchSettings, parse_sensor_faults
 
 NAMES = ("gen1", "gen2")
 OUTPUTS = ("T_winding", "T_iron")
@@ -51,16 +51,6 @@ def test_injector_holds_a_stuck_reading_across_cycles_and_biases_only_its_sensor
     assert np.allclose(first[0, 0], sensed[0, 0] + 2.0) and np.allclose(first[0, 1], sensed[0, 1])
 
 
-#: Why the "changes no load" tests are marked xfail at present.
-KNOWN_BIAS_REPLAN = ("known defect since offset-free planning (issue 9): before the claim the unit's disturbance "
-                     "heat flows absorb the faulty reading, and the plan now carries them, so a re-plan the healthy "
-                     "flight does not make follows (measured: winding bias at 6000 s, iron bias at 8100 s)")
-KNOWN_DRIFT_REPLAN = ("known defect since offset-free planning (issue 9): a 1.5 K/h winding drift from 60 min is "
-                      "claimed at 120 min; before it, the plan carries the heat flow the drift forces on the filter "
-                      "and re-plans at 75 and 100 min where the healthy flight does not; after the claim the "
-                      "last trusted heat flows are held (TrustedHeatFlows)")
-
-
 def _system(tmp_path: Path, sensor_faults) -> PowerSystem:
     document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
     document["generators"] = {"limit_C": LIMIT_C}
@@ -80,21 +70,20 @@ def healthy_flight(tmp_path_factory):
     return fly(_system(tmp_path_factory.mktemp("healthy"), []), "engineer", ManagerSettings())
 
 
-def test_a_biased_winding_sensor_is_masked_and_changes_no_load(tmp_path, healthy_flight):
+def test_a_biased_winding_sensor_is_corrected_and_changes_no_load(tmp_path, healthy_flight):
     result = fly(_system(tmp_path, [WINDING_BIAS]), "engineer", ManagerSettings())
     summary = flight_summary(result)
     [claim] = summary["sensor_faults"]["claimed"]
     assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen1", "T_winding", "bias")
-    assert claim["action"] == "masked"
+    assert claim["action"] == CORRECTED  # in the filter; the record is masked
     assert abs(claim["onset_s"] - 3600.0) <= 300.0 and claim["claimed_at_s"] <= 3600.0 + 600.0
     assert summary["sensor_faults"]["injected"][0]["value"] == 6.0
     onset = 60.0 * WINDING_BIAS["onset_min"]
     caused = set(_replans_from(result, onset)) - set(_replans_from(healthy_flight, onset))
     assert all(not plan.get("believed", {}).get("gen1") for plan in result.plans)
     assert not any(i.effect for i in result.monitor.identifications if i.generator == 0)
-    if caused:
-        pytest.xfail(KNOWN_BIAS_REPLAN)
     assert caused == set()  # no re-plan the healthy flight did not make
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)  # not one load change
 
 
 @pytest.mark.slow
@@ -114,8 +103,9 @@ def test_a_biased_iron_sensor_is_named_and_changes_no_load(tmp_path, healthy_fli
     assert [(c["generator"], c["sensor"], c["kind"]) for c in claims] == [("gen2", "T_iron", "bias")]
     onset = 60.0 * fault["onset_min"]
     assert abs(claims[0]["onset_s"] - onset) <= 300.0
-    if set(_replans_from(result, onset)) - set(_replans_from(healthy_flight, onset)):
-        pytest.xfail(KNOWN_BIAS_REPLAN)
+    # masked, the iron sensor left the filter blind to a node: 4 re-plans moved and 3 cycles' loads changed
+    assert set(_replans_from(result, onset)) == set(_replans_from(healthy_flight, onset))
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
 
 
 def test_a_stuck_winding_sensor_is_claimed_before_any_plan_change(tmp_path, healthy_flight):
@@ -144,8 +134,9 @@ def test_a_drifting_winding_sensor_is_claimed_and_moves_no_load(tmp_path, health
     assert claims[0]["value"] > 0 and claims[0]["claimed_at_s"] <= 3600.0 + 90 * 60.0
     onset = 60.0 * fault["onset_min"]
     assert result.monitor.beliefs == [(), ()]
-    if set(_replans_from(result, onset)) != set(_replans_from(healthy_flight, onset)):
-        pytest.xfail(KNOWN_DRIFT_REPLAN)
+    # before UnconfirmedExcess the plan carried the heat flow the drift forced on the filter and
+    # re-planned at 75 and 100 min, before the claim
+    assert set(_replans_from(result, onset)) == set(_replans_from(healthy_flight, onset))
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A)  # not one load change
 
 
@@ -163,11 +154,10 @@ def test_a_machine_fault_is_not_taken_for_a_sensor_fault():
     result = fly(PowerSystem.from_mission(load_mission("blockage_large")), "engineer", ManagerSettings())
     summary = flight_summary(result)
     assert summary["sensor_faults"]["claimed"] == []
-    if not any(i["effect"] for i in summary["identified"]):
-        pytest.xfail("known regression since offset-free planning (issue 9): on blockage_large the engineer's "
-                     "heuristic sees gen1's extra heat in the plan and moves load off it sooner; the blockage then "
-                     "shows less, and the four alarms on gen1 (185-220 min) identify nothing significant (before: "
-                     "the blockage at 135 min)")
+    # before UnconfirmedExcess the plan carried gen1's extra heat before the fault test alarmed, moved
+    # load off it sooner, and the four alarms on gen1 (185-220 min) identified nothing significant
+    assert [i["effect"] for i in summary["identified"] if i["generator"] == "gen1" and i["effect"]] \
+        [:1] == ["coolant_flow_reduction"]
 
 
 @pytest.mark.slow

@@ -765,9 +765,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 detectors[g].predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         sample_times = t + dt * np.arange(1, n + 1)
-        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
-        monitor.record(t, applied.currents_A, sensed)
-        measured = sensed[:, :, -1]
+        read = injector.apply(sample_times, sensed)
+        monitor.record(t, applied.currents_A, watch.correct(sample_times, read))
+        measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         rested_s += float(np.count_nonzero(applied.resting)) * dt
         running = np.flatnonzero(~applied.resting)
