@@ -1,16 +1,9 @@
-r"""Sensor faults in flight: inject them from the scenario, tell them from machine faults, mask them.
+r"""Output-sensor faults in flight: tell them from machine faults, mask or correct them.
 
-Scenario key (top level of a mission YAML)::
-
-    sensor_faults:
-      - {generator: 1, sensor: T_iron, kind: drift, onset_min: 90, value: 1.5}    # K/h
-      - {generator: gen2, sensor: T_winding, kind: bias, onset_min: 60, value: 4}  # K
-      - {generator: 1, sensor: T_winding, kind: stuck, onset_min: 60}             # holds its reading
-
-``sensor`` is an output of the flown machine's sensor schema (``T_winding``, ``T_iron`` for the
-thesis generator); ``kind`` and ``value`` as
-:class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
-is held). The faulty readings go to the filter and to the manager's record, as on a real aircraft.
+The scenario's faults (``sensor_faults`` key) are parsed and injected by
+:mod:`~genthermal.schedule.sensor_injection`; the faulty readings go to the filter and to the
+manager's record, as on a real aircraft. This module watches the output sensors (winding, iron);
+:mod:`~genthermal.schedule.input_watch` the input sensors (inlet, ambient).
 
 **Telling them apart**, every cycle, before the fault monitor sees the cycle
 (:mod:`~genthermal.schedule.sensor_patterns` for the first two):
@@ -73,10 +66,6 @@ plan holds its last heat flows until the fault test alarms on it (the alarm's be
 reviewed as above) or for at most :attr:`SensorWatchSettings.max_unconfirmed_s`. The cost on a real
 fault: a 0.3-Ω shorted turn from 60 min, which the fault test alarms on at 70 min, is held one
 cycle (its first re-plan at 70 min instead of 65 min; identified at 70 min as before).
-
-Input sensors (coolant inlet, ambient) are not covered in flight: the filter and the record read
-the true inlet and the mission's ambient (:mod:`genthermal.diagnose.input_sensors` covers them in
-``diagnose``).
 """
 
 from __future__ import annotations
@@ -86,13 +75,11 @@ import math
 
 import numpy as np
 
-from ..conditions import checked_number, reject_unknown_keys
-from ..errors import InputError
-from ..sensor_faults import SENSOR_FAULT_KINDS, SensorFault
+from ..sensor_faults import SensorFault
 from .monitor import Cusum, believed_model, detector_node_roles
+from .sensor_injection import SCENARIO_KEY, FlightSensorFault, SensorFaultInjector, parse_sensor_faults  # noqa: F401
 from .sensor_patterns import UnconfirmedExcess, frozen_since, opposite_flows
 
-SCENARIO_KEY = "sensor_faults"
 #: The ``action`` of a claimed bias (module docstring, "Acting on a claim").
 CORRECTED = "bias subtracted in the filter; masked in the record and the fault test"
 
@@ -186,99 +173,6 @@ class SensorWatchSettings:
     unconfirmed_iron: float = 1.15
     max_unconfirmed_s: float = 3600.0
     enabled: bool = True
-
-
-@dataclasses.dataclass(frozen=True)
-class FlightSensorFault:
-    """A sensor fault of one generator: ``fault.onset_s`` is the time since the mission start."""
-
-    generator: int
-    fault: SensorFault
-    row: int
-
-
-def parse_sensor_faults(entries, names, outputs) -> tuple[FlightSensorFault, ...]:
-    """The ``sensor_faults`` scenario key (module docstring); InputError names the bad field.
-
-    Parameters
-    ----------
-    entries : list or None
-    names : sequence of str
-        Generator names.
-    outputs : sequence of str
-        The flown model's outputs (the measurement vector's rows).
-    """
-    if entries is None:
-        return ()
-    if not isinstance(entries, list):
-        raise InputError(SCENARIO_KEY, entries, "must be a list of sensor faults")
-    faults = []
-    for i, entry in enumerate(entries):
-        path = f"{SCENARIO_KEY}[{i}]"
-        if not isinstance(entry, dict):
-            raise InputError(path, entry, "must be a mapping with generator, sensor, kind, onset_min, value")
-        reject_unknown_keys(entry, ("generator", "sensor", "kind", "onset_min", "value"), prefix=f"{path}.")
-        generator = entry.get("generator")
-        if isinstance(generator, int) and not isinstance(generator, bool) and 1 <= generator <= len(names):
-            index = generator - 1
-        elif isinstance(generator, str) and generator in names:
-            index = names.index(generator)
-        else:
-            raise InputError(f"{path}.generator", generator,
-                             f"must be a generator number 1..{len(names)} or a name among {', '.join(names)}")
-        sensor = entry.get("sensor")
-        if sensor not in outputs:
-            raise InputError(f"{path}.sensor", sensor, f"must be one of {', '.join(outputs)}")
-        kind = entry.get("kind")
-        if kind not in SENSOR_FAULT_KINDS:
-            raise InputError(f"{path}.kind", kind, f"must be one of {', '.join(SENSOR_FAULT_KINDS)}")
-        if "onset_min" not in entry:
-            raise InputError(f"{path}.onset_min", None, "missing: give the onset (min since the mission start)")
-        onset = checked_number(entry["onset_min"], f"{path}.onset_min", "a number of minutes")
-        if not (math.isfinite(onset) and onset >= 0):
-            raise InputError(f"{path}.onset_min", entry["onset_min"], "must be >= 0 min")
-        if "value" not in entry and kind != "stuck":
-            raise InputError(f"{path}.value", None, f"missing: give the size of the {kind} "
-                             f"({SENSOR_FAULT_KINDS[kind]})")
-        value = checked_number(entry.get("value", 0.0), f"{path}.value", f"a number ({SENSOR_FAULT_KINDS[kind]})")
-        if kind == "noise" and not value >= 1.0:
-            raise InputError(f"{path}.value", entry["value"], "is the factor on the noise standard deviation: >= 1")
-        faults.append(FlightSensorFault(index, SensorFault(sensor, kind, float(value), 60.0 * float(onset)),
-                                        list(outputs).index(sensor)))
-    return tuple(faults)
-
-
-class SensorFaultInjector:
-    """Applies the scenario's sensor faults to the sensed outputs, cycle after cycle.
-
-    Parameters
-    ----------
-    faults : sequence of FlightSensorFault
-    noise_std_K : array_like
-        Usual noise standard deviation of (winding, iron), K.
-    seed : int
-    """
-
-    def __init__(self, faults, noise_std_K, seed: int = 0):
-        self.faults, self.noise_std_K = tuple(faults), np.asarray(noise_std_K, dtype=float)
-        self._rng = np.random.default_rng(seed + 7919)
-        self._held: dict[int, float] = {}
-
-    def apply(self, sample_times_s, sensed) -> np.ndarray:
-        """``sensed`` (n_gen, 2, n) at ``sample_times_s`` (n,), s since the mission start, as read."""
-        read = np.array(sensed, dtype=float, copy=True)
-        times = np.asarray(sample_times_s, dtype=float)
-        for k, item in enumerate(self.faults):
-            fault, g, row = item.fault, item.generator, item.row
-            if fault.kind == "stuck" and fault.value == 0.0:
-                after = times >= fault.onset_s
-                if after.any() and k not in self._held:
-                    self._held[k] = float(read[g, row, int(np.flatnonzero(after)[0])])
-                if k in self._held:
-                    read[g, row, after] = self._held[k]
-                continue
-            read[g, row] = fault.reading(times, read[g, row], float(self.noise_std_K[row]), self._rng)
-        return read
 
 
 class SensorWatch:
@@ -436,7 +330,7 @@ class SensorWatch:
         return claimed
 
     @staticmethod
-    def _undo_beliefs_since(g: int, onset_s: float, monitor) -> None:
+    def undo_beliefs_since(g: int, onset_s: float, monitor) -> None:
         """Back to the machine believed before ``onset_s``: effects identified on generator ``g``
         from a record the faulty sensor had already spoilt are dropped."""
         kept = [i for i in monitor.identifications if i.generator == g and i.effect and i.detected_at_s < onset_s]
@@ -642,7 +536,7 @@ class SensorWatch:
         onsets = onsets[(onsets > 0) & (onsets < series.time_s.size - 2)]
         masked = {self.outputs[r] for (h, r) in self.corrections if h == g}
         outputs = [a for a in alarmed if a not in masked]
-        # input sensors are not injected nor corrected in flight (the filter reads the true inlet)
+        # input sensors are checked by the input watch, on a disagreement between units (input_watch)
         found = (screen.against_model(search, ranked, search.noise, outputs, onsets, on_top=True, inputs=False)
                  if outputs and onsets.size else None)
         noisy = [h for h in screen.found if h.evidence == "noise" and h.output in outputs]
@@ -676,7 +570,7 @@ class SensorWatch:
         self.corrections[(g, row)] = fault
         self.mask_from[(g, row)] = from_s
         monitor.mask(g, row, from_s)
-        self._undo_beliefs_since(g, from_s, monitor)
+        self.undo_beliefs_since(g, from_s, monitor)
         for test in self.patterns:  # the opposite-flow test stops (:meth:`_pattern_alarm`): a sum left
             test.high = 0.0  # standing would keep every unit "suspicious" for the rest of the flight
         self.unconfirmed.release(g, self.claims[-1]["claimed_at_s"] if self.claims else from_s, "sensor claimed")
