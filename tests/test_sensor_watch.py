@@ -17,6 +17,7 @@ from genthermal.schedule.sensor_watch import CORRECTED, SensorFaultInjector, Sen
 
 NAMES = ("gen1", "gen2")
 OUTPUTS = ("T_winding", "T_iron")
+INPUTS = ("T_inlet", "T_ambient")
 #: The Fig. 7.7 mission flown to 88 °C: the healthy flight peaks near 85 °C, so a winding sensor
 #: reading 6 K high would make the manager shed load for nothing.
 LIMIT_C = 88.0
@@ -31,11 +32,28 @@ WINDING_BIAS = {"generator": 1, "sensor": "T_winding", "kind": "bias", "onset_mi
     ({"generator": 1, "sensor": "T_iron", "kind": "bias", "value": 1}, "sensor_faults[0].onset_min"),
     ({"generator": 1, "sensor": "T_iron", "kind": "noise", "onset_min": 1, "value": 0.5}, "sensor_faults[0].value"),
     ({"generator": 1, "sensor": "T_iron", "kind": "bias", "onset_min": 1, "value": 1, "size": 2}, "size"),
+    ({"generator": 1, "sensor": "T_inlet", "kind": "noise", "onset_min": 1, "value": 2}, "sensor_faults[0].kind"),
 ])
 def test_bad_sensor_fault_entries_name_the_field(entry, field):
     with pytest.raises(InputError) as error:
-        parse_sensor_faults([entry], NAMES, OUTPUTS)
+        parse_sensor_faults([entry], NAMES, OUTPUTS, INPUTS)
     assert field in str(error.value)
+
+
+def test_input_sensor_faults_change_only_their_unit_s_input_reading():
+    faults = parse_sensor_faults([{"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 1, "value": -3},
+                                  {"generator": 1, "sensor": "T_ambient", "kind": "stuck", "onset_min": 0}],
+                                 NAMES, OUTPUTS, INPUTS)
+    assert [f.row for f in faults] == [None, None] and all(f.on_input for f in faults)
+    injector = SensorFaultInjector(faults, [0.1, 0.1])
+    times = np.arange(6) * 20.0
+    sensed = np.full((2, 2, 6), 50.0)
+    assert np.array_equal(injector.apply(times, sensed), sensed)  # outputs untouched
+    inlet, ambient = np.full((2, 6), 20.0), np.array([np.linspace(15.0, 16.0, 6)] * 2)
+    read = injector.apply_inputs(times, {"T_inlet": inlet, "T_ambient": ambient})
+    assert np.array_equal(read["T_inlet"][0], inlet[0])
+    assert np.array_equal(read["T_inlet"][1], np.where(times >= 60.0, 17.0, 20.0))
+    assert np.all(read["T_ambient"][0] == 15.0) and np.array_equal(read["T_ambient"][1], ambient[1])
 
 
 def test_injector_holds_a_stuck_reading_across_cycles_and_biases_only_its_sensor():
@@ -172,3 +190,50 @@ def test_a_real_blockage_is_not_masked_as_a_fast_sensor_drift():
     watch = flight["summary"]["sensor_faults"]
     assert watch["injected"] == [] and watch["claimed"] == []
     assert max(flight["summary"]["max_T_winding"].values()) < 200.0
+
+
+def test_a_biased_inlet_sensor_is_substituted_and_changes_no_load(tmp_path, healthy_flight):
+    """gen2's inlet PT100 reads 3 K low from 60 min: its model, driven by it, predicts the unit 3 K
+    cooler while its winding and iron do not move; its record fits gen1's inlet reading markedly
+    better than its own, so the sensor is claimed and its reading replaced by gen1's."""
+    fault = {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0}
+    result = fly(_system(tmp_path, [fault]), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    [claim] = watch["claimed"]
+    assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen2", "T_inlet", "bias")
+    assert claim["value"] == pytest.approx(-3.0, abs=0.1) and abs(claim["onset_s"] - 3600.0) <= 60.0
+    assert claim["claimed_at_s"] <= 3600.0 + 900.0 and claim["action"].startswith("substituted")
+    [injected] = watch["injected"]
+    assert (injected["generator"], injected["sensor"], injected["value"]) == ("gen2", "T_inlet", -3.0)
+    assert result.monitor.beliefs == [(), ()]  # the unit that looked hotter is not believed blocked
+    recorded = result.monitor.frame(1)
+    assert np.allclose(recorded["T_inlet"], result.monitor.frame(0)["T_inlet"])  # substituted back to the onset
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    fault = {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0}
+    settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(enabled=False))
+    result = fly(_system(tmp_path, [fault]), "engineer", settings)
+    assert flight_summary(result)["sensor_faults"]["claimed"] == []
+    assert result.monitor.beliefs[1]  # gen2's heating "fault" (measured: a coolant flow reduction)
+
+
+@pytest.mark.slow
+def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_path):
+    """A partial blockage that recirculates air heats gen1's inlet by 5 K: the inlet readings
+    disagree, but gen1's record fits its own reading better than gen2's, so nothing is claimed and
+    the blockage is identified."""
+    document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
+    document["generators"] = {"limit_C": LIMIT_C}
+    document["faults"] = [{"generator": 1, "kind": "coolant_blockage", "onset_min": 60, "k_flow": 0.6,
+                           "inlet_rise_C": 5}]
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(document))
+    result = fly(PowerSystem.from_mission(load_mission(str(path))), "engineer", ManagerSettings())
+    summary = flight_summary(result)
+    assert summary["sensor_faults"]["claimed"] == []
+    assert any(c["alarmed"] == ["T_inlet"] for c in summary["sensor_faults"]["checks"])  # it was looked at
+    assert [i["effect"] for i in summary["identified"] if i["effect"]][:1] == ["coolant_flow_reduction"]

@@ -263,7 +263,10 @@ class InputWatch:
         found = None
         if fault is not None:
             onset_index = int(np.searchsorted(elapsed, fault.onset_s))
-            found = SensorHypothesis(dataclasses.replace(fault, onset_s=float(own.time_s[0]) + fault.onset_s),
+            # the record's samples are stamped at the end of their step; an input reading is in force
+            # from the start of it, which is when the fault begins on the mission clock
+            start_s = float(own.time_s[0]) - monitor.dt_s
+            found = SensorHypothesis(dataclasses.replace(fault, onset_s=start_s + fault.onset_s),
                                      onset_index, math.sqrt(rss[0] / n), math.sqrt(rss[1] / n), delta, "input",
                                      error, alternative=f"its own reading: RMSE {math.sqrt(rss[0] / n):.3f} K against "
                                      f"{math.sqrt(rss[1] / n):.3f} K with the other units' {name}", columns=(name,),
