@@ -18,7 +18,8 @@ Figures per case: ``claimed`` (sensor and kind claimed), ``claim_delay_min`` (cl
 true onset), ``replans_caused`` (re-plans at times the healthy flight did not re-plan, and the
 healthy flight's re-plans missing), ``load_changes`` (management cycles whose applied currents
 differ from the healthy flight's by more than 1 mA on any generator) and, for the physical cases,
-what was identified. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE]``.
+what was identified, the first re-plan after the onset, the hottest winding and the time above the
+limit. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -118,7 +119,12 @@ def main(argv=None) -> dict:
         rows.append({"case": "physical", "fault": entry,
                      "claimed": [(c["generator"], c["sensor"], c["kind"]) for c in summary["sensor_faults"]["claimed"]],
                      "identified": [(i["generator"], i["detected_at_s"], i["effect"]) for i in summary["identified"]],
-                     "beliefs_held": summary["sensor_faults"].get("beliefs_held", [])})
+                     "beliefs_held": summary["sensor_faults"].get("beliefs_held", []),
+                     "first_replan_after_onset_min": min((p["time_s"] / 60.0 for p in result.plans
+                                                          if p["time_s"] >= 60.0 * entry["onset_min"]), default=None),
+                     "max_T_winding_C": float(np.max(result.temperatures_C[:, 0, :])),
+                     "s_above_limit": float(np.count_nonzero(result.temperatures_C[:, 0, :] > LIMIT_C)
+                                            * settings.dt_s)})
         print(json.dumps(rows[-1]), flush=True)
     sensor_rows = [r for r in rows if r["case"] == "sensor"]
     delays = [r["claim_delay_min"] for r in sensor_rows if r["claim_delay_min"] is not None]

@@ -4,7 +4,11 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
-   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
+   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10), predicting with the
+   inlet and ambient temperatures as their sensors read them (a scenario's ``sensor_faults`` may
+   make any of these sensors misread: :mod:`~genthermal.schedule.sensor_injection`; the sensor
+   watches, :mod:`~genthermal.schedule.sensor_watch` and :mod:`~genthermal.schedule.input_watch`,
+   claim and mask, correct or substitute them before the fault monitor sees the cycle); the planner gets
    its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`) and the filter's
    disturbance heat flows (:func:`~genthermal.schedule.monitor.planning_generator`: offset-free
    predictions); the fault monitor
@@ -768,7 +772,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             if not settings.tell_fault:
                 # sensor faults first: never seen as heat
                 watch.cycle(t, estimators, measured, before, monitor, detectors)
-                inputs_watch.cycle(t, *inputs_read, estimators, monitor)
+                inputs_watch.cycle(t, inputs_read, estimators, monitor)
                 believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
                 watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing
@@ -800,8 +804,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         applied = timeline.head(n)
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
-        inputs_read = (step_times, read_inputs(step_times))
-        inlets, ambients = _filter_inputs(system, inputs_read[1], step_times)
+        inputs_read = read_inputs(step_times)
+        inlets, ambients = _filter_inputs(system, inputs_read, step_times)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
@@ -810,7 +814,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         sample_times = t + dt * np.arange(1, n + 1)
         read = injector.apply(sample_times, sensed)
-        monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read[1])
+        monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
         measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         rested_s += float(np.count_nonzero(applied.resting)) * dt
