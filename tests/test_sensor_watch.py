@@ -13,7 +13,8 @@ from genthermal.resources import SCENARIO_DIR
 from genthermal.schedule.closed_loop import ManagerSettings, fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sensor_watch import CORRECTED, SensorFaultInjector, SensorWatchSettings, parse_sensor_faults
+from genthermal.schedule.sensor_injection import SensorFaultInjector, parse_sensor_faults
+from genthermal.schedule.sensor_watch import CORRECTED, SensorWatchSettings
 
 NAMES = ("gen1", "gen2")
 OUTPUTS = ("T_winding", "T_iron")

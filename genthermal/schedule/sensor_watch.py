@@ -77,7 +77,6 @@ import numpy as np
 
 from ..sensor_faults import SensorFault
 from .monitor import Cusum, believed_model, detector_node_roles
-from .sensor_injection import SCENARIO_KEY, FlightSensorFault, SensorFaultInjector, parse_sensor_faults  # noqa: F401
 from .sensor_patterns import UnconfirmedExcess, frozen_since, opposite_flows
 
 #: The ``action`` of a claimed bias (module docstring, "Acting on a claim").
@@ -185,7 +184,8 @@ class SensorWatch:
     detection : DetectionSettings
         The fault monitor's settings (candidate heating faults of the check).
     injected : sequence of FlightSensorFault
-        The scenario's sensor faults (reported, never read by the detection).
+        The scenario's sensor faults (:mod:`~genthermal.schedule.sensor_injection`; reported,
+        never read by the detection).
 
     Attributes
     ----------
