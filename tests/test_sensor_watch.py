@@ -238,3 +238,13 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
     assert summary["sensor_faults"]["claimed"] == []
     assert any(c["alarmed"] == ["T_inlet"] for c in summary["sensor_faults"]["checks"])  # it was looked at
     assert [i["effect"] for i in summary["identified"] if i["effect"]][:1] == ["coolant_flow_reduction"]
+
+
+@pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),
+                                          ("max_checks", 2.5)])
+def test_bad_input_watch_settings_name_the_field(field, value):
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    with pytest.raises(InputError) as error:
+        InputWatchSettings(**{field: value})
+    assert f"input_watch.{field}" in str(error.value)

@@ -87,6 +87,8 @@ class InputWatchSettings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InputError(f"input_watch.{name}", value, "must be a finite number > 0")
+        if isinstance(self.max_checks, bool) or not isinstance(self.max_checks, int) or self.max_checks < 0:
+            raise InputError("input_watch.max_checks", self.max_checks, "must be a whole number >= 0")
 
 
 class InputWatch:
