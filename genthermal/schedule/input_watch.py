@@ -150,12 +150,14 @@ class InputWatch:
         """The inputs the plan holds (input name → (n_gen, 1) readings at the planning time, claimed
         sensors substituted): a unit whose reading disagrees with the other units' median by more
         than :attr:`InputWatchSettings.disagreement_K` and is still under check (checks left, and no
-        check found its record fitting its own reading markedly better than the shared one: a real
-        difference, e.g. air recirculated by a blockage) plans with its last reading that agreed,
-        until a check claims its sensor or runs out. Otherwise a
-        sensor's step reaches the plan the cycle it happens, before the filter or a check could
-        tell it from the air (a 3-K inlet bias re-planned at its onset). With two units both
-        disagree, and both hold: the air did not change for both, or they would agree.
+        check found its record fitting its own reading markedly better than the shared one) plans
+        with its last reading that agreed where that is the warmer one, until a check claims its
+        sensor or runs out. A reading colder than the air was otherwise reaches the plan the cycle it
+        happens, before the filter or a check could tell it from the air, and would let the plan load
+        the unit. A warmer reading is planned with at once: a real inlet rise (air recirculated by a
+        blockage) cannot wait for the check (held, a 60-K rise on a nearly blocked unit made the
+        manager shed the healthy unit too, ``tests/test_closed_loop_shed.py``); the price is that
+        a sensor reading high moves the plan until its claim.
         """
         planned = {name: np.array(v, dtype=float, copy=True) for name, v in readings.items()}
         if not self.settings.enabled or self.n_generators < 2:
@@ -170,7 +172,7 @@ class InputWatch:
                     self._agreed[(g, name)] = np.array(readings[name][g], dtype=float)
                 elif (g, name) in self._agreed and self._checks.get((g, name), 0) < self.settings.max_checks \
                         and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC:
-                    values[g] = self._agreed[(g, name)]
+                    values[g] = np.maximum(values[g], self._agreed[(g, name)])  # never a cooler plan
         return planned
 
     def cycle(self, t_s: float, readings: dict, estimators, monitor) -> list:
