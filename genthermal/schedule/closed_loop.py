@@ -4,7 +4,11 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
-   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
+   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10), predicting with the
+   inlet and ambient temperatures as their sensors read them (a scenario's ``sensor_faults`` may
+   make any of these sensors misread: :mod:`~genthermal.schedule.sensor_injection`; the sensor
+   watches, :mod:`~genthermal.schedule.sensor_watch` and :mod:`~genthermal.schedule.input_watch`,
+   claim and mask, correct or substitute them before the fault monitor sees the cycle); the planner gets
    its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`) and the filter's
    disturbance heat flows (:func:`~genthermal.schedule.monitor.planning_generator`: offset-free
    predictions); the fault monitor
@@ -70,7 +74,9 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
                    generator_inputs, mission_segments, predict, remaining_after, split_segments)
 from .power_system import PowerSystem
-from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
+from .input_watch import InputWatch, InputWatchSettings
+from .sensor_injection import SensorFaultInjector, parse_sensor_faults
+from .sensor_watch import SensorWatch, SensorWatchSettings
 from .optimal_nlp import flown_optimal_plan
 from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
 
@@ -137,6 +143,8 @@ class ManagerSettings:
         Fault detection and identification in flight.
     sensor_watch : SensorWatchSettings
         Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
+    input_watch : InputWatchSettings
+        Inlet and ambient sensor faults in flight (:mod:`genthermal.schedule.input_watch`).
     planner_model : str
         One of :data:`PLANNER_MODELS`: ``affine`` (default) plans on the design model within θmax −
         ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
@@ -175,6 +183,7 @@ class ManagerSettings:
     confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
     detection: DetectionSettings = DetectionSettings()
     sensor_watch: SensorWatchSettings = SensorWatchSettings()
+    input_watch: InputWatchSettings = InputWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
@@ -499,16 +508,24 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
-             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None) -> PlanningProblem:
+             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
+             inputs_C: dict | None = None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
     ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
-    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance."""
-    inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance.
+    ``inputs_C`` (input name → (n_gen, 1) readings at ``t_s``, °C): the measured inlet of each
+    generator and the median measured ambient, held over the plan (default the mission's)."""
+    generator = system.planning_model.spec.interface.generator
+    inputs_C = inputs_C or {}
+    inlet = np.array([float(inputs_C[generator.coolant_input][g, 0]) if generator.coolant_input in inputs_C
+                      else float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    ambient = float(np.median(inputs_C[generator.ambient_input][:, 0])) if generator.ambient_input in inputs_C \
+        else system.mission.T_ambient_C
     budget = max(float(rest_budget_s), 0.0)
     limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
         (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
-                           system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
+                           ambient, system.rest_current_A, system.current_limit_A,
                            limit, min(settings.max_rest_s, budget), settings.dt_s,
                            rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown)
 
@@ -716,6 +733,26 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     return run[list(model.output_names)].to_numpy()[1:].T, states[-1]
 
 
+def true_inputs(system: PowerSystem, input_names, times) -> dict:
+    """The true values of the measured inputs ``input_names`` (coolant inlet, ambient) of every
+    generator at ``times`` (s): input name → (n_gen, n) °C."""
+    generator = system.planning_model.spec.interface.generator
+    times = np.asarray(times, dtype=float)
+    values = {generator.coolant_input: np.array([system.inlet_C(g, times) for g in range(system.n_generators)]),
+              generator.ambient_input: np.full((system.n_generators, times.size), system.mission.T_ambient_C)}
+    return {name: values[name] for name in input_names if name in values}
+
+
+def _filter_inputs(system: PowerSystem, inputs_C: dict, times) -> tuple:
+    """Per generator, the inlet (n,) and ambient (n,) temperatures its filter is driven with, °C: the
+    readings in ``inputs_C`` (:func:`true_inputs` keys), the true values for an input not read."""
+    generator = system.planning_model.spec.interface.generator
+    true = true_inputs(system, (generator.coolant_input, generator.ambient_input), times)
+    inlet = inputs_C.get(generator.coolant_input, true[generator.coolant_input])
+    ambient = inputs_C.get(generator.ambient_input, true[generator.ambient_input])
+    return inlet, ambient
+
+
 def _told_beliefs(system: PowerSystem, t_s: float) -> list:
     """Per generator, the effects of the faults started by ``t_s`` (``--tell-fault``)."""
     known = system.faults_known_at(t_s)
@@ -764,14 +801,22 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                        detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
+    from ..diagnose.input_sensors import input_sensors
+
+    input_names = input_sensors(system.planning_model.spec.interface)
     sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
-                                        system.planning_model.output_names)
+                                        system.planning_model.output_names, input_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
+    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators)
+
+    def read_inputs(times):
+        """The inputs as the manager reads them at ``times`` (s): injected faults, claimed ones substituted."""
+        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(system, input_names, times)))
     trusted = TrustedHeatFlows(system.n_generators)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
-    measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
+    measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     while segments:
         if settings.cpu_limit_s is not None and time.process_time() - started > settings.cpu_limit_s:
             raise FlightTimeout(t, cycles, time.process_time() - started, settings.cpu_limit_s)
@@ -785,6 +830,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             if not settings.tell_fault:
                 # sensor faults first: never seen as heat
                 watch.cycle(t, estimators, measured, before, monitor, detectors)
+                inputs_watch.cycle(t, inputs_read, estimators, monitor)
                 believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
                 watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing
@@ -802,7 +848,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [trusted.planning_generator(g, e, watch.trusts_heat_flows(g, t))
                             for g, e in enumerate(estimators)], np.floor((budget - rested_s) / dt + 1e-9) * dt,
-                           resting_s, flown)
+                           resting_s, flown, inputs_watch.for_plan(read_inputs(np.array([t]))))
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
@@ -817,16 +863,18 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         applied = timeline.head(n)
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
+        inputs_read = read_inputs(step_times)
+        inlets, ambients = _filter_inputs(system, inputs_read, step_times)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
-            estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+            estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
             if detectors is not estimators:
-                detectors[g].predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+                detectors[g].predict(applied.currents_A[g], inlets[g], ambients[g])
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         sample_times = t + dt * np.arange(1, n + 1)
-        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
-        monitor.record(t, applied.currents_A, sensed)
-        measured = sensed[:, :, -1]
+        read = injector.apply(sample_times, sensed)
+        monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
+        measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         rested_s += float(np.count_nonzero(applied.resting)) * dt
         running = np.flatnonzero(~applied.resting)

@@ -287,10 +287,12 @@ class StateEstimator:
         step = self.filter.update(self.z, self.P, y)
         self.z, self.P, self.innovation = step.x, step.P, step.innovation
 
-    def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
-        """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
-        for current, inlet in zip(currents_A, inlets_C):
-            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, ambient_C))
+    def predict(self, currents_A, inlets_C, ambient_C) -> None:
+        """Time updates over the applied phase currents and the measured inlet and ambient
+        temperatures (°C; the ambient one per step or one for all), one per step."""
+        ambients = np.broadcast_to(np.asarray(ambient_C, dtype=float), np.shape(currents_A))
+        for current, inlet, ambient in zip(currents_A, inlets_C, ambients):
+            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, float(ambient)))
 
 
 def believed_model(base, effects):
@@ -374,7 +376,7 @@ class Identification:
                 "solve_s": self.solve_s}
 
 
-def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C: float,
+def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C,
                  measured_C) -> pd.DataFrame:
     """A generator's in-flight record in the measurement CSV schema (balanced phases).
 
@@ -386,7 +388,8 @@ def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C
         (n,) s.
     currents_A, excitation_A, inlet_C : array_like
         (n,) phase current, field current (A) and inlet temperature (°C) in force at each sample.
-    ambient_C : float
+    ambient_C : float or array_like
+        Ambient temperature, °C (one, or (n,) per sample).
     measured_C : array_like
         (n_sensors, n) measured sensor temperatures in the interface's output order, °C.
     """
@@ -396,7 +399,7 @@ def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C
         frame[name] = currents_A
     frame[generator.excitation_input] = excitation_A
     frame[generator.coolant_input] = inlet_C
-    frame[generator.ambient_input] = np.full(len(frame["time_s"]), ambient_C)
+    frame[generator.ambient_input] = np.broadcast_to(np.asarray(ambient_C, dtype=float), frame["time_s"].shape).copy()
     for sensor, measured in zip(interface.sensors, measured_C):
         for column in sensor.columns:
             frame[column] = measured
@@ -438,14 +441,24 @@ class FaultMonitor:
         #: ``(generator, node index)`` out of the fault test after a sensor of the generator was
         #: masked by the sensor watch (:meth:`mask`, :meth:`DisturbanceDetector.statistics`).
         self.masked: set = set()
-        self._time, self._currents, self._measured = [], [], []
+        self._time, self._currents, self._measured, self._inputs = [], [], [], []
 
-    def record(self, t0: float, currents_A, measured_C) -> None:
+    def record(self, t0: float, currents_A, measured_C, inputs_C=None) -> None:
         """Add the steps flown from ``t0``: currents (n_gen, n) and sensors (n_gen, 2, n) at the end
-        of each step."""
+        of each step; ``inputs_C`` maps the measured inputs (coolant inlet, ambient) to their
+        readings (n_gen, n) °C in force during each step (default: the mission's true values)."""
         self._time.append(t0 + self.dt_s * np.arange(currents_A.shape[1]))
         self._currents.append(currents_A)
         self._measured.append(measured_C)
+        self._inputs.append({name: np.array(v, dtype=float, copy=True) for name, v in (inputs_C or {}).items()})
+
+    def replace_input(self, g: int, name: str, from_s: float, replacement) -> None:
+        """Rewrite generator ``g``'s recorded reading of input ``name`` from ``from_s`` (s since the
+        mission start) on with ``replacement(times, readings (n_gen, n)) -> (n,)`` of each recorded
+        cycle (a claimed input sensor, :mod:`~genthermal.schedule.input_watch`)."""
+        for times, inputs in zip(self._time, self._inputs):
+            if name in inputs and np.any(times >= from_s):
+                inputs[name][g] = replacement(times, inputs[name])
 
     def mask(self, g: int, row: int, from_s: float) -> None:
         """Take generator ``g`` out of the fault test and its sensor ``row`` out of its record from
@@ -466,8 +479,18 @@ class FaultMonitor:
         interface = self.system.planning_model.spec.interface
         excitation = interface.generator.exciter_law(current, self.system.mission.power_factor,
                                                      self.system.rated_current_A)
-        return record_frame(interface, time_s, current, excitation, self.system.inlet_C(g, time_s - self.dt_s),
-                            self.system.mission.T_ambient_C, measured)
+        generator = interface.generator
+        inlet = self._recorded_input(g, generator.coolant_input, self.system.inlet_C(g, time_s - self.dt_s))
+        ambient = self._recorded_input(g, generator.ambient_input,
+                                       np.full(time_s.shape, self.system.mission.T_ambient_C))
+        return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)
+
+    def _recorded_input(self, g: int, name: str, true_values) -> np.ndarray:
+        """Generator ``g``'s recorded reading of input ``name`` over the record, ``true_values``
+        where none was recorded."""
+        if not all(name in inputs for inputs in self._inputs):
+            return np.asarray(true_values, dtype=float)
+        return np.concatenate([inputs[name][g] for inputs in self._inputs])
 
     def design_generator(self, g: int):
         """Design model of generator ``g`` as the manager believes it."""
