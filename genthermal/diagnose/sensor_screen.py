@@ -28,7 +28,8 @@ import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
-from .input_sensors import corrected_inputs, screen_inputs
+from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
+from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
                             screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
@@ -66,7 +67,7 @@ def corrected_record(measurements, series: MeasuredSeries, hypotheses):
     frame = measurements.frame.copy()
     time_s = measurements.time_s
     for hypothesis in hypotheses:
-        drop = hypothesis.fault.kind in ("stuck", "noise") and hypothesis.evidence == "redundancy"
+        drop = hypothesis.drops_reading
         onset_s = float(series.time_s[0]) + hypothesis.fault.onset_s
         for column in (c for c in hypothesis.columns if c in frame):
             if drop:
@@ -181,9 +182,33 @@ class SensorScreen:
                                           f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
                     candidate, claimed = on_top, True
         if not claimed:
-            return None
+            return self._onset_signatures(search, noise) if outputs is None and onsets is None else None
         self.found.append(candidate)
         return candidate
+
+    def _onset_signatures(self, search, noise: float) -> SensorHypothesis | None:
+        """Claim the sensor faults told by their onset alone (a reading that froze, a jump of a
+        sensor with thermal inertia, an input's jump the machine did not follow:
+        :mod:`~genthermal.diagnose.onset_signatures`), when the whole-record comparison did not
+        claim one; the first claimed, or None."""
+        model = search.viewed(search.model)
+        inputs = search.series.inputs
+        exclude = {h.fault.sensor for h in self.found}
+        claimed = screen_frozen(self.readings, self.elapsed_s, self.columns, exclude)
+        exclude |= {h.fault.sensor for h in claimed}
+        measured, predicted = search.series.outputs, search.predicted_before
+        responses = {name: input_step_response(model, inputs, name, self.output_names)
+                     for name in input_sensors(model.spec.interface)}
+        coolant = model.spec.interface.coolant_input
+        inertial = inertial_outputs(responses[coolant], self.output_names) if coolant in responses else set()
+        jump = screen_jumps(measured, predicted, self.readings, search.series.dt_s, self.elapsed_s,
+                            self.output_names, self.columns, inertial, noise, exclude)
+        claimed += [jump] if jump is not None else []
+        through_input = screen_input_jumps(inputs, measured - predicted, responses, search.series.dt_s,
+                                           self.elapsed_s, noise)
+        claimed += [through_input] if through_input is not None else []
+        self.found += claimed
+        return claimed[0] if claimed else None
 
     def text(self, machine_verdict: str) -> str:
         """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""
