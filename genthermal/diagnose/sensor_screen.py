@@ -28,6 +28,8 @@ import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
+from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
+                                misfit_from_start, on_series_grid, sensor_hypotheses)
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
@@ -110,6 +112,7 @@ class SensorScreen:
         self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
+        self.calibrated_alternative: SensorHypothesis | None = None
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
         noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
@@ -182,11 +185,11 @@ class SensorScreen:
                                           f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
                     candidate, claimed = on_top, True
         if not claimed:
-            return self._onset_signatures(search, noise) if outputs is None and onsets is None else None
+            return self._onset_signatures(search, ranked, noise) if outputs is None and onsets is None else None
         self.found.append(candidate)
         return candidate
 
-    def _onset_signatures(self, search, noise: float) -> SensorHypothesis | None:
+    def _onset_signatures(self, search, ranked, noise: float) -> SensorHypothesis | None:
         """Claim the sensor faults told by their onset alone (a reading that froze, a jump of a
         sensor with thermal inertia, an input's jump the machine did not follow:
         :mod:`~genthermal.diagnose.onset_signatures`), when the whole-record comparison did not
@@ -207,8 +210,38 @@ class SensorScreen:
         through_input = screen_input_jumps(inputs, measured - predicted, responses, search.series.dt_s,
                                            self.elapsed_s, noise)
         claimed += [through_input] if through_input is not None else []
+        if not claimed:
+            calibrated = self._calibrated(search, ranked, noise, responses, exclude)
+            claimed += [calibrated] if calibrated is not None else []
         self.found += claimed
         return claimed[0] if claimed else None
+
+    def _calibrated(self, search, ranked, noise: float, responses: dict, exclude) -> SensorHypothesis | None:
+        """The best sensor or input fault fitted jointly with a calibration of the model, if it
+        beats the physical effects fitted the same way
+        (:mod:`~genthermal.diagnose.calibrated_screen`)."""
+        from .discover import DEFAULT_BASELINE_PARAMETERS, passes_tests
+
+        model = search.viewed(search.model)
+        sensitivities = calibration_sensitivities(model, search.series.inputs, self.output_names,
+                                                  DEFAULT_BASELINE_PARAMETERS)
+        from_start = [on_series_grid(t, search.coarse.time_s, search.series.time_s) if t.shape[1] != len(search.series.time_s)
+                      else t for t in misfit_from_start(responses, ranked)]
+        frame = CalibratedFrame(search.series.outputs - search.predicted_before,
+                                np.concatenate([sensitivities, np.array(from_start).reshape(-1, *sensitivities.shape[1:])]))
+        hypotheses = sensor_hypotheses(frame, self.readings, self.elapsed_s, self.output_names, self.columns,
+                                       exclude)
+        hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s)
+        if not hypotheses:
+            return None
+        best = min(hypotheses, key=lambda h: h.delta_bic)
+        physical_bic, physical = best_physical(frame, ranked, search.coarse.time_s, search.series.time_s)
+        best.alternative = f"calibrated: {physical or 'no physical effect'} ΔBIC {physical_bic:.0f}"
+        self.calibrated_alternative = best
+        if passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
+                best.delta_bic < physical_bic - PREFERENCE_BIC:
+            return best
+        return None
 
     def text(self, machine_verdict: str) -> str:
         """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""
