@@ -98,6 +98,7 @@ def rig_record():
 @pytest.mark.slow
 @pytest.mark.parametrize("fault", [SensorFault("T_iron", "bias", -1.2, 1.3 * HOUR),
                                    SensorFault("T_iron", "stuck", 0.0, 2.1 * HOUR),
+                                   SensorFault("T_iron", "drift", 1.0, 1.7 * HOUR),
                                    SensorFault("T_inlet", "bias", 1.5, 1.8 * HOUR),
                                    None])
 def test_sensor_faults_are_named_on_a_plant_that_differs_from_the_model(rig_record, plant_model, fault):
@@ -109,4 +110,23 @@ def test_sensor_faults_are_named_on_a_plant_that_differs_from_the_model(rig_reco
     if fault is not None and fault.kind != "stuck":
         [claim] = result.sensor_faults
         assert claim.fault.value == pytest.approx(fault.value, abs=0.3)
-        assert claim.fault.onset_s == pytest.approx(fault.onset_s, abs=2 * DT_S)
+        assert claim.fault.onset_s == pytest.approx(fault.onset_s, abs=(2 if fault.kind == "bias" else 30) * DT_S)
+
+
+def test_a_drift_is_found_on_top_of_a_calibration_misfit_and_a_misfit_alone_is_not_a_fault():
+    from genthermal.diagnose.calibrated_screen import CalibratedFrame, sensor_hypotheses
+
+    n, rng = 1440, np.random.default_rng(6)
+    elapsed = np.arange(n) * DT_S
+    sensitivity = np.vstack([_heating(n, 1800.0, 200, 5.0), _heating(n, 3600.0, 200, 3.0)])[None]
+    misfit = 0.4 * sensitivity[0] + 0.1 * rng.standard_normal((2, n))  # a loss 40 % off the model's
+    columns = {"T_winding": ("T_winding",), "T_iron": ("T_iron",)}
+    readings = {"T_winding": misfit[0], "T_iron": misfit[1]}
+    frame = CalibratedFrame(misfit, sensitivity)
+    assert frame.rss / frame.n == pytest.approx(0.01, rel=0.15)  # what is left is the noise
+    drifting = misfit.copy()
+    drifting[1, 800:] += 1.2 * (elapsed[800:] - elapsed[800]) / HOUR
+    frame = CalibratedFrame(drifting, sensitivity)
+    best = min(sensor_hypotheses(frame, readings, elapsed, ["T_winding", "T_iron"], columns), key=lambda h: h.delta_bic)
+    assert (best.fault.sensor, best.fault.kind) == ("T_iron", "drift")
+    assert best.fault.value == pytest.approx(1.2, rel=0.1) and abs(best.onset_index - 800) <= 20
