@@ -130,3 +130,14 @@ def test_a_drift_is_found_on_top_of_a_calibration_misfit_and_a_misfit_alone_is_n
     best = min(sensor_hypotheses(frame, readings, elapsed, ["T_winding", "T_iron"], columns), key=lambda h: h.delta_bic)
     assert (best.fault.sensor, best.fault.kind) == ("T_iron", "drift")
     assert best.fault.value == pytest.approx(1.2, rel=0.1) and abs(best.onset_index - 800) <= 20
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("effect", ["coolant_flow_reduction", "phase_short_circuit", "winding_insulation_degradation",
+                                    "end_winding_stray_loss", "frame_cooling_change"])
+def test_no_physical_effect_of_the_rig_plant_is_taken_for_a_sensor_fault(plant_model, effect):
+    """The onset signatures and the calibrated comparison run on every rig record (the
+    whole-record comparison claims nothing there): a machine effect must not pass them."""
+    case = make_hidden_effect_case(effect, seed=5, plant=load_model(RIG_PLANT))
+    result = Discovery(fitter=OnsetFitter(pairs=False), design_experiment=False).fit(plant_model, case.data)
+    assert result.sensor_faults == [], [h.fault.describe() for h in result.sensor_faults]

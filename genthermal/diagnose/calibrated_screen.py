@@ -124,17 +124,29 @@ class CalibratedFrame:
         return self.n * math.log(max(rss, 1e-300) / max(self.rss, 1e-300)) + k * math.log(self.n)
 
 
-def misfit_from_start(responses: dict, ranked) -> list:
-    """Nuisance terms a calibration cannot tell from a fault present from the first sample: the
-    response to a 1-K offset of each input sensor (``responses``: input → (n_outputs, N)) and
-    each physical effect of ``ranked`` switched on at the first sample (the effect's
-    ``onset_responses`` at onset 0, on the decimated grid: interpolated by :func:`best_physical`'s
-    rule). Returns a list of (n_outputs, N) arrays or (coarse_change, None) pairs to interpolate."""
-    terms = [response for response in responses.values()]
+def misfit_from_start(responses: dict, ranked, coarse_time_s, time_s) -> list:
+    """Nuisance terms a calibration cannot tell from a fault present from the first sample.
+
+    Parameters
+    ----------
+    responses : dict
+        Input sensor → (n_outputs, N) response of the outputs to a 1-K offset of it.
+    ranked : sequence of Candidate
+        Physical effects with ``onset_responses`` (their change from onset 0, on the decimated
+        grid ``coarse_time_s``, is one term).
+    coarse_time_s, time_s : numpy.ndarray
+        Times of the decimated grid and of the series, s.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        (n_outputs, N) each.
+    """
+    terms = list(responses.values())
     for candidate in ranked:
         onset_responses = getattr(candidate, "onset_responses", None)
         if onset_responses is not None and onset_responses.onsets.size and onset_responses.onsets[0] == 0:
-            terms.append(np.nan_to_num(onset_responses.changes[0]))
+            terms.append(on_series_grid(onset_responses.changes[0], coarse_time_s, time_s))
     return terms
 
 

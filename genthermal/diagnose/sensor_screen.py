@@ -13,7 +13,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    it still passes the four tests against that effect alone); the round is then run again on the
    record with that sensor corrected, so what the machine does is still judged. The faults of the
    input sensors (coolant inlet, ambient: :mod:`~genthermal.diagnose.input_sensors`) compete in
-   the same step; a claimed one is corrected in the inputs the model is driven with.
+   the same step; a claimed one is corrected in the inputs the model is driven with;
+3. on a record searched blind, when step 2 claimed nothing (a plant that differs from the model
+   leaves a misfit of kelvins that swamps a 1-3 K fault on the whole-record comparison): the
+   faults told by their onset (a reading that froze, a jump of a sensor with thermal inertia, an
+   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`), then
+   the sensor and input faults fitted jointly with a calibration of the model against the
+   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`).
 
 Redundant sensors are screened on the model's own sensor schema before the record's sensor view
 is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
@@ -29,7 +35,7 @@ import numpy as np
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
 from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
-                                misfit_from_start, on_series_grid, sensor_hypotheses)
+                                misfit_from_start, sensor_hypotheses)
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
@@ -225,10 +231,8 @@ class SensorScreen:
         model = search.viewed(search.model)
         sensitivities = calibration_sensitivities(model, search.series.inputs, self.output_names,
                                                   DEFAULT_BASELINE_PARAMETERS)
-        from_start = [on_series_grid(t, search.coarse.time_s, search.series.time_s) if t.shape[1] != len(search.series.time_s)
-                      else t for t in misfit_from_start(responses, ranked)]
-        frame = CalibratedFrame(search.series.outputs - search.predicted_before,
-                                np.concatenate([sensitivities, np.array(from_start).reshape(-1, *sensitivities.shape[1:])]))
+        from_start = misfit_from_start(responses, ranked, search.coarse.time_s, search.series.time_s)
+        frame = CalibratedFrame(search.series.outputs - search.predicted_before, [*sensitivities, *from_start])
         hypotheses = sensor_hypotheses(frame, self.readings, self.elapsed_s, self.output_names, self.columns,
                                        exclude)
         hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s)
