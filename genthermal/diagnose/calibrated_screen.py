@@ -45,6 +45,9 @@ RELATIVE_STEP = 0.05
 #: Onsets of the hypotheses leave this share of the record before them: a fault from the first
 #: minutes is a calibration offset (the record cannot tell them apart).
 MIN_ONSET_FRACTION = 0.05
+#: Onsets of the first pass at most (a long record is searched on a coarser grid, then every
+#: sample near the best): each costs a projection of the whole stacked record.
+MAX_GRID_ONSETS = 200
 #: Shapes of a sensor's fault fitted here (a frozen reading and a jump:
 #: :mod:`~genthermal.diagnose.onset_signatures`).
 CALIBRATED_KINDS = ("bias", "drift")
@@ -166,9 +169,11 @@ def _best_onset(frame: CalibratedFrame, shape_at, n: int) -> tuple[float, int, f
         rss, sizes = frame.fit([shape_at(onset)])
         return rss, float(sizes[0])
 
-    coarse = {int(o): scored(int(o)) for o in _onset_grid(n, _first_onset(n))}
+    spacing = max(ONSET_GRID, n // MAX_GRID_ONSETS)
+    grid = _onset_grid(n, _first_onset(n))[::max(1, spacing // ONSET_GRID)]
+    coarse = {int(o): scored(int(o)) for o in grid}
     centre = min(coarse, key=lambda o: coarse[o][0])
-    near = range(max(_first_onset(n), centre - ONSET_GRID), min(n - 3, centre + ONSET_GRID + 1))
+    near = range(max(_first_onset(n), centre - spacing), min(n - 3, centre + spacing + 1))
     results = {**coarse, **{o: scored(o) for o in near if o not in coarse}}
     onset = min(results, key=lambda o: results[o][0])
     return results[onset][0], onset, results[onset][1]
