@@ -133,11 +133,27 @@ def test_a_drift_is_found_on_top_of_a_calibration_misfit_and_a_misfit_alone_is_n
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("effect", ["coolant_flow_reduction", "phase_short_circuit", "winding_insulation_degradation",
-                                    "end_winding_stray_loss", "frame_cooling_change"])
-def test_no_physical_effect_of_the_rig_plant_is_taken_for_a_sensor_fault(plant_model, effect):
+@pytest.mark.parametrize("effect, seed", [("coolant_flow_reduction", 5), ("phase_short_circuit", 5),
+                                          ("winding_insulation_degradation", 5), ("end_winding_stray_loss", 5),
+                                          ("frame_cooling_change", 5), ("frame_cooling_change", 7)])
+def test_no_physical_effect_of_the_rig_plant_is_taken_for_a_sensor_fault(plant_model, effect, seed):
     """The onset signatures and the calibrated comparison run on every rig record (the
-    whole-record comparison claims nothing there): a machine effect must not pass them."""
-    case = make_hidden_effect_case(effect, seed=5, plant=load_model(RIG_PLANT))
+    whole-record comparison claims nothing there): a machine effect must not pass them. Seed 7's
+    better-cooled frame fitted like an ambient reading 11.9 K high until an input fault had to
+    show in the logged input."""
+    case = make_hidden_effect_case(effect, seed=seed, plant=load_model(RIG_PLANT))
     result = Discovery(fitter=OnsetFitter(pairs=False), design_experiment=False).fit(plant_model, case.data)
     assert result.sensor_faults == [], [h.fault.describe() for h in result.sensor_faults]
+
+
+def test_an_input_fault_must_show_in_the_logged_reading():
+    from genthermal.diagnose.calibrated_screen import logged_input_shows
+
+    elapsed = np.arange(1440) * DT_S
+    steady = np.full(1440, 25.0)
+    assert not logged_input_shows(steady, elapsed, "bias", 2.0, 700)  # the reading never moved
+    assert not logged_input_shows(steady, elapsed, "drift", 1.0, 700)
+    jumped = steady + np.where(np.arange(1440) >= 703, 2.0, 0.0)
+    assert logged_input_shows(jumped, elapsed, "bias", 1.8, 700)
+    drifting = steady + np.where(elapsed >= elapsed[700], (elapsed - elapsed[700]) / HOUR, 0.0)
+    assert logged_input_shows(drifting, elapsed, "drift", 1.1, 690)

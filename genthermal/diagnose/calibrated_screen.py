@@ -18,7 +18,9 @@ Onsets start at :data:`MIN_ONSET_FRACTION` of the record.
 * a sensor's bias or drift from an onset moves its own row only
   (:mod:`~genthermal.diagnose.sensor_faults`);
 * an input sensor's bias or drift moves every output by the model's response to it
-  (:mod:`~genthermal.diagnose.input_sensors`);
+  (:mod:`~genthermal.diagnose.input_sensors`), and must show in the logged input itself (a jump,
+  a change of slope: :func:`logged_input_shows`): a physical effect that fits like an input error
+  (a better-cooled frame, a warmer ambient reading) does not move the reading;
 * a physical effect moves the outputs by what it changes from an onset
   (:attr:`~genthermal.diagnose.search.Candidate.onset_responses`, simulated at the effect's
   typical value on the search's onset grid, interpolated to every sample); an onset between two
@@ -45,6 +47,8 @@ RELATIVE_STEP = 0.05
 #: Onsets of the hypotheses leave this share of the record before them: a fault from the first
 #: minutes is a calibration offset (the record cannot tell them apart).
 MIN_ONSET_FRACTION = 0.05
+#: An input sensor's fault must show in its logged reading within this share of its size.
+LOGGED_AGREEMENT = 0.5
 #: Onsets of the first pass at most (a long record is searched on a coarser grid, then every
 #: sample near the best): each costs a projection of the whole stacked record.
 MAX_GRID_ONSETS = 200
@@ -206,9 +210,34 @@ def sensor_hypotheses(frame: CalibratedFrame, readings, elapsed_s, output_names,
     return found
 
 
-def input_hypotheses(frame: CalibratedFrame, responses: dict, elapsed_s, dt_s: float) -> list:
+def logged_input_shows(logged, elapsed_s, kind: str, value: float, onset: int) -> bool:
+    """Whether the logged input itself shows a fault of ``kind`` and size ``value`` from sample
+    ``onset``: a bias is a jump of the reading (the largest one-sample change within
+    :data:`~genthermal.diagnose.sensor_faults.ONSET_GRID` samples of the onset), a drift a change
+    of its slope (least-squares lines before and after the onset), each within
+    :data:`LOGGED_AGREEMENT` of ``value`` (K, K/h). A real change of the input at the same moment
+    that hides the fault is not expected; without it, an error the reading does not show is not
+    the sensor's (a better-cooled frame fits like a warmer ambient reading, but the ambient
+    reading did not move)."""
+    logged, elapsed_s = np.asarray(logged, float), np.asarray(elapsed_s, float)
+    n = logged.size
+    if kind == "bias":
+        near = slice(max(1, onset - ONSET_GRID), min(n, onset + ONSET_GRID + 1))
+        steps = np.diff(logged)[near.start - 1:near.stop - 1]
+        shown = float(steps[np.argmax(np.abs(steps))]) if steps.size else 0.0
+    else:
+        before, after = slice(max(0, onset - max(onset // 2, 10)), onset), slice(onset, n)
+        if before.stop - before.start < 2 or n - onset < 2:
+            return False
+        slope = [np.polyfit(elapsed_s[part] / 3600.0, logged[part], 1)[0] for part in (before, after)]
+        shown = float(slope[1] - slope[0])
+    return abs(shown - value) <= LOGGED_AGREEMENT * abs(value)
+
+
+def input_hypotheses(frame: CalibratedFrame, responses: dict, elapsed_s, dt_s: float, inputs=None) -> list:
     """The best bias and drift of every input sensor in the calibrated frame (``responses``:
-    input → (n_outputs, N) response to a 1-K step at the first sample)."""
+    input → (n_outputs, N) response to a 1-K step at the first sample); with ``inputs`` (the
+    logged inputs), only those the logged reading shows (:func:`logged_input_shows`)."""
     n, found = elapsed_s.size, []
     for name, step in responses.items():
         shapes = {"bias": step, "drift": np.cumsum(step, axis=1) * dt_s / 3600.0}
@@ -219,6 +248,9 @@ def input_hypotheses(frame: CalibratedFrame, responses: dict, elapsed_s, dt_s: f
                 return shifted
 
             rss, onset, value = _best_onset(frame, shape_at, n)
+            if inputs is not None and not logged_input_shows(inputs[name].to_numpy(float), elapsed_s, kind, value,
+                                                             onset):
+                continue
             after = (np.arange(n) >= onset).astype(float)
             error = value * (after if kind == "bias" else after * (elapsed_s - elapsed_s[onset]) / 3600.0)
             found.append(SensorHypothesis(SensorFault(name, kind, value, float(elapsed_s[onset])), onset,

@@ -235,7 +235,7 @@ class SensorScreen:
         frame = CalibratedFrame(search.series.outputs - search.predicted_before, [*sensitivities, *from_start])
         hypotheses = sensor_hypotheses(frame, self.readings, self.elapsed_s, self.output_names, self.columns,
                                        exclude)
-        hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s)
+        hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s, search.series.inputs)
         if not hypotheses:
             return None
         best = min(hypotheses, key=lambda h: h.delta_bic)
