@@ -162,3 +162,14 @@ def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_e
     assert catalogue[variants[0]].shape_parameters == ()
     assert registered_effect_name(variants[0]) == "coolant_flow_reduction"
     assert registered_effect_name("phase_short_circuit") == "phase_short_circuit"
+
+
+def test_a_refinement_within_the_tolerance_confirms_the_belief():
+    from genthermal.schedule.monitor import confirms
+
+    believed = (("coolant_flow_reduction", (("k_flow", 0.197),)),)
+    assert confirms((("coolant_flow_reduction", (("k_flow", 0.174),)),), believed, 0.25)
+    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.10),)),), believed, 0.25)
+    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.2), ("n_flow", 0.0))),), believed, 0.25)
+    assert not confirms((("phase_short_circuit", (("R_short", 0.197),)),), believed, 0.25)
+    assert not confirms(believed, (), 0.25)

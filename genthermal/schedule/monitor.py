@@ -184,6 +184,12 @@ class DetectionSettings:
         blockage fitted with onset 69 min (ΔBIC -712) was refused at four alarms in a row. The
         model's own error shows from the first minutes (fits with onsets of 8-15 min on the same
         flight), well before 60 min.
+    confirm_tolerance : float
+        A new identification of the believed effect whose parameters are each within this
+        fraction of the believed ones confirms the belief, which is kept: the filters and plan
+        do not restart for a refinement, and the sensor watch does not re-check the record (on
+        the robustness grid's case 0 a k_flow 0.197 → 0.174 refinement had the watch claim the
+        blocked unit's winding sensor as stuck and mask it).
     equivalent_delta_bic : float
         Effects within this ΔBIC of the identified one are reported as equivalent explanations
         (Kass & Raftery 1995: a BIC difference below 2 is not worth more than a bare mention);
@@ -205,6 +211,7 @@ class DetectionSettings:
     identify_spacing_s: float = 600.0
     max_onset_lead_s: float = 3600.0
     late_onset_s: float = 3600.0
+    confirm_tolerance: float = 0.25
     equivalent_delta_bic: float = 2.0
 
 
@@ -643,11 +650,25 @@ class FaultMonitor:
             self._recalibrate(t_s, others, z)
         found = identify_fault(self.model, self.frame(g), g, t_s, self.settings)
         self.identifications.append(found)
-        if found.effect:
+        if found.effect and not confirms(found.effects, self.beliefs[g], self.settings.confirm_tolerance):
             self.beliefs[g] = found.effects
             self.detector.restart(g)
             if self.innovation_test is not None:
                 self.innovation_test.restart(g)
+
+
+def confirms(new, believed, tolerance: float) -> bool:
+    """True when the effects ``new`` (``((name, ((parameter, value), ...)),)``) are ``believed``
+    with every parameter within ``tolerance`` (a fraction) of the believed value."""
+    if len(new) != len(believed) or not new:
+        return False
+    for (name, values), (old_name, old_values) in zip(new, believed):
+        values, old_values = dict(values), dict(old_values)
+        if name != old_name or set(values) != set(old_values):
+            return False
+        if any(abs(values[k] - old_values[k]) > tolerance * abs(old_values[k]) for k in values):
+            return False
+    return True
 
 
 def detector_node_roles(model) -> list:
