@@ -56,18 +56,10 @@ class InnovationCusumSettings:
         (``DetectionSettings.fault_drift``/``fault_threshold`` of commit 9399c62).
     threshold_K : float
         :math:`h`, K.
-    own_innovation_must_move : bool
-        Limit :math:`d_g` to the generator's own innovation :math:`e_g` (zero when they differ in
-        sign), as the sensor watch does: with two generators a real fault on one gives the other
-        the mirrored difference while its own innovation stays small. On blockage_large the
-        blocked generator's filter, with full flow and the measured +31 K inlet, first predicts
-        it 2-3 K warmer than it reads, and the healthy one alarmed 4 min after the onset. False
-        for the baseline (the original test), True in flight (``DetectionSettings.innovation``).
     """
 
     drift_K: float = 0.25
     threshold_K: float = 0.2
-    own_innovation_must_move: bool = False
 
     def __post_init__(self):
         for name in ("drift_K", "threshold_K"):
@@ -185,8 +177,6 @@ class InnovationCusum:
             if not others or not np.isfinite(innovations[g]) or load[g] > np.median(load[others]) + 1e-9:
                 continue
             d = innovations[g] - float(np.median(innovations[others]))
-            if self.settings.own_innovation_must_move:
-                d = float(np.sign(d)) * min(abs(d), abs(innovations[g])) if d * innovations[g] > 0 else 0.0
             self.last_statistic[g] = d
             self.sums[g] = max(0.0, self.sums[g] + d - self.settings.drift_K)
             if self.sums[g] > self.settings.threshold_K:

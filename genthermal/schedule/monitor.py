@@ -198,7 +198,7 @@ class DetectionSettings:
     """
 
     detector: DetectorSettings = DetectorSettings()
-    innovation: InnovationCusumSettings | None = InnovationCusumSettings(own_innovation_must_move=True)
+    innovation: InnovationCusumSettings | None = InnovationCusumSettings()
     model_drift: float = 2.5
     model_threshold: float = 5.0
     calibrate_parameters: tuple = ("R0", "h_end_air", "h_top_air", "P_iron", "m_dot_fan")
