@@ -114,3 +114,22 @@ def test_switching_a_filter_to_another_model_carries_its_nodes_and_restarts_its_
     assert test.x[0] == pytest.approx(np.full(len(test.x[0]), 25.0))
     with pytest.raises(InputError, match="generators.count"):
         InnovationCusum(1, DT, 20.0, generator)
+
+
+def test_a_reference_with_a_hotter_inlet_is_no_reference(generator):
+    """Generator 0's inlet is 10 K hotter and its winding reads 3 K cold (its filter's own error):
+    the original test has generator 1 alarm on the mirrored difference; with the inlet tolerance
+    generator 1 has no reference, and generator 0 is still tested."""
+    n = 12 * CYCLE
+    currents, inlet, measured = _record(generator, np.full((2, n), 5.0), heat_from_step=4 * CYCLE, extra_K=-3.0)
+    inlet = inlet.copy()
+    inlet[0, 4 * CYCLE:] += 10.0
+    record = (currents, inlet, measured)
+    assert {g for _, g in _stepped(generator, record)} == {1}
+    assert _stepped(generator, record, settings=InnovationCusumSettings(inlet_tolerance_K=1.0)) == []
+    # generator 0 reads 25 K hot instead (more than its 10 K hotter inlet can explain): it alarms
+    hot = (currents, inlet, measured + np.where(np.arange(2)[:, None, None] == 0, 28.0, 0.0) *
+           (np.arange(n) >= 4 * CYCLE))
+    assert {g for _, g in _stepped(generator, hot, settings=InnovationCusumSettings(inlet_tolerance_K=1.0))} == {0}
+    with pytest.raises(InputError, match="inlet_tolerance_K"):
+        InnovationCusumSettings(inlet_tolerance_K=-1.0)

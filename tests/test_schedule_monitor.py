@@ -169,7 +169,9 @@ def test_a_refinement_within_the_tolerance_confirms_the_belief():
 
     believed = (("coolant_flow_reduction", (("k_flow", 0.197),)),)
     assert confirms((("coolant_flow_reduction", (("k_flow", 0.174),)),), believed, 0.25)
-    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.10),)),), believed, 0.25)
+    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.05),)),), believed, 0.25)  # 0.147 > 0.25 x 0.5
+    assert confirms((("coolant_flow_reduction", (("k_flow", 0.26), ("n_flow", 0.036))),),
+                    (("coolant_flow_reduction", (("k_flow", 0.264), ("n_flow", 0.028))),), 0.25)
     assert not confirms((("coolant_flow_reduction", (("k_flow", 0.2), ("n_flow", 0.0))),), believed, 0.25)
     assert not confirms((("phase_short_circuit", (("R_short", 0.197),)),), believed, 0.25)
     assert not confirms(believed, (), 0.25)

@@ -167,7 +167,10 @@ class DetectionSettings:
         Sample period of the records handed to calibration and identification, s.
     max_identifications : int
         Identifications (whatever their outcome) per generator and flight; later alarms are
-        recorded only.
+        recorded only. 8: with the innovation test alarming from 9 min after blockage_large's
+        onset (heuristic), the first four identifications (75-105 min) named a stray loss, a
+        shorted turn and a k_flow 0.86 blockage before the record told the blockage's size; with
+        4 the flight kept the last.
     identify_spacing_s : float
         Shortest time between two identifications of one generator, s (alarms in between are
         recorded only).
@@ -185,8 +188,10 @@ class DetectionSettings:
         model's own error shows from the first minutes (fits with onsets of 8-15 min on the same
         flight), well before 60 min.
     confirm_tolerance : float
-        A new identification of the believed effect whose parameters are each within this
-        fraction of the believed ones confirms the belief, which is kept: the filters and plan
+        A new identification of the believed effect whose parameters each differ from the
+        believed ones by at most this fraction of the larger of the believed value and the
+        parameter's typical value (:class:`~genthermal.effects.EffectParameter`; a convection
+        exponent near 0 does not count as changed by 0.01) confirms the belief, which is kept: the filters and plan
         do not restart for a refinement, and the sensor watch does not re-check the record (on
         the robustness grid's case 0 a k_flow 0.197 → 0.174 refinement had the watch claim the
         blocked unit's winding sensor as stuck and mask it).
@@ -198,7 +203,7 @@ class DetectionSettings:
     """
 
     detector: DetectorSettings = DetectorSettings()
-    innovation: InnovationCusumSettings | None = InnovationCusumSettings()
+    innovation: InnovationCusumSettings | None = InnovationCusumSettings(inlet_tolerance_K=1.0)
     model_drift: float = 2.5
     model_threshold: float = 5.0
     calibrate_parameters: tuple = ("R0", "h_end_air", "h_top_air", "P_iron", "m_dot_fan")
@@ -207,7 +212,7 @@ class DetectionSettings:
     max_recalibrations: int = 3
     fault_effects: tuple = FAULT_EFFECTS
     identify_dt_s: float = 60.0
-    max_identifications: int = 4
+    max_identifications: int = 8
     identify_spacing_s: float = 600.0
     max_onset_lead_s: float = 3600.0
     late_onset_s: float = 3600.0
@@ -658,15 +663,20 @@ class FaultMonitor:
 
 
 def confirms(new, believed, tolerance: float) -> bool:
-    """True when the effects ``new`` (``((name, ((parameter, value), ...)),)``) are ``believed``
-    with every parameter within ``tolerance`` (a fraction) of the believed value."""
+    """True when the effects ``new`` (``((name, ((parameter, value), ...)),)``, registered names)
+    are ``believed`` with every parameter within ``tolerance`` times the larger of the believed
+    value and the parameter's typical value (``DetectionSettings.confirm_tolerance``)."""
+    from ..effects import get_effect
+
     if len(new) != len(believed) or not new:
         return False
     for (name, values), (old_name, old_values) in zip(new, believed):
         values, old_values = dict(values), dict(old_values)
         if name != old_name or set(values) != set(old_values):
             return False
-        if any(abs(values[k] - old_values[k]) > tolerance * abs(old_values[k]) for k in values):
+        typical = {p.name: abs(p.typical or 0.0) for p in get_effect(name).all_parameters}
+        if any(abs(values[k] - old_values[k]) > tolerance * max(abs(old_values[k]), typical.get(k, 0.0))
+               for k in values):
             return False
     return True
 
