@@ -169,14 +169,19 @@ def test_a_drifting_iron_sensor_is_claimed_and_moves_no_load(tmp_path, healthy_f
 
 
 @pytest.mark.slow
-def test_a_machine_fault_is_not_taken_for_a_sensor_fault():
-    result = fly(PowerSystem.from_mission(load_mission("blockage_large")), "engineer", ManagerSettings())
+@pytest.mark.parametrize("scheduler", ["heuristic", "engineer", "optimal"])
+def test_a_machine_fault_is_not_taken_for_a_sensor_fault(scheduler):
+    """blockage_large (k_flow 0.2, n_flow 0, onset 66 min, +31 K inlet): no sensor is claimed, and
+    the blockage is identified on gen1 in flight, sized within a factor of two of its flow with an
+    onset within 15 min of the truth (the convection exponent fitted: with it held at 0.8 the
+    flow was sized 0.80-0.86, and with the engineer's heuristic nothing was identified)."""
+    result = fly(PowerSystem.from_mission(load_mission("blockage_large")), scheduler, ManagerSettings())
     summary = flight_summary(result)
     assert summary["sensor_faults"]["claimed"] == []
-    # before UnconfirmedExcess the plan carried gen1's extra heat before the fault test alarmed, moved
-    # load off it sooner, and the four alarms on gen1 (185-220 min) identified nothing significant
-    assert [i["effect"] for i in summary["identified"] if i["generator"] == "gen1" and i["effect"]] \
-        [:1] == ["coolant_flow_reduction"]
+    blockages = [i for i in summary["identified"] if i["generator"] == "gen1" and i["effect"] == "coolant_flow_reduction"
+                 and 0.1 <= i["parameters"]["k_flow"] <= 0.4 and abs(i["onset_s"] - 66 * 60.0) <= 15 * 60.0]
+    assert blockages, summary["identified"]
+    assert not [i for i in summary["identified"] if i["generator"] == "gen2" and i["effect"]]
 
 
 @pytest.mark.slow
