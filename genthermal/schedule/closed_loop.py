@@ -61,7 +61,7 @@ from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, bui
 from .power_system import PowerSystem
 from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
 from .optimal_nlp import flown_optimal_plan
-from .shed import NOT_SERVED_TOLERANCE_A, shed_plan
+from .shed import NOT_SERVED_TOLERANCE_A, shed_plan, unexplained_rise
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
@@ -442,10 +442,13 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
-             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None) -> PlanningProblem:
+             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
+             unexplained_rise_K=None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
     ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
-    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance."""
+    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance;
+    ``unexplained_rise_K`` (n_generators, n_outputs), K: the last cycle's rise the filters did not
+    explain (``PlanningProblem.unexplained_rise_K``)."""
     inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
     budget = max(float(rest_budget_s), 0.0)
     limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
@@ -453,7 +456,8 @@ def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: 
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
                            limit, min(settings.max_rest_s, budget), settings.dt_s,
-                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown)
+                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown,
+                           None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 
 
 def _segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
@@ -741,10 +745,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators],
                               [e.P for e in estimators], settings.confidence_sigmas) if settings.nonlinear else None
+        trusts = [watch.trusts_heat_flows(g, t) for g in range(system.n_generators)]
+        # a sensor the watch does not trust may be what the innovation shows: no rise from it
+        rise = np.array([unexplained_rise(e.innovation, e.innovation_std) if trusts[g] else np.zeros(2)
+                         for g, e in enumerate(estimators)])
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [trusted.planning_generator(g, e, watch.trusts_heat_flows(g, t))
-                            for g, e in enumerate(estimators)], np.floor((budget - rested_s) / dt + 1e-9) * dt,
-                           resting_s, flown)
+                           [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
+                           np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s, flown, rise)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
