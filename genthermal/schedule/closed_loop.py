@@ -286,7 +286,7 @@ def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
-              previous=None, switched_off=None) -> PlanResult:
+              previous=None, switched_off=None, shedding: bool = False) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
@@ -304,6 +304,14 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         Warm start of the optimal scheduler.
     switched_off : array-like of bool, optional
         (n_generators,) generators already switched off: the plan is :func:`~.shed.shed_plan`.
+    shedding : bool
+        The manager sheds load now (its last plan did). It goes back to plans without shedding
+        only once one keeps the planning limit: while the lowest reachable peak is above it, it
+        keeps shedding rather than fly a schedule that uses up the margin (hysteresis). Measured
+        on the robustness grid's case 15 (a k_flow 0.23 blockage on gen2 of 3): the lowest-peak
+        schedules flown after the shedding, 0.2-0.6 K into the margin, moved gen2's landing load onto
+        the healthy generators, which the plant's 25 % weaker cooling took to 110.5 °C (20 s
+        above θmax).
 
     Returns
     -------
@@ -336,15 +344,20 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
              f"action {segment.action_index + 1} ({segment.label})")
     found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
                  lowest_peak_action=segment.action_index + 1)
-    if lowest.peak_C > limit_C:
+    keep_shedding = shedding and lowest.peak_C > problem.limit_C + LIMIT_TOLERANCE_K
+    if lowest.peak_C > limit_C or keep_shedding:
         nobody = np.zeros(problem.n_generators, dtype=bool)
+        if lowest.peak_C <= limit_C:
+            where += (f", within θmax {limit_C:g} °C: the manager, shedding, keeps shedding until a plan keeps "
+                      "the margin")
         if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
             shed = _flown_shed(problem, settings, previous, names, limit_C, where)
             if shed is not None:
                 shed.solve_s += result.solve_s + lowest.solve_s
                 shed.details.update(found)
                 return shed
-        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K,
+                     within_margin=lowest.peak_C <= limit_C)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
@@ -410,11 +423,12 @@ def _first_rest_max_s(problem: PlanningProblem) -> float:
 
 
 def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
-          where: str, receiver_margin_K: float) -> PlanResult:
+          where: str, receiver_margin_K: float, within_margin: bool = False) -> PlanResult:
     """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
     breaches θmax on a generator still on, switch that one off too; the
     :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
-    ``feasible``."""
+    ``feasible``. ``within_margin``: θmax can be kept but the planning limit cannot (the messages
+    say so)."""
     off = off.copy()
     result = shed_plan(problem, off, receiver_margin_K)
     # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
@@ -425,11 +439,14 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
     shedding = [names[g] for g in result.details["shedding"]]
     if where:
+        bound = f"the planning limit {problem.limit_C:.1f} °C" if within_margin else f"θmax {limit_C:g} °C"
         response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
-                    f"displacement keeps it within θmax {limit_C:g} °C; each generator carries at most what keeps "
+                    f"displacement keeps it within {bound}; each generator carries at most what keeps "
                     "it within the planning limit, the others take what their limits allow, the rest is not served"
                     + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
-        result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+        headline = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C"
+                    if within_margin else f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C")
+        result.warnings.append(f"{headline}; {where}; {response}")
         result.details.update(response=response)
     elif newly:
         response = f"switch off {', '.join(newly)} (too hot even carrying nothing)"
@@ -756,7 +773,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                               previous=schedule, switched_off=schedule.switched_off)
+                               previous=schedule, switched_off=schedule.switched_off, shedding=shedding)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
