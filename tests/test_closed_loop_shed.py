@@ -63,7 +63,9 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
 
 def test_rest_budget_bounds_the_rest_and_the_cycles(tmp_path):
     """A plant that needs rest it is not allowed: the flight adds at most the budget."""
-    system = _system(tmp_path, SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 95}"))
+    # θmax 97 °C: within reach with 30 min of rest, out of reach with 2 min (the manager sheds); at
+    # 95 °C the first plans shed, and a shedding manager keeps shedding until a plan keeps the margin
+    system = _system(tmp_path, SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 97}"))
     budget_s = 120.0
     settings = ManagerSettings(rest_budget_s=budget_s)
     result = fly(system, "heuristic", settings)
