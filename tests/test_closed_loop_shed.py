@@ -63,7 +63,9 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
 
 def test_rest_budget_bounds_the_rest_and_the_cycles(tmp_path):
     """A plant that needs rest it is not allowed: the flight adds at most the budget."""
-    system = _system(tmp_path, SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 95}"))
+    # θmax 97 °C: within reach with 30 min of rest, out of reach with 2 min (the manager sheds); at
+    # 95 °C the first plans shed, and a shedding manager keeps shedding until a plan keeps the margin
+    system = _system(tmp_path, SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 97}"))
     budget_s = 120.0
     settings = ManagerSettings(rest_budget_s=budget_s)
     result = fly(system, "heuristic", settings)
@@ -177,3 +179,39 @@ def test_fly_command_rest_budget_option(tmp_path, capsys):
     assert "shed: load of gen1" in capsys.readouterr().out
     assert main(["fly", str(scenario), "--rest-budget-min", "-3", "--json", str(tmp_path / "bad.json")]) == 2
     assert "--rest-budget-min" in capsys.readouterr().err
+
+
+def test_unexplained_rise_is_the_innovation_beyond_its_noise():
+    from genthermal.schedule.shed import unexplained_rise
+
+    np.testing.assert_allclose(unexplained_rise([13.25, 0.5, -4.0, np.nan], [0.88, 0.28, 0.5, 0.5]),
+                               [13.25 - 3 * 0.88, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(unexplained_rise([2.0], [0.5], sigmas=0.0), [2.0])
+    with pytest.raises(ValueError, match="sigmas"):
+        unexplained_rise([1.0], [0.5], sigmas=-1.0)
+    with pytest.raises(ValueError, match="shape"):
+        unexplained_rise([1.0, 2.0], [0.5])
+
+
+def test_shed_plan_sheds_more_now_for_a_rise_its_filter_did_not_explain(tmp_path):
+    """A fault the disturbance states have not yet taken up: the last cycle's unexplained rise,
+    added over the next cycle, makes the generator shed load now (where the prediction alone asks
+    for none in the first action), and a larger rise sheds more; a healthy one is left alone."""
+    import dataclasses
+
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    problem = PlanningProblem(segments, generators, x0, np.array([20.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, 75.0, rise_backoff=0.3)  # taxi from 40 °C peaks at 71 °C
+    plain = shed_plan(problem, [False, False])
+    assert plain.schedule.displaced_A[0, 0] <= 1e-9
+    rises = []
+    for rise_K in (8.0, 12.0):
+        rise = np.array([[rise_K, 0.0], [0.0, 0.0]])
+        guarded = shed_plan(dataclasses.replace(problem, unexplained_rise_K=rise), [False, False])
+        rises.append(guarded.schedule.displaced_A[0, 0])
+        assert guarded.schedule.displaced_A[0, 0] > 0.1
+        assert guarded.schedule.displaced_A[1, 0] <= 0.0  # the healthy one sheds none of its own
+    assert rises[1] > rises[0]

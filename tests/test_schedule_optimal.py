@@ -91,3 +91,19 @@ def test_a_plan_that_keeps_thetamax_but_not_its_back_off_is_not_feasible(tiny, s
     assert not result.feasible
     assert result.warnings[-1].startswith("margin not kept") and "rest" in result.details["response"]
     assert result.details["planned_peak_C"] <= lowest + 1.0
+
+
+def test_while_shedding_the_manager_keeps_shedding_rather_than_use_up_the_margin(tiny):
+    """Hysteresis: a manager that sheds goes back to plans without shedding only once one keeps the
+    planning limit; a lowest-peak schedule within θmax but into the margin is not flown then."""
+    lowest = lowest_reachable_peak(tiny).peak_C
+    squeezed = PlanningProblem(tiny.segments, tiny.generators, tiny.x0, tiny.inlet_C, 20.0, 1.911, 7.0,
+                               limit_C=lowest - 1.0, max_rest_s=900.0)
+    names = ("gen1", "gen2")
+    relaxed = plan_with("optimal", squeezed, ManagerSettings(), names, limit_C=lowest + 1.0)
+    assert relaxed.method != "shed" and relaxed.peak_C > squeezed.limit_C  # not shedding: into the margin
+    kept = plan_with("optimal", squeezed, ManagerSettings(), names, limit_C=lowest + 1.0, shedding=True)
+    assert kept.method == "shed" and not kept.feasible
+    assert kept.peak_C < relaxed.peak_C and kept.peak_C <= lowest + 1.0  # load not served instead of margin
+    assert kept.warnings[-1].startswith("margin not kept") and "keeps shedding" in kept.warnings[-1]
+    assert "within the planning limit" in kept.details["response"]

@@ -115,3 +115,40 @@ def test_a_flight_without_a_re_plan_is_every_schedulers_flight():
     assert flown["summary"] == second["summary"]
     runs = sweep.case_records([document], [first, second], ("heuristic", "engineer"))[0]["runs"]
     assert runs["engineer"]["same_flight_as"] == "heuristic" and "same_flight_as" not in runs["heuristic"]
+
+
+def test_sweep_only_flies_the_named_cases_of_the_grid_and_checks_them(monkeypatch, capsys):
+    import json
+
+    import genthermal.schedule.sweep as sweep
+    flown = {}
+
+    def fake(documents, schedulers, *rest):
+        flown["names"], flown["planner"] = [d["name"] for d in documents], rest[-1]
+        return [{"name": d["name"], "faulty": bool(d["faults"]), "runs": {"engineer": run(0, 0.0)}} for d in documents]
+    monkeypatch.setattr(sweep, "run_sweep", fake)
+    assert main(["sweep", "--cases", "20", "--only", "15,3", "--schedulers", "engineer", "--planner-model",
+                 "nonlinear"]) == 0
+    assert flown["names"] == [robustness_case(15)["name"], robustness_case(3)["name"]]  # the grid's own cases
+    assert flown["planner"] == "nonlinear"
+    provenance = json.loads(capsys.readouterr().out)["provenance"]
+    assert "--only 15,3" in provenance["command"] and provenance["optimal_planner_model"] == "nonlinear"
+    for only, message in (("15,x", "indices"), ("20", "not in the grid"), ("3,3", "more than once"), ("", "indices")):
+        assert main(["sweep", "--cases", "20", "--only", only, "--schedulers", "engineer"]) == 2
+        error = capsys.readouterr().err
+        assert "--only" in error and message in error
+
+
+def test_schedulers_share_a_flight_only_when_they_plan_on_the_same_model():
+    import genthermal.schedule.sweep as sweep
+
+    assert sweep.planner_model_of("optimal", "nonlinear") == "nonlinear"
+    assert sweep.planner_model_of("engineer", "nonlinear") == "affine"
+    document = {"name": "case901:healthy:2gen:1.0h", "actions": [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 5)],
+                "generators": {"count": 2, "plant_mismatch": {"h_end_air": 1.2, "R0": 0.8}}, "faults": []}
+    first, second, third = sweep.fly_case(document, ("heuristic", "optimal", "engineer"), optimal_planner_model="nonlinear")
+    assert first["summary"]["replans"] == 0 and "same_flight_as" not in second  # another re-plan test: flown
+    assert second["planner_model"] == "nonlinear" and second["status"] == "ok"
+    assert third["same_flight_as"] == "heuristic"
+    with pytest.raises(Exception, match="optimal_planner_model"):
+        sweep.run_sweep([], ("optimal",), optimal_planner_model="quadratic")

@@ -1,4 +1,4 @@
-"""``genthermal sweep --cases N [--schedulers a,b] [--cluster ADDRESS] [--json FILE]``.
+"""``genthermal sweep --cases N [--only I,J] [--schedulers a,b] [--planner-model M] [--cluster ADDRESS] [--json FILE]``.
 
 Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweep`): N seeded cases (missions
 of 2-8 h, 2-4 generators, plant parameters off by up to ±30 %, a fault the manager is not told)
@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..outputs import finite_document, report_json
-from ..schedule.closed_loop import SCHEDULERS
+from ..schedule.closed_loop import PLANNER_MODELS, SCHEDULERS
 from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S
 
 
@@ -38,6 +38,11 @@ def register(subparsers) -> None:
                              f"(default {DEFAULT_FLIGHT_CPU_LIMIT_S:g})")
     parser.add_argument("--timeout-s", type=float, help="wall-clock limit of the whole sweep, s: flights not "
                         "done by then are recorded as unfinished (default: none)")
+    parser.add_argument("--only", metavar="INDICES", help="fly only these cases of the --cases grid, "
+                        "comma-separated indices from 0 (e.g. 0,15,50: each is the same seeded case as in the whole grid)")
+    parser.add_argument("--planner-model", default="affine", choices=PLANNER_MODELS,
+                        help="model the optimal scheduler plans on (the baselines plan on the design model): "
+                             "affine (default) or nonlinear")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
@@ -57,14 +62,15 @@ def run(args) -> int:
     for option, value in (("--flight-limit-s", args.flight_limit_s), ("--timeout-s", args.timeout_s)):
         if value is not None and not (math.isfinite(value) and value > 0):
             raise InputError(option, value, "must be a number of seconds > 0")
-    documents = [robustness_case(i, args.seed) for i in range(args.cases)]
+    documents = [robustness_case(i, args.seed) for i in case_indices(args.only, args.cases)]
     started = time.perf_counter()
     records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress,
-                        args.flight_limit_s, args.timeout_s)
+                        args.flight_limit_s, args.timeout_s, args.planner_model)
     report = {**summarise(records, schedulers),
               "provenance": {"command": equivalent_command(args),
                              "commit": source_commit(), "workers": None if args.cluster else args.workers,
-                             "cluster": args.cluster, "seed": args.seed, "sweep_wall_s": time.perf_counter() - started},
+                             "cluster": args.cluster, "seed": args.seed, "only": args.only,
+                             "optimal_planner_model": args.planner_model, "sweep_wall_s": time.perf_counter() - started},
               "cases": records}
     if not args.json:
         print(json.dumps(finite_document(report), indent=2, default=str, allow_nan=False))
@@ -73,6 +79,23 @@ def run(args) -> int:
                      allow_nan=False))
     report_json(args.json, report)
     return 0
+
+
+def case_indices(only: str | None, cases: int) -> list:
+    """The indices of the cases to fly: ``only`` (comma-separated whole numbers in ``[0, cases)``,
+    each once) or, when None, all ``cases``."""
+    if only is None:
+        return list(range(cases))
+    words = [w.strip() for w in only.split(",")]
+    if not words or not all(w.isdigit() for w in words):
+        raise InputError("--only", only, "must be comma-separated case indices (whole numbers from 0)")
+    indices = [int(w) for w in words]
+    outside = [i for i in indices if i >= cases]
+    if outside:
+        raise InputError("--only", only, f"cases {outside} are not in the grid of --cases {cases} (indices 0 to {cases - 1})")
+    if len(set(indices)) != len(indices):
+        raise InputError("--only", only, "names a case more than once")
+    return indices
 
 
 def source_commit() -> str | None:
@@ -93,6 +116,8 @@ def equivalent_command(args) -> str:
     """The ``genthermal sweep`` command line that runs this sweep again (every option spelt out)."""
     words = ["genthermal", "sweep", "--cases", str(args.cases), "--schedulers", args.schedulers,
              "--seed", str(args.seed), "--flight-limit-s", f"{args.flight_limit_s:g}"]
+    words += ["--only", args.only] if args.only is not None else []
+    words += ["--planner-model", args.planner_model]
     words += ["--cluster", args.cluster] if args.cluster else ["--workers", str(args.workers)]
     words += ["--timeout-s", f"{args.timeout_s:g}"] if args.timeout_s is not None else []
     words += ["--json", args.json, "--force"] if args.json else []

@@ -78,7 +78,7 @@ from .input_watch import InputWatch, InputWatchSettings
 from .sensor_injection import SensorFaultInjector, parse_sensor_faults
 from .sensor_watch import SensorWatch, SensorWatchSettings
 from .optimal_nlp import flown_optimal_plan
-from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan, unexplained_rise
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
@@ -324,7 +324,8 @@ def infeasible_response(system: PowerSystem, settings: ManagerSettings) -> str:
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
-              previous=None, switched_off=None, when_infeasible: str | None = None) -> PlanResult:
+              previous=None, switched_off=None, when_infeasible: str | None = None,
+              shedding: bool = False) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
@@ -345,6 +346,14 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     when_infeasible : str, optional
         One of :data:`INFEASIBLE_RESPONSES`, what to do when the lowest reachable peak is above
         θmax; None (default): ``settings.when_infeasible``.
+    shedding : bool
+        The manager sheds load now (its last plan did). It goes back to plans without shedding
+        only once one keeps the planning limit: while the lowest reachable peak is above it, it
+        keeps shedding rather than fly a schedule that uses up the margin (hysteresis). Measured
+        on the robustness grid's case 15 (a k_flow 0.23 blockage on gen2 of 3): the lowest-peak
+        schedules flown after the shedding, 0.2-0.6 K into the margin, moved gen2's landing load onto
+        the healthy generators, which the plant's 25 % weaker cooling took to 110.5 °C (20 s
+        above θmax).
 
     Returns
     -------
@@ -382,15 +391,20 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
              f"action {segment.action_index + 1} ({segment.label})")
     found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
                  lowest_peak_action=segment.action_index + 1)
-    if lowest.peak_C > limit_C and response_mode == "shed":
+    keep_shedding = shedding and lowest.peak_C > problem.limit_C + LIMIT_TOLERANCE_K
+    if (lowest.peak_C > limit_C or keep_shedding) and response_mode == "shed":
         nobody = np.zeros(problem.n_generators, dtype=bool)
+        if lowest.peak_C <= limit_C:
+            where += (f", within θmax {limit_C:g} °C: the manager, shedding, keeps shedding until a plan keeps "
+                      "the margin")
         if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
             shed = _flown_shed(problem, settings, previous, names, limit_C, where)
             if shed is not None:
                 shed.solve_s += result.solve_s + lowest.solve_s
                 shed.details.update(found)
                 return shed
-        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K,
+                     within_margin=lowest.peak_C <= limit_C)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
@@ -476,11 +490,12 @@ def _first_rest_max_s(problem: PlanningProblem) -> float:
 
 
 def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
-          where: str, receiver_margin_K: float) -> PlanResult:
+          where: str, receiver_margin_K: float, within_margin: bool = False) -> PlanResult:
     """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
     breaches θmax on a generator still on, switch that one off too; the
     :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
-    ``feasible``."""
+    ``feasible``. ``within_margin``: θmax can be kept but the planning limit cannot (the messages
+    say so)."""
     off = off.copy()
     result = shed_plan(problem, off, receiver_margin_K)
     # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
@@ -491,11 +506,14 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
     shedding = [names[g] for g in result.details["shedding"]]
     if where:
+        bound = f"the planning limit {problem.limit_C:.1f} °C" if within_margin else f"θmax {limit_C:g} °C"
         response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
-                    f"displacement keeps it within θmax {limit_C:g} °C; each generator carries at most what keeps "
+                    f"displacement keeps it within {bound}; each generator carries at most what keeps "
                     "it within the planning limit, the others take what their limits allow, the rest is not served"
                     + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
-        result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+        headline = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C"
+                    if within_margin else f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C")
+        result.warnings.append(f"{headline}; {where}; {response}")
         result.details.update(response=response)
     elif newly:
         response = f"switch off {', '.join(newly)} (too hot even carrying nothing)"
@@ -509,12 +527,14 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
              rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
-             inputs_C: dict | None = None) -> PlanningProblem:
+             inputs_C: dict | None = None, unexplained_rise_K=None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
     ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
     nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance.
     ``inputs_C`` (input name → (n_gen, 1) readings at ``t_s``, °C): the measured inlet of each
-    generator and the median measured ambient, held over the plan (default the mission's)."""
+    generator and the median measured ambient, held over the plan (default the mission's);
+    ``unexplained_rise_K`` (n_generators, n_outputs), K: the last cycle's rise the filters did not
+    explain (``PlanningProblem.unexplained_rise_K``)."""
     generator = system.planning_model.spec.interface.generator
     inputs_C = inputs_C or {}
     inlet = np.array([float(inputs_C[generator.coolant_input][g, 0]) if generator.coolant_input in inputs_C
@@ -527,7 +547,8 @@ def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: 
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            ambient, system.rest_current_A, system.current_limit_A,
                            limit, min(settings.max_rest_s, budget), settings.dt_s,
-                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown)
+                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown,
+                           None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 
 
 def _segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
@@ -845,16 +866,20 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators],
                               [e.P for e in estimators], settings.confidence_sigmas) if settings.nonlinear else None
+        trusts = [watch.trusts_heat_flows(g, t) for g in range(system.n_generators)]
+        # a sensor the watch does not trust may be what the innovation shows: no rise from it
+        rise = np.array([unexplained_rise(e.innovation, e.innovation_std) if trusts[g] else np.zeros(2)
+                         for g, e in enumerate(estimators)])
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
-                           [trusted.planning_generator(g, e, watch.trusts_heat_flows(g, t))
-                            for g, e in enumerate(estimators)], np.floor((budget - rested_s) / dt + 1e-9) * dt,
-                           resting_s, flown, inputs_watch.for_plan(read_inputs(np.array([t]))))
+                           [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
+                           np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s, flown,
+                           inputs_watch.for_plan(read_inputs(np.array([t]))), rise)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off,
-                               when_infeasible=infeasible_response(system, settings))
+                               when_infeasible=infeasible_response(system, settings), shedding=shedding)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)

@@ -357,6 +357,13 @@ class PlanningProblem:
         Plan on the nonlinear model the manager flies (:mod:`genthermal.schedule.flown`): then
         :func:`predict` runs that model from the filter's state, with a back-off derived from the
         filter's covariance, and ``limit_C`` is θmax itself. Default None: the design models.
+    unexplained_rise_K : numpy.ndarray, optional
+        (n_generators, n_outputs) rise of each temperature over the last management cycle that the
+        filter's prediction did not explain beyond its noise, K (>= 0;
+        :func:`~genthermal.schedule.shed.unexplained_rise`): heating of a fault the disturbance
+        states have not yet taken up. The shed plan (:func:`~genthermal.schedule.shed.shed_plan`)
+        holds every generator within the limit over the next cycle with this rise added. Default
+        None: no such rise.
     """
 
     segments: tuple
@@ -374,6 +381,7 @@ class PlanningProblem:
     rest_budget_s: float = np.inf
     rest_taken_s: float = 0.0
     flown: object = None
+    unexplained_rise_K: np.ndarray | None = None
 
     @property
     def n_generators(self) -> int:

@@ -24,7 +24,16 @@ back in flight):
 * the load of the switched-off generators (at least their lowest nominal current in the
   segment) and what the others must shed go to the generators with room, in proportion to it;
 * what nobody can take is **not served** (reported per generator in A·s and A·h of phase
-  current by :func:`not_served`).
+  current by :func:`not_served`);
+* over the next management cycle each generator is held within the limit with the rise of its
+  last cycle that its filter did not explain added (``problem.unexplained_rise_K``,
+  :func:`unexplained_rise`, growing linearly over the cycle): right after a fault's onset the
+  disturbance states take the new heating up over several cycles, and a prediction that holds
+  them underestimates the next cycle's rise. Measured on the robustness grid's case 15 (a k_flow
+  0.23 blockage with a +24 K inlet rise): the winding innovations of the blocked generator were
+  +5.3 and +13.3 K (standard deviation 0.55 and 0.88 K) in the two cycles after the onset; the
+  shed plans made without them kept its load but for 0.41 A, and it spent 240 s above θmax
+  (113.6 °C) before it was switched off, where at 0 A its winding falls by about 3 K a minute.
 
 A healthy generator is therefore never loaded beyond the planning limit of its design model;
 the mission goes on to its end.
@@ -49,6 +58,38 @@ INFEASIBLE_RESPONSES = ("shed", "best_effort")
 
 #: Smaller shortfalls of the total phase current are rounding of the schedulers' displacements, A.
 NOT_SERVED_TOLERANCE_A = 1e-6
+#: Standard deviations of an innovation taken as noise by :func:`unexplained_rise`. Choice of this
+#: project: a Gaussian innovation exceeds three of them in 0.13 % of the cycles (one-sided), so a
+#: healthy generator is rarely asked to shed for noise, and then for a fraction of a kelvin.
+UNEXPLAINED_RISE_SIGMAS = 3.0
+
+
+def unexplained_rise(innovation_K, innovation_std_K, sigmas: float = UNEXPLAINED_RISE_SIGMAS) -> np.ndarray:
+    """The rise of a temperature over the last cycle that the filter's prediction did not explain:
+    how far the innovation (measured minus predicted, K) exceeds ``sigmas`` of its predicted
+    standard deviation (K); 0 where it does not, or where it is not a number (a masked sensor).
+
+    Parameters
+    ----------
+    innovation_K, innovation_std_K : array-like
+        Innovations of the last filter update and their standard deviations, K (same shape).
+    sigmas : float
+        Standard deviations taken as noise (>= 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        Unexplained rise, K (>= 0), the shape of ``innovation_K``.
+    """
+    if not (np.isfinite(sigmas) and sigmas >= 0):
+        raise ValueError(f"sigmas = {sigmas!r}: must be a number of standard deviations >= 0")
+    innovation = np.asarray(innovation_K, dtype=float)
+    std = np.asarray(innovation_std_K, dtype=float)
+    if innovation.shape != std.shape:
+        raise ValueError(f"innovation_K has shape {innovation.shape} and innovation_std_K {std.shape}: "
+                         "they must match")
+    excess = innovation - sigmas * np.where(np.isfinite(std), std, 0.0)
+    return np.where(np.isfinite(excess), np.clip(excess, 0.0, None), 0.0)
 
 
 def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float = 0.0) -> PlanResult:
@@ -82,6 +123,9 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
     for k, segment in enumerate(problem.segments):
         low, high = problem.displacement_bounds(k)
         responses = {g: SegmentResponse(problem, g, k, x[g], 0.0) for g in on}
+        if k == 0 and problem.unexplained_rise_K is not None:
+            for g in on:
+                _add_next_cycle_rise(responses[g], problem, problem.unexplained_rise_K[g])
         must_shed = {g: min(_least_shed(responses[g], problem.limit_C), high) for g in on}
         shedding |= {g for g in on if must_shed[g] > 0}
         receiver_limit_C = problem.limit_C - receiver_margin_K
@@ -99,6 +143,18 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
     result = evaluate(problem, schedule, "shed", time.perf_counter() - started)
     result.details["shedding"] = sorted(set(np.flatnonzero(off)) | shedding)
     return result
+
+
+def _add_next_cycle_rise(response: SegmentResponse, problem: PlanningProblem, rise_K) -> None:
+    """Add to ``response``'s temperatures (plain and with the rise back-off) the unexplained rise
+    ``rise_K`` (n_outputs,) K, growing linearly over the next management cycle
+    (``problem.window_s``) and left out after it (the next cycle's plan has its own)."""
+    rise = np.asarray(rise_K, dtype=float)
+    if not np.any(rise > 0):
+        return
+    elapsed = problem.dt_s * np.arange(1, response.y0.shape[1] + 1)
+    ramp = np.where(elapsed <= problem.window_s + 1e-9, elapsed / problem.window_s, 0.0)
+    response.y0 = response.y0 + np.tile(rise, response.y0.shape[0] // rise.size)[:, None] * ramp[None, :]
 
 
 def _least_shed(response: SegmentResponse, limit_C: float) -> float:

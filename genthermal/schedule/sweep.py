@@ -47,6 +47,7 @@ import traceback
 
 import numpy as np
 
+from ..errors import InputError
 from ..mission import Mission
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
@@ -107,26 +108,38 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
-def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> list:
+def planner_model_of(scheduler: str, optimal_planner_model: str = "affine") -> str:
+    """The model ``scheduler`` plans on in a sweep: ``optimal_planner_model`` for the optimal
+    scheduler (one of :data:`~genthermal.schedule.closed_loop.PLANNER_MODELS`), the design model
+    (``affine``) for the baselines, which are defined on it."""
+    return optimal_planner_model if scheduler == "optimal" else "affine"
+
+
+def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S,
+             optimal_planner_model: str = "affine") -> list:
     """Fly case ``document`` with each of ``schedulers`` (:func:`fly_flight`); once a flight ends
-    without a re-plan, the remaining schedulers get its record (module docstring) with
-    ``same_flight_as`` naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
-    flights, shared = [], None
+    without a re-plan, the remaining schedulers that plan on the same model (:func:`planner_model_of`:
+    the re-plan test predicts on it) get its record (module docstring) with ``same_flight_as``
+    naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
+    flights, shared = [], {}
     for scheduler in schedulers:
-        if shared is not None:
-            summary = dict(shared["summary"], scheduler=scheduler)
-            flights.append({**shared, "scheduler": scheduler, "summary": summary, "same_flight_as": shared["scheduler"],
-                            "wall_s": 0.0, "cpu_s": 0.0})
+        model = planner_model_of(scheduler, optimal_planner_model)
+        if model in shared:
+            summary = dict(shared[model]["summary"], scheduler=scheduler)
+            flights.append({**shared[model], "scheduler": scheduler, "summary": summary,
+                            "same_flight_as": shared[model]["scheduler"], "wall_s": 0.0, "cpu_s": 0.0})
             continue
-        flight = fly_flight(document, scheduler, cpu_limit_s)
+        flight = fly_flight(document, scheduler, cpu_limit_s, model)
         flights.append(flight)
         if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
-            shared = flight
+            shared[model] = flight
     return flights
 
 
-def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S) -> dict:
-    """Fly case ``document`` with ``scheduler``; never raises.
+def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S,
+               planner_model: str = "affine") -> dict:
+    """Fly case ``document`` with ``scheduler`` planning on ``planner_model``
+    (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.planner_model`); never raises.
 
     Returns
     -------
@@ -141,10 +154,11 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
     from .report import flight_summary
 
     started, cpu_started = time.perf_counter(), time.process_time()
-    record = {"case": document["name"], "scheduler": scheduler}
+    record = {"case": document["name"], "scheduler": scheduler, "planner_model": planner_model}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
-        summary = flight_summary(fly(system, scheduler, ManagerSettings(cpu_limit_s=cpu_limit_s)))
+        summary = flight_summary(fly(system, scheduler, ManagerSettings(cpu_limit_s=cpu_limit_s,
+                                                                        planner_model=planner_model)))
         summary.pop("warnings")
         record.update(status="ok", summary=summary)
     except FlightTimeout as stopped:
@@ -168,6 +182,7 @@ def case_records(documents, flights: list, schedulers) -> list:
                                 {"status": "unfinished", "error": "not flown: the sweep's timeout passed", "wall_s": None})
             if flight["status"] == "ok":
                 runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], "cpu_s": flight.get("cpu_s"),
+                                   **({"planner_model": flight["planner_model"]} if "planner_model" in flight else {}),
                                    **({"same_flight_as": flight["same_flight_as"]} if "same_flight_as" in flight else {}),
                                    **flight["summary"]}
             else:
@@ -179,7 +194,8 @@ def case_records(documents, flights: list, schedulers) -> list:
 
 
 def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True,
-              flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None) -> list:
+              flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None,
+              optimal_planner_model: str = "affine") -> list:
     """Fly every case with every scheduler on Dask: a :class:`distributed.LocalCluster` of
     ``workers`` single-threaded processes, or the scheduler at ``cluster`` (``tcp://host:8786``);
     a tqdm bar when ``progress``.
@@ -197,12 +213,18 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     timeout_s : float or None
         Wall-clock limit of the whole sweep, s: flights not done by then are recorded as
         ``unfinished`` and cancelled.
+    optimal_planner_model : str
+        Model the optimal scheduler plans on (:func:`planner_model_of`), ``affine`` or ``nonlinear``.
 
     Returns
     -------
     list of dict
         :func:`case_records`, in the order of ``documents``.
     """
+    from .closed_loop import PLANNER_MODELS
+
+    if optimal_planner_model not in PLANNER_MODELS:
+        raise InputError("optimal_planner_model", optimal_planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
     from distributed import Client, LocalCluster, as_completed
     from distributed.utils import TimeoutError as DaskTimeoutError
     from tqdm import tqdm
@@ -214,7 +236,8 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     flights = []
     try:
         order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
-        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s, pure=False,
+        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s,
+                                 optimal_planner_model, pure=False,
                                  priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
         bar = tqdm(total=len(futures), disable=not progress, desc="cases")
         try:
