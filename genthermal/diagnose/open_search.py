@@ -12,8 +12,15 @@ When the catalogue does not explain the data, the missing physics may still be a
   (:math:`I_{exc}^2`, W/A²), and into the slot winding also the per-phase ``I_u2``, ``I_v2``,
   ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
   W/(A²K));
+* a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
+  kind (the copper loss of the windings, the iron loss of the stator iron) grows by a fraction
+  :math:`k` per kelvin of the node's temperature above the temperature the model evaluates that
+  loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
+  :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` (1/K);
 * a change of a conductance by a factor: the winding insulation, the frame to ambient, the
-  coolant air streams.
+  coolant air streams (their advective conductance :math:`\dot m c_p`), the internal convection
+  to the cooling air (every heat-transfer coefficient the machine lists as swept by the coolant,
+  :class:`~genthermal.machines.interface.Role` ``INTERNAL_CONVECTION``).
 
 Each is an ordinary :class:`~genthermal.effects.Effect`, so the search is the catalogue search
 with this library in place of the catalogue (:func:`open_search` calls
@@ -52,7 +59,20 @@ COMMON_FORMS = ("constant", "I2", "I_exc2")
 #: Conductances that can change: name → plain language.
 CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
                 "frame_to_ambient": "the frame-to-ambient conductance",
-                "air_streams": "the coolant air flow"}
+                "air_streams": "the coolant air flow",
+                "internal_convection": "the internal convection to the cooling air"}
+#: Machine roles each conductance change reads.
+CONDUCTANCE_NEEDS = {"winding_insulation": (Role.WINDING_INSULATION,), "frame_to_ambient": (Role.FRAME_TO_AMBIENT,),
+                     "air_streams": (Role.COOLANT_FLOW,), "internal_convection": (Role.INTERNAL_CONVECTION,)}
+#: Modelled losses that can depend on temperature: loss label → plain name of the node group
+#: that carries it (every node with a loss of that label).
+LOSS_GROUPS = {"copper": "windings", "iron": "stator iron"}
+#: Temperature at which a loss is taken to hold when the model's loss does not name one
+#: (``theta_ref``): 20 °C, the reference of tabulated resistivities and temperature coefficients
+#: (IEC 60028 gives copper's 0.00393 /K at 20 °C).
+DEFAULT_LOSS_REFERENCE_C = 20.0
+#: Bound on |k| of a temperature-dependent loss, 1/K: five times copper's coefficient.
+LOSS_THETA_BOUND = 0.02
 
 
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
@@ -127,14 +147,72 @@ def conductance_effect(role: str, name: str | None = None) -> Effect:
     def transform(network, roles, k):
         if role == "air_streams":
             return network.scale_air_streams(k)
+        if role == "internal_convection":
+            return _scale_convection(network, roles[Role.INTERNAL_CONVECTION], k)
         for a, b in roles[Role(role)]:
             network = network.scale_links(a, b, k)
         return network
 
     return Effect(name, f"{CONDUCTANCES[role]} multiplied by a factor", r"G \to k\,G",
                   (EffectParameter(f"k_{name}", 1.0, "1", 0.05, 20.0, 0.5),), transform,
-                  f"{CONDUCTANCES[role]} changed",
-                  needs=(Role.COOLANT_FLOW,) if role == "air_streams" else (Role(role),))
+                  f"{CONDUCTANCES[role]} changed", needs=CONDUCTANCE_NEEDS[role])
+
+
+def _scale_convection(network, coefficients, k):
+    """``network`` with every heat-transfer coefficient named in ``coefficients`` multiplied by ``k``."""
+    symbols = {symbol.name: symbol for link in network.links for symbol in link.resistance.free_symbols}
+    missing = [name for name in coefficients if name not in symbols]
+    if missing:
+        raise InputError("internal_convection", missing[0], "no link of the network uses this coefficient")
+    return network.substitute_in_links({symbols[name]: k * symbols[name] for name in coefficients})
+
+
+def _loss_reference(power) -> sympy.Expr:
+    """The temperature a modelled loss holds at: the ``theta_ref`` symbol of its expression (a
+    resistance evaluated at a reference temperature), else :data:`DEFAULT_LOSS_REFERENCE_C`."""
+    named = [symbol for symbol in power.free_symbols if symbol.name == "theta_ref"]
+    return named[0] if named else sympy.Float(DEFAULT_LOSS_REFERENCE_C)
+
+
+def loss_nodes(model: ThermalModel, label: str) -> tuple[str, ...]:
+    """The capacitive nodes of ``model`` that carry a modelled loss labelled ``label``."""
+    states = set(model.state_names)
+    return tuple(dict.fromkeys(s.node for s in model.network.heat_sources if s.label == label and s.node in states))
+
+
+def loss_temperature_effect(label: str, name: str | None = None) -> Effect:
+    r"""The modelled loss ``label`` (``"copper"``, ``"iron"``) of each node made temperature-dependent:
+    :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` with :math:`P_n` the node's own
+    modelled loss of that label and :math:`\theta_{ref}` the temperature the model evaluates it at
+    (:func:`_loss_reference`); :math:`k` in 1/K (copper's resistance: about +0.0039 /K).
+
+    Parameters
+    ----------
+    label : str
+        A key of :data:`LOSS_GROUPS`.
+    name : str, optional
+        Effect name (default ``loss_theta_<label>``); its parameter is ``k_<name>``.
+    """
+    if label not in LOSS_GROUPS:
+        raise InputError("loss", label, f"must be one of {', '.join(LOSS_GROUPS)}")
+    name = name or f"loss_theta_{label}"
+
+    def transform(network, roles, k):
+        sources = [s for s in network.heat_sources if s.label == label]
+        if not sources:
+            raise InputError("loss", label, "the model has no loss of this kind")
+        return network.with_heat_sources(
+            [HeatSource(s.node, k * s.power * (network.temperature_symbol(s.node) - _loss_reference(s.power)), name)
+             for s in sources])
+
+    def requires(model):
+        return None if loss_nodes(model, label) else f"the model has no {label} loss"
+
+    group = LOSS_GROUPS[label]
+    return Effect(name, f"the {label} loss of the {group} rises by a fraction k per kelvin",
+                  r"q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})",
+                  (EffectParameter(f"k_{name}", 0.0, "1/K", -LOSS_THETA_BOUND, LOSS_THETA_BOUND, 0.004),), transform,
+                  f"residual grows with the {group} temperature times their {label} loss", requires=requires)
 
 
 def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
@@ -146,6 +224,10 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
             if all(model.spec.interface.has_role(role) for role in FORM_NEEDS[form]):
                 effect = heat_flow_effect(group, nodes, form)
                 library[effect.name] = effect
+    for label in LOSS_GROUPS:
+        effect = loss_temperature_effect(label)
+        if effect.unavailable_reason(model) is None:
+            library[effect.name] = effect
     for role in CONDUCTANCES:
         effect = conductance_effect(role)
         if all(model.spec.interface.has_role(need) for need in effect.needs):
@@ -161,6 +243,10 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
     when = "from the start" if found.onset_index == 0 else f"from {found.onset_s / 3600:.2f} h"
     if found.effect.startswith("conductance_"):
         return f"{CONDUCTANCES[found.effect[len('conductance_'):]]} multiplied by about {value:.2f} {when}"
+    if found.effect.startswith("loss_theta_"):
+        label = found.effect[len("loss_theta_"):]
+        return (f"the {label} loss of the {LOSS_GROUPS[label]} {'rising' if value > 0 else 'falling'} by about "
+                f"{abs(value) * 100:.2g} % per K of their temperature {when}")
     form, group = _form_and_group(found.effect)
     label, unit = HEAT_FORMS[form][:2]
     return (f"about {abs(value):.3g} {unit.replace('^2', '²')}{' × ' + label if label else ''} "
@@ -177,10 +263,13 @@ def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) 
     if found.effect.startswith("conductance_"):
         role = found.effect[len("conductance_"):]
         build = f"conductance_effect({role!r}, name={name!r})"
+    elif found.effect.startswith("loss_theta_"):
+        build = f"loss_temperature_effect({found.effect[len('loss_theta_'):]!r}, name={name!r})"
     else:
         form, group = _form_and_group(found.effect)
         build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
-    lines = ["from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups", ""]
+    lines = ["from genthermal.diagnose.open_search import (conductance_effect, heat_flow_effect, "
+             "loss_temperature_effect, node_groups)", ""]
     if "NODES" in build:
         lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
     lines += [f"effect = {build}",
