@@ -4,7 +4,7 @@ For each catalogue effect: inject it into a 4-hour mission (the nonlinear plant;
 the linear design model into that model), diagnose with the catalogue *without* that effect (does
 the residual test say something is missing?), then run the open search over the generic library
 (:func:`genthermal.diagnose.open_search.open_search`) and check that it finds terms (one, or a
-jointly fitted pair) that all have the right node group and form, and that the RMSE after them is
+jointly fitted pair) that all have the right node group and form (:data:`EXPECTED`), and that the RMSE after them is
 at most 2 x the estimated noise.
 
 Usage: ``python benchmarks/bench_open_search.py [--json FILE] [--dt 60] [--only EFFECT ...]``. Prints
@@ -37,7 +37,7 @@ EXPECTED = {
     "end_winding_stray_loss": {"heat_I2_end_windings"},
     "frame_cooling_change": {"conductance_frame_to_ambient"},
     "copper_resistance_temperature": {"loss_theta_copper", "heat_I2_theta_slot_winding"},
-    "quadratic_copper_loss": {"heat_I2_slot_winding", "heat_I2_end_windings"},
+    "quadratic_copper_loss": {"loss_I2_copper", "heat_I2_slot_winding", "heat_I2_end_windings"},
 }
 LINEAR_EFFECTS = ("copper_resistance_temperature", "quadratic_copper_loss")
 

@@ -3,6 +3,7 @@ it names, and each is found on a short record (4 h at 60 s) with its node group,
 (the leave-one-effect-out evaluation is benchmarks/bench_open_search.py)."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ from genthermal.diagnose.catalogue import Catalogue
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
 from genthermal.diagnose.open_search import (conductance_effect, describe_term, effect_code, heat_flow_library,
-                                             loss_nodes, loss_temperature_effect)
+                                             loss_nodes, loss_reform_effect, loss_temperature_effect)
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
 from genthermal.synth import THESIS_NOISE_VARIANCE_K2
@@ -50,26 +51,40 @@ def test_a_blockage_is_the_air_stream_term_with_the_convection_term(plant_model)
 def test_temperature_dependent_copper_loss_is_the_resistance_rising_with_temperature(design_model, plant_model):
     """On the linear design model (copper loss held at theta_ref = 90 °C) the copper loss x k (theta - 90 °C)
     is the catalogue's resistance rising with temperature at alpha_R = k; on the nonlinear plant it
-    is referred to 20 °C; the iron term acts on the iron loss."""
+    is referred to 20 °C."""
     loss = loss_temperature_effect("copper")
     np.testing.assert_allclose(
         _steady_outputs(design_model.with_effect(loss, k_loss_theta_copper=0.005), **INPUTS),
         _steady_outputs(design_model.with_effect("copper_resistance_temperature", alpha_R=0.005), **INPUTS),
         atol=1e-9)
     assert set(loss_nodes(plant_model, "copper")) == {"stator_winding", "end_winding_in", "end_winding_out"}
-    assert set(loss_nodes(plant_model, "iron")) == {"stator_iron", "stator_teeth"}
     hotter = plant_model.with_effect(loss, k_loss_theta_copper=0.004)
     assert _steady_outputs(hotter, **INPUTS)[0] > _steady_outputs(plant_model, **INPUTS)[0] + 1.0
-    iron = plant_model.with_effect(loss_temperature_effect("iron"), k_loss_theta_iron=0.004)
-    assert _steady_outputs(iron, **INPUTS)[1] > _steady_outputs(plant_model, **INPUTS)[1]
+
+
+def test_a_linearised_copper_loss_undone_is_the_copper_loss_re_formed_on_I2(design_model):
+    """The design model's copper loss R (a I + b) replaced by R I² (the catalogue's quadratic copper
+    loss at weight w) is the copper loss re-formed with k_P = -w and k_I2 = w R, ΣI² shared as the
+    copper loss is (by copper mass); neutral values change nothing."""
+    weight = 0.9
+    resistance = design_model.parameters["R0"].value * (
+        1 + design_model.parameters["alpha_cu"].value * design_model.parameters["theta_ref"].value)
+    reform = loss_reform_effect("copper")
+    np.testing.assert_allclose(
+        _steady_outputs(design_model.with_effect(reform, k_loss_I2_copper_P=-weight,
+                                                 k_loss_I2_copper_I2=weight * resistance), **INPUTS),
+        _steady_outputs(design_model.with_effect("quadratic_copper_loss", lambda_I2=weight), **INPUTS), atol=1e-9)
+    np.testing.assert_allclose(_steady_outputs(design_model.with_effect(reform), **INPUTS),
+                               _steady_outputs(design_model, **INPUTS), atol=1e-9)
 
 
 def test_library_has_the_new_terms_and_refuses_unknown_ones(plant_model, design_model):
     for model in (plant_model, design_model):
         library = heat_flow_library(model)
-        assert {"conductance_internal_convection", "loss_theta_copper", "loss_theta_iron"} <= set(library)
-    with pytest.raises(InputError, match="loss"):
-        loss_temperature_effect("friction")
+        assert {"conductance_internal_convection", "loss_theta_copper", "loss_I2_copper"} <= set(library)
+    for build in (loss_temperature_effect, loss_reform_effect):
+        with pytest.raises(InputError, match="loss"):
+            build("friction")
     with pytest.raises(InputError, match="conductance"):
         conductance_effect("rotor_to_shaft")
 
@@ -115,3 +130,28 @@ def test_open_search_finds_a_fall_of_the_internal_convection(plant_model, discov
     assert describe_term(found, result.catalogue) == (
         f"the internal convection to the cooling air multiplied by about "
         f"{found.values['k_conductance_internal_convection']:.2f} from {found.onset_s / 3600:.2f} h")
+
+
+def test_open_search_finds_a_copper_loss_in_I2_instead_of_its_line(design_model, discovery):
+    """The linear design model's copper loss replaced (90 %) by R I²: the re-formed copper loss wins
+    over ΣI² and constant flows into the windings, with both values, from the start."""
+    library = heat_flow_library(design_model)
+    truth = {"k_loss_I2_copper_P": -0.9, "k_loss_I2_copper_I2": 1.45}
+    case = make_hidden_effect_case([Injection("loss_I2_copper", truth, 0.0)], mission="thesis_fig_7_7", dt_s=DT_S,
+                                   seed=23, plant=design_model, catalogue=library)
+    terms = ["loss_I2_copper", "heat_I2_slot_winding", "heat_I2_end_windings", "heat_constant_slot_winding",
+             "loss_theta_copper"]
+    result = discovery.with_settings(candidates=Catalogue.of(library).only(terms)).fit(design_model, case.data)
+    assert [f.effect for f in result.found] == ["loss_I2_copper"], result.verdict
+    (found,) = result.found
+    for name, value in truth.items():
+        assert found.values[name] == pytest.approx(value, rel=0.1), name
+    assert found.onset_index == 0
+    assert result.iterations[0].rmse_after <= 2 * SENSOR_NOISE_STD and not result.unexplained
+    assert re.fullmatch(r"the copper loss of the windings about 1\d % of the model's plus 1\.[34]\d W/A² × ΣI² "
+                        r"\(shared as the copper loss\) from the start", describe_term(found, result.catalogue))
+    namespace = {"model": design_model}
+    exec(effect_code(found, result.catalogue, "copper_in_I2"), namespace)
+    kept = namespace["model"].parameters
+    assert kept["k_copper_in_I2_P"].value == pytest.approx(found.values["k_loss_I2_copper_P"], rel=1e-5)
+    assert kept["k_copper_in_I2_I2"].value == pytest.approx(found.values["k_loss_I2_copper_I2"], rel=1e-5)

@@ -13,10 +13,15 @@ When the catalogue does not explain the data, the missing physics may still be a
   ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
   W/(A²K));
 * a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
-  kind (the copper loss of the windings, the iron loss of the stator iron) grows by a fraction
+  kind (the copper loss of the windings) grows by a fraction
   :math:`k` per kelvin of the node's temperature above the temperature the model evaluates that
   loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
   :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` (1/K);
+* the copper loss re-formed (``loss_I2``, two parameters): a fraction :math:`k_P` of the modelled
+  loss and :math:`k_{I2}\,\sum_p I_p^2` added to each winding node, shared as the copper loss,
+  :math:`q_n \mathrel{+}= k_P P_n + k_{I2} (P_n/P) \sum_p I_p^2` — the loss refitted on two
+  shapes, its modelled one and I² (:math:`k_P = -1`: the modelled form replaced by
+  :math:`k_{I2} I^2`, a linearised loss undone);
 * a change of a conductance by a factor: the winding insulation, the frame to ambient, the
   coolant air streams (their advective conductance :math:`\dot m c_p`), the internal convection
   to the cooling air (every heat-transfer coefficient the machine lists as swept by the coolant,
@@ -64,15 +69,26 @@ CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
 #: Machine roles each conductance change reads.
 CONDUCTANCE_NEEDS = {"winding_insulation": (Role.WINDING_INSULATION,), "frame_to_ambient": (Role.FRAME_TO_AMBIENT,),
                      "air_streams": (Role.COOLANT_FLOW,), "internal_convection": (Role.INTERNAL_CONVECTION,)}
-#: Modelled losses that can depend on temperature: loss label → plain name of the node group
-#: that carries it (every node with a loss of that label).
-LOSS_GROUPS = {"copper": "windings", "iron": "stator iron"}
+#: Modelled losses whose temperature dependence is searched: loss label → plain name of the node
+#: group that carries it (every node with a loss of that label). The copper loss: a resistance
+#: rises by about 0.4 %/K. The iron loss is left out: its temperature dependence is weak (eddy
+#: currents fall slowly as the steel's resistivity rises) and, tried, a temperature-dependent iron
+#: loss took the place of an I_exc² heat flow into the iron (tests/test_diagnose_joint.py).
+LOSS_GROUPS = {"copper": "windings"}
 #: Temperature at which a loss is taken to hold when the model's loss does not name one
 #: (``theta_ref``): 20 °C, the reference of tabulated resistivities and temperature coefficients
 #: (IEC 60028 gives copper's 0.00393 /K at 20 °C).
 DEFAULT_LOSS_REFERENCE_C = 20.0
 #: Bound on |k| of a temperature-dependent loss, 1/K: five times copper's coefficient.
 LOSS_THETA_BOUND = 0.02
+#: Modelled losses that are re-formed on I² (``loss_I2``): the copper loss, whose form (I², a line
+#: through I², a resistance at one temperature) is a modelling choice. The iron loss of the shipped
+#: machines is a constant shared by heat capacity, which the constant heat flow into the stator
+#: iron already is.
+REFORMED_LOSSES = ("copper",)
+#: Bounds on the fraction k_P of the modelled loss added: the loss gone (-1) to three times the
+#: model's (+2).
+LOSS_FRACTION_BOUNDS = (-1.0, 2.0)
 
 
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
@@ -181,7 +197,7 @@ def loss_nodes(model: ThermalModel, label: str) -> tuple[str, ...]:
 
 
 def loss_temperature_effect(label: str, name: str | None = None) -> Effect:
-    r"""The modelled loss ``label`` (``"copper"``, ``"iron"``) of each node made temperature-dependent:
+    r"""The modelled loss ``label`` (``"copper"``) of each node made temperature-dependent:
     :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` with :math:`P_n` the node's own
     modelled loss of that label and :math:`\theta_{ref}` the temperature the model evaluates it at
     (:func:`_loss_reference`); :math:`k` in 1/K (copper's resistance: about +0.0039 /K).
@@ -189,7 +205,7 @@ def loss_temperature_effect(label: str, name: str | None = None) -> Effect:
     Parameters
     ----------
     label : str
-        A key of :data:`LOSS_GROUPS`.
+        A key of :data:`LOSS_GROUPS` (``"copper"``).
     name : str, optional
         Effect name (default ``loss_theta_<label>``); its parameter is ``k_<name>``.
     """
@@ -215,6 +231,50 @@ def loss_temperature_effect(label: str, name: str | None = None) -> Effect:
                   f"residual grows with the {group} temperature times their {label} loss", requires=requires)
 
 
+def loss_reform_effect(label: str, name: str | None = None) -> Effect:
+    r"""The modelled loss ``label`` (``"copper"``) re-formed on two shapes: to each node's loss
+    :math:`P_n` add a fraction :math:`k_P` of it and :math:`k_{I2}\sum_p I_p^2` shared as the loss
+    is, :math:`q_n \mathrel{+}= k_P P_n + k_{I2}\,s_n \sum_p I_p^2` with :math:`s_n` the node's share
+    of the heat capacity of the nodes carrying the loss (the copper loss is shared by copper mass).
+    :math:`k_P = -1` replaces the modelled form by :math:`k_{I2} I^2` (W/A², a phase resistance);
+    :math:`k_{I2} = 0` scales the loss. Two parameters: a missing loss of this form is usually a
+    bit of both, and each alone explains little of it (they cancel where the model is right).
+
+    Parameters
+    ----------
+    label : str
+        One of :data:`REFORMED_LOSSES`.
+    name : str, optional
+        Effect name (default ``loss_I2_<label>``); its parameters are ``k_<name>_P`` and
+        ``k_<name>_I2``.
+    """
+    if label not in REFORMED_LOSSES:
+        raise InputError("loss", label, f"must be one of {', '.join(REFORMED_LOSSES)}")
+    name = name or f"loss_I2_{label}"
+
+    def transform(network, roles, k_fraction, k_square):
+        sources = [s for s in network.heat_sources if s.label == label]
+        if not sources:
+            raise InputError("loss", label, "the model has no loss of this kind")
+        shares = mass_shares(network, tuple(dict.fromkeys(s.node for s in sources)))
+        squares = sum(input_symbol(p) ** 2 for p in roles[Role.LOAD_CURRENTS])
+        added = [HeatSource(s.node, k_fraction * s.power, name) for s in sources]
+        added += [HeatSource(n, k_square * share * squares, name) for n, share in shares.items()]
+        return network.with_heat_sources(added)
+
+    def requires(model):
+        return None if loss_nodes(model, label) else f"the model has no {label} loss"
+
+    group = LOSS_GROUPS[label]
+    bound, typical = HEAT_FORMS["I2"][2:]
+    return Effect(name, f"the {label} loss of the {group} re-formed: a fraction k_P of it plus k_I2 ΣI²",
+                  r"q_n \mathrel{+}= k_P\,P_n + k_{I2}\,s_n \sum_p I_p^2",
+                  (EffectParameter(f"k_{name}_P", 0.0, "1", *LOSS_FRACTION_BOUNDS, -0.2),
+                   EffectParameter(f"k_{name}_I2", 0.0, "W/A^2", -bound, bound, typical)), transform,
+                  f"residual follows the {group}' {label} loss and ΣI² in another mix than the model's",
+                  requires=requires, needs=(Role.LOAD_CURRENTS,))
+
+
 def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
     """The generic library for ``model``: heat flows (node group × form) and conductance changes."""
     library = {}
@@ -224,8 +284,8 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
             if all(model.spec.interface.has_role(role) for role in FORM_NEEDS[form]):
                 effect = heat_flow_effect(group, nodes, form)
                 library[effect.name] = effect
-    for label in LOSS_GROUPS:
-        effect = loss_temperature_effect(label)
+    for effect in ([loss_temperature_effect(label) for label in LOSS_GROUPS]
+                   + [loss_reform_effect(label) for label in REFORMED_LOSSES]):
         if effect.unavailable_reason(model) is None:
             library[effect.name] = effect
     for role in CONDUCTANCES:
@@ -238,8 +298,8 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
 def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
     """Plain language for one found term of the library, e.g. "about 0.6 W/A² × I_v² into the slot
     winding from 0.90 h"."""
-    (parameter,) = catalogue[found.effect].parameters
-    value = found.values[parameter.name]
+    parameters = catalogue[found.effect].parameters
+    value = found.values[parameters[0].name]
     when = "from the start" if found.onset_index == 0 else f"from {found.onset_s / 3600:.2f} h"
     if found.effect.startswith("conductance_"):
         return f"{CONDUCTANCES[found.effect[len('conductance_'):]]} multiplied by about {value:.2f} {when}"
@@ -247,6 +307,11 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
         label = found.effect[len("loss_theta_"):]
         return (f"the {label} loss of the {LOSS_GROUPS[label]} {'rising' if value > 0 else 'falling'} by about "
                 f"{abs(value) * 100:.2g} % per K of their temperature {when}")
+    if found.effect.startswith("loss_I2_"):
+        label = found.effect[len("loss_I2_"):]
+        square = found.values[parameters[1].name]
+        return (f"the {label} loss of the {LOSS_GROUPS[label]} about {(1 + value) * 100:.2g} % of the model's "
+                f"{'plus' if square >= 0 else 'minus'} {abs(square):.3g} W/A² × ΣI² (shared as the {label} loss) {when}")
     form, group = _form_and_group(found.effect)
     label, unit = HEAT_FORMS[form][:2]
     return (f"about {abs(value):.3g} {unit.replace('^2', '²')}{' × ' + label if label else ''} "
@@ -255,25 +320,28 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
 
 def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) -> str:
     """Python source that builds the found term as a new effect called ``name`` and adds it to
-    ``model`` at the fitted value. The code changes no global state; its last line, commented
+    ``model`` at the fitted values. The code changes no global state; its last line, commented
     out, registers the effect so that model files and the command line know it by name."""
     effect = catalogue[found.effect]
-    (parameter,) = effect.parameters
-    value = found.values[parameter.name]
     if found.effect.startswith("conductance_"):
         role = found.effect[len("conductance_"):]
         build = f"conductance_effect({role!r}, name={name!r})"
     elif found.effect.startswith("loss_theta_"):
         build = f"loss_temperature_effect({found.effect[len('loss_theta_'):]!r}, name={name!r})"
+    elif found.effect.startswith("loss_I2_"):
+        build = f"loss_reform_effect({found.effect[len('loss_I2_'):]!r}, name={name!r})"
     else:
         form, group = _form_and_group(found.effect)
         build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
     lines = ["from genthermal.diagnose.open_search import (conductance_effect, heat_flow_effect, "
-             "loss_temperature_effect, node_groups)", ""]
+             "loss_reform_effect, loss_temperature_effect, node_groups)", ""]
     if "NODES" in build:
         lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
+    # the new effect's parameters are the found term's with its name in place of the term's
+    values = ", ".join(f"k_{name}{p.name[len('k_' + found.effect):]}={found.values[p.name]:.6g}"
+                       for p in effect.parameters)
     lines += [f"effect = {build}",
-              f"model = model.with_effect(effect, k_{name}={value:.6g})   # fitted: {describe_term(found, catalogue)}",
+              f"model = model.with_effect(effect, {values})   # fitted: {describe_term(found, catalogue)}",
               "# from genthermal.effects import register_effect; register_effect(effect)   # to use it by name"]
     return "\n".join(lines) + "\n"
 
