@@ -18,8 +18,9 @@ When the catalogue does not explain the data, the missing physics may still be a
   loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
   :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` (1/K);
 * the copper loss re-formed (``loss_I2``, two parameters): a fraction :math:`k_P` of the modelled
-  loss and :math:`k_{I2}\,\sum_p I_p^2` added to each winding node, shared as the copper loss,
-  :math:`q_n \mathrel{+}= k_P P_n + k_{I2} (P_n/P) \sum_p I_p^2` — the loss refitted on two
+  loss and :math:`k_{I2}\,\sum_p I_p^2` added to the winding nodes, the latter shared by heat
+  capacity :math:`s_n` (copper mass, as the machine shares its copper loss),
+  :math:`q_n \mathrel{+}= k_P P_n + k_{I2}\,s_n \sum_p I_p^2` — the loss refitted on two
   shapes, its modelled one and I² (:math:`k_P = -1`: the modelled form replaced by
   :math:`k_{I2} I^2`, a linearised loss undone);
 * a change of a conductance by a factor: the winding insulation, the frame to ambient, the
