@@ -155,3 +155,12 @@ def test_open_search_finds_a_copper_loss_in_I2_instead_of_its_line(design_model,
     kept = namespace["model"].parameters
     assert kept["k_copper_in_I2_P"].value == pytest.approx(found.values["k_loss_I2_copper_P"], rel=1e-5)
     assert kept["k_copper_in_I2_I2"].value == pytest.approx(found.values["k_loss_I2_copper_I2"], rel=1e-5)
+
+
+@pytest.mark.parametrize("model_fixture", ["plant_model", "design_model"])
+def test_open_search_on_a_healthy_record_finds_no_term(model_fixture, request, discovery):
+    """With the new terms in the library, a healthy record still gives "none" and nothing unexplained."""
+    model = request.getfixturevalue(model_fixture)
+    case = make_hidden_effect_case(None, mission="thesis_fig_7_7", dt_s=DT_S, seed=24, plant=model)
+    result = discovery.with_settings(candidates=Catalogue.of(heat_flow_library(model))).fit(model, case.data)
+    assert result.verdict == "none" and result.found == [] and not result.unexplained
