@@ -11,8 +11,8 @@ import pytest
 from genthermal.diagnose.catalogue import Catalogue
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
-from genthermal.diagnose.open_search import (conductance_effect, describe_term, effect_code, heat_flow_library,
-                                             loss_nodes, loss_reform_effect, loss_temperature_effect)
+from genthermal.diagnose.loss_terms import loss_nodes, loss_reform_effect, loss_temperature_effect
+from genthermal.diagnose.open_search import conductance_effect, describe_term, effect_code, heat_flow_library
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
 from genthermal.synth import THESIS_NOISE_VARIANCE_K2

@@ -12,7 +12,7 @@ When the catalogue does not explain the data, the missing physics may still be a
   (:math:`I_{exc}^2`, W/A²), and into the slot winding also the per-phase ``I_u2``, ``I_v2``,
   ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
   W/(A²K));
-* a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
+* (in :mod:`genthermal.diagnose.loss_terms`) a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
   kind (the copper loss of the windings) grows by a fraction
   :math:`k` per kelvin of the node's temperature above the temperature the model evaluates that
   loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
@@ -48,12 +48,14 @@ from ..losses import input_symbol, mass_shares
 from ..machines.interface import Role
 from ..model import ThermalModel
 from ..network import HeatSource
+from .loss_terms import (I2_BOUND, I2_TYPICAL, LOSS_GROUPS, REFORMED_LOSSES, loss_reform_effect,
+                         loss_temperature_effect)
 from .search import FoundEffect
 
 #: Extra heat-flow forms: name → (plain-language factor, unit of k, bound on |k|, typical k).
 HEAT_FORMS = {
     "constant": ("", "W", 500.0, 20.0),
-    "I2": ("ΣI²", "W/A^2", 5.0, 0.2),
+    "I2": ("ΣI²", "W/A^2", I2_BOUND, I2_TYPICAL),
     "I_exc2": ("I_exc²", "W/A^2", 200.0, 20.0),
     "I_u2": ("I_u²", "W/A^2", 5.0, 0.3),
     "I_v2": ("I_v²", "W/A^2", 5.0, 0.3),
@@ -70,26 +72,6 @@ CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
 #: Machine roles each conductance change reads.
 CONDUCTANCE_NEEDS = {"winding_insulation": (Role.WINDING_INSULATION,), "frame_to_ambient": (Role.FRAME_TO_AMBIENT,),
                      "air_streams": (Role.COOLANT_FLOW,), "internal_convection": (Role.INTERNAL_CONVECTION,)}
-#: Modelled losses whose temperature dependence is searched: loss label → plain name of the node
-#: group that carries it (every node with a loss of that label). The copper loss: a resistance
-#: rises by about 0.4 %/K. The iron loss is left out: its temperature dependence is weak (eddy
-#: currents fall slowly as the steel's resistivity rises) and, tried, a temperature-dependent iron
-#: loss took the place of an I_exc² heat flow into the iron (tests/test_diagnose_joint.py).
-LOSS_GROUPS = {"copper": "windings"}
-#: Temperature at which a loss is taken to hold when the model's loss does not name one
-#: (``theta_ref``): 20 °C, the reference of tabulated resistivities and temperature coefficients
-#: (IEC 60028 gives copper's 0.00393 /K at 20 °C).
-DEFAULT_LOSS_REFERENCE_C = 20.0
-#: Bound on |k| of a temperature-dependent loss, 1/K: five times copper's coefficient.
-LOSS_THETA_BOUND = 0.02
-#: Modelled losses that are re-formed on I² (``loss_I2``): the copper loss, whose form (I², a line
-#: through I², a resistance at one temperature) is a modelling choice. The iron loss of the shipped
-#: machines is a constant shared by heat capacity, which the constant heat flow into the stator
-#: iron already is.
-REFORMED_LOSSES = ("copper",)
-#: Bounds on the fraction k_P of the modelled loss added: the loss gone (-1) to three times the
-#: model's (+2).
-LOSS_FRACTION_BOUNDS = (-1.0, 2.0)
 
 
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
@@ -184,98 +166,6 @@ def _scale_convection(network, coefficients, k):
     return network.substitute_in_links({symbols[name]: k * symbols[name] for name in coefficients})
 
 
-def _loss_reference(power) -> sympy.Expr:
-    """The temperature a modelled loss holds at: the ``theta_ref`` symbol of its expression (a
-    resistance evaluated at a reference temperature), else :data:`DEFAULT_LOSS_REFERENCE_C`."""
-    named = [symbol for symbol in power.free_symbols if symbol.name == "theta_ref"]
-    return named[0] if named else sympy.Float(DEFAULT_LOSS_REFERENCE_C)
-
-
-def loss_nodes(model: ThermalModel, label: str) -> tuple[str, ...]:
-    """The capacitive nodes of ``model`` that carry a modelled loss labelled ``label``."""
-    states = set(model.state_names)
-    return tuple(dict.fromkeys(s.node for s in model.network.heat_sources if s.label == label and s.node in states))
-
-
-def loss_temperature_effect(label: str, name: str | None = None) -> Effect:
-    r"""The modelled loss ``label`` (``"copper"``) of each node made temperature-dependent:
-    :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` with :math:`P_n` the node's own
-    modelled loss of that label and :math:`\theta_{ref}` the temperature the model evaluates it at
-    (:func:`_loss_reference`); :math:`k` in 1/K (copper's resistance: about +0.0039 /K).
-
-    Parameters
-    ----------
-    label : str
-        A key of :data:`LOSS_GROUPS` (``"copper"``).
-    name : str, optional
-        Effect name (default ``loss_theta_<label>``); its parameter is ``k_<name>``.
-    """
-    if label not in LOSS_GROUPS:
-        raise InputError("loss", label, f"must be one of {', '.join(LOSS_GROUPS)}")
-    name = name or f"loss_theta_{label}"
-
-    def transform(network, roles, k):
-        sources = [s for s in network.heat_sources if s.label == label]
-        if not sources:
-            raise InputError("loss", label, "the model has no loss of this kind")
-        return network.with_heat_sources(
-            [HeatSource(s.node, k * s.power * (network.temperature_symbol(s.node) - _loss_reference(s.power)), name)
-             for s in sources])
-
-    def requires(model):
-        return None if loss_nodes(model, label) else f"the model has no {label} loss"
-
-    group = LOSS_GROUPS[label]
-    return Effect(name, f"the {label} loss of the {group} rises by a fraction k per kelvin",
-                  r"q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})",
-                  (EffectParameter(f"k_{name}", 0.0, "1/K", -LOSS_THETA_BOUND, LOSS_THETA_BOUND, 0.004),), transform,
-                  f"residual grows with the {group} temperature times their {label} loss", requires=requires)
-
-
-def loss_reform_effect(label: str, name: str | None = None) -> Effect:
-    r"""The modelled loss ``label`` (``"copper"``) re-formed on two shapes: to each node's loss
-    :math:`P_n` add a fraction :math:`k_P` of it and :math:`k_{I2}\sum_p I_p^2` shared as the loss
-    is, :math:`q_n \mathrel{+}= k_P P_n + k_{I2}\,s_n \sum_p I_p^2` with :math:`s_n` the node's share
-    of the heat capacity of the nodes carrying the loss (the copper loss is shared by copper mass).
-    :math:`k_P = -1` replaces the modelled form by :math:`k_{I2} I^2` (W/A², a phase resistance);
-    :math:`k_{I2} = 0` scales the loss. Two parameters: a missing loss of this form is usually a
-    bit of both, and each alone explains little of it (they cancel where the model is right).
-
-    Parameters
-    ----------
-    label : str
-        One of :data:`REFORMED_LOSSES`.
-    name : str, optional
-        Effect name (default ``loss_I2_<label>``); its parameters are ``k_<name>_P`` and
-        ``k_<name>_I2``.
-    """
-    if label not in REFORMED_LOSSES:
-        raise InputError("loss", label, f"must be one of {', '.join(REFORMED_LOSSES)}")
-    name = name or f"loss_I2_{label}"
-
-    def transform(network, roles, k_fraction, k_square):
-        sources = [s for s in network.heat_sources if s.label == label]
-        if not sources:
-            raise InputError("loss", label, "the model has no loss of this kind")
-        shares = mass_shares(network, tuple(dict.fromkeys(s.node for s in sources)))
-        squares = sum(input_symbol(p) ** 2 for p in roles[Role.LOAD_CURRENTS])
-        added = [HeatSource(s.node, k_fraction * s.power, name) for s in sources]
-        added += [HeatSource(n, k_square * share * squares, name) for n, share in shares.items()]
-        return network.with_heat_sources(added)
-
-    def requires(model):
-        return None if loss_nodes(model, label) else f"the model has no {label} loss"
-
-    group = LOSS_GROUPS[label]
-    bound, typical = HEAT_FORMS["I2"][2:]
-    return Effect(name, f"the {label} loss of the {group} re-formed: a fraction k_P of it plus k_I2 ΣI²",
-                  r"q_n \mathrel{+}= k_P\,P_n + k_{I2}\,s_n \sum_p I_p^2",
-                  (EffectParameter(f"k_{name}_P", 0.0, "1", *LOSS_FRACTION_BOUNDS, -0.2),
-                   EffectParameter(f"k_{name}_I2", 0.0, "W/A^2", -bound, bound, typical)), transform,
-                  f"residual follows the {group}' {label} loss and ΣI² in another mix than the model's",
-                  requires=requires, needs=(Role.LOAD_CURRENTS,))
-
-
 def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
     """The generic library for ``model``: heat flows (node group × form) and conductance changes."""
     library = {}
@@ -334,8 +224,8 @@ def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) 
     else:
         form, group = _form_and_group(found.effect)
         build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
-    lines = ["from genthermal.diagnose.open_search import (conductance_effect, heat_flow_effect, "
-             "loss_reform_effect, loss_temperature_effect, node_groups)", ""]
+    lines = ["from genthermal.diagnose.loss_terms import loss_reform_effect, loss_temperature_effect",
+             "from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups", ""]
     if "NODES" in build:
         lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
     # the new effect's parameters are the found term's with its name in place of the term's
