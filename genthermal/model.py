@@ -246,6 +246,10 @@ class StructureCache:
 
 #: The process's :class:`StructureCache`.
 STRUCTURES = StructureCache()
+#: The reduced equations of each network, whatever sensors read it (:meth:`ThermalModel._symbolic`):
+#: a model with one more sensor on the same network (a record's outlet sensor, fitted by a
+#: diagnosis) compiles its functions again, but not its equations.
+EQUATIONS = StructureCache()
 
 
 class ThermalModel:
@@ -374,6 +378,20 @@ class ThermalModel:
         return self._shared_value("affine_branch", lambda: self._build_symbolic(loss_floors=False))
 
     def _build_symbolic(self, loss_floors: bool = True) -> dict:
+        """:meth:`_build_equations` (shared by the models of one network whatever their sensors,
+        :data:`EQUATIONS`) with the sensor outputs ``y``."""
+        key = (self.network, tuple(self.input_names), tuple(sorted(self.spec.boundary_inputs.items())),
+               tuple(self.parameter_names), tuple(self.parameters[n].symbol for n in self.parameter_names))
+        equations = EQUATIONS.shared(key)
+        if loss_floors not in equations:
+            equations[loss_floors] = self._build_equations(loss_floors)
+        s = equations[loss_floors]
+        index = {name: i for i, name in enumerate(s["internal"])}
+        return {**s, "y": s["nodes"][[index[self.spec.sensors[o]] for o in self.output_names]]}
+
+    def _build_equations(self, loss_floors: bool = True) -> dict:
+        """SX state equations ``xdot`` and internal node temperatures ``nodes`` of (x, u, p), the
+        total source heat ``heat``: every sensor-independent part of :attr:`_symbolic`."""
         net = self.network
         x = ca.SX.sym("x", self.n_states)
         u = ca.SX.sym("u", len(self.input_names))
@@ -429,9 +447,7 @@ class ThermalModel:
         for k, row, diagonal, remainder in reversed(eliminated):
             theta[k] = -(sum(g * theta[j] for j, g in row.items()) + remainder) / diagonal
         nodes = ca.vertcat(*[theta[i] for i in range(len(internal))])
-        sensor_idx = [index[self.spec.sensors[o]] for o in self.output_names]
-        return {"x": x, "u": u, "p": p, "xdot": xdot, "nodes": nodes,
-                "y": nodes[sensor_idx], "heat": ca.sum1(q), "internal": internal}
+        return {"x": x, "u": u, "p": p, "xdot": xdot, "nodes": nodes, "heat": ca.sum1(q), "internal": internal}
 
     # --- CasADi functions ------------------------------------------------------------------
     @property

@@ -56,6 +56,19 @@ def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effe
     assert not result.unexplained and result.to_dict()["verdict"] == result.verdict
 
 
+def test_two_workers_fit_the_pairs_of_one_process(plant_model, two_effect_case, discovery):
+    """Every stage of the pair search runs in the worker pool with two workers (the singles and
+    their polish, the pair grid, one descent per starting point, the polish of the best pairs, the
+    look-alike refit per phase): the rankings are those of one process, to the last digit."""
+    three = Catalogue.registered().only(["coolant_flow_reduction", "end_winding_stray_loss", "phase_short_circuit"])
+    results = [discovery.with_settings(candidates=three, fitter=OnsetFitter(workers=workers)).fit(
+        plant_model, two_effect_case.data) for workers in (1, 2)]
+    (one, two) = ([(tuple(c.effects) if hasattr(c, "effects") else c.effect, c.rss)
+                   for c in [*r.iterations[0].ranked, *r.iterations[0].pairs]] for r in results)
+    assert one == two and len(one) >= 5
+    assert results[0].verdict == results[1].verdict
+
+
 def test_a_partial_fit_says_something_is_still_missing(plant_model, two_effect_case, discovery):
     blockage_only = discovery.with_settings(candidates=Catalogue.registered().only(["coolant_flow_reduction"]))
     result = blockage_only.fit(plant_model, two_effect_case.data)

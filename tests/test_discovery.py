@@ -1,6 +1,7 @@
 """The composed discovery: candidates, criterion and fitter behind ``fit``; nothing global changes."""
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from genthermal.diagnose import AIC, BIC, Catalogue, Discovery, OnsetFitter
 from genthermal.diagnose.compare import measured_series
 from genthermal.diagnose.hidden import make_hidden_effect_case
-from genthermal.diagnose.parallel import can_fork, map_in_workers
+from genthermal.diagnose.parallel import WORKER_CPU, can_fork, cpu_clock, map_in_workers
 from genthermal.diagnose.search import EffectSearch
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
@@ -85,3 +86,20 @@ def test_workers_give_the_results_of_one_process():
     assert sorted(seen) == [1, 2, 3] and (can_fork() or seen == [1, 2, 3])
     with pytest.raises(InputError, match="workers"):
         map_in_workers(shifted, [1.0], 0)
+
+
+@pytest.mark.skipif(not can_fork(), reason="no forked workers on this platform")
+def test_workers_cpu_time_is_counted_and_the_busiest_worker_bounds_the_wall_time():
+    def busy(seconds):
+        started = time.process_time()
+        while time.process_time() - started < seconds:
+            pass
+        return seconds
+
+    before, maps = cpu_clock(), WORKER_CPU.maps
+    assert map_in_workers(busy, [0.3, 0.1, 0.1], 2) == [0.3, 0.1, 0.1]
+    spent = cpu_clock() - before
+    assert WORKER_CPU.maps == maps + 1
+    assert 0.5 <= spent.workers_s < 0.8  # every item's CPU time, in whichever worker it ran
+    # the busiest worker ran the 0.3-s item, perhaps with one 0.1-s item: the other ran the rest
+    assert 0.3 <= spent.critical_s - spent.own_s <= 0.45 and spent.critical_s < spent.total_s

@@ -201,6 +201,24 @@ def test_equal_networks_built_again_share_compiled_functions_not_values(plant_mo
         StructureCache(size=0)
 
 
+def test_one_more_sensor_on_the_same_network_reuses_its_equations(plant_model):
+    """The outlet sensor a diagnosis fits: a new model on the same network, its equations shared
+    (EQUATIONS), its own sensor outputs compiled, the other sensors reading the same."""
+    from genthermal.diagnose.sensor_view import with_outlet_sensor
+    from genthermal.model import EQUATIONS
+
+    hits = EQUATIONS.hits
+    viewed = with_outlet_sensor(plant_model)
+    assert EQUATIONS.hits == hits + 1
+    assert viewed.output_names == [*plant_model.output_names, "T_outlet"]
+    x = np.linspace(40.0, 90.0, plant_model.n_states)
+    u = plant_model.input_vector(**{name: 100.0 for name in plant_model.input_names if name.startswith("I_")})
+    y, y_viewed = (np.asarray(m.functions["outputs"](x, u, m.p0)).ravel() for m in (plant_model, viewed))
+    assert np.array_equal(y_viewed[:-1], y)
+    nodes = np.asarray(viewed.functions["nodes"](x, u, viewed.p0)).ravel()
+    assert y_viewed[-1] == nodes[viewed.node_order.index(viewed.spec.sensors["T_outlet"])]
+
+
 def test_heat_capacities_are_the_capacitance_expressions_evaluated(plant_model):
     values = {plant_model.parameters[n].symbol: plant_model.parameters.value(n) for n in plant_model.parameter_names}
     expected = [float(plant_model.network.node(n).capacitance.subs(values)) for n in plant_model.state_names]

@@ -62,5 +62,5 @@ class OnsetFitter:
         """Pairs of ``singles`` fitted jointly (:class:`~genthermal.diagnose.joint.PairSearch`), or
         only those of :attr:`pair_starts` from their onsets; best first."""
         if self.pair_starts:
-            return PairSearch(search).refit(singles, self.pair_starts)
+            return PairSearch(search).refit(singles, self.pair_starts, self.workers, progress)
         return PairSearch(search).rank(singles, self.pair_pool, progress=progress, workers=self.workers)

@@ -333,19 +333,21 @@ class PairSearch:
         onsets, z, _ = self._coarse_fit(first, second)
         return self._finish((first.effect, second.effect), onsets, z, polish)
 
-    def refit(self, singles: Sequence[Candidate], starts: Sequence[tuple]) -> list[JointCandidate]:
+    def refit(self, singles: Sequence[Candidate], starts: Sequence[tuple], workers: int = 1,
+              progress=None) -> list[JointCandidate]:
         """Pairs fitted from known onsets (warm starts): for each ``(effect, onset s, effect, onset s)``
         of ``starts`` (e.g. a pair fitted to the same record on other sensors), the values of both
         effects fitted at those onsets from their single fits, the onsets refined within one grid
         step of the pair grid by coordinate descent (step 3 without the search over the whole
-        record), then step 4; best ΔBIC first. Pairs of an effect not among ``singles`` are skipped."""
+        record), then step 4; best ΔBIC first. Pairs of an effect not among ``singles`` are skipped.
+        With ``workers`` > 1 the pairs are fitted in forked processes, with the same result;
+        ``progress(done, total, label)`` is called after each."""
         search, by_name = self.search, {c.effect: c for c in singles}
         factor = int(round(search.coarse.dt_s / search.series.dt_s))
         grid = self._onset_grid()
-        ranked = []
-        for first, first_onset_s, second, second_onset_s in starts:
-            if first not in by_name or second not in by_name:
-                continue
+
+        def fit_from(start):
+            first, first_onset_s, second, second_onset_s = start
             coarse = self._structure((first, second), search.coarse)
             z = np.array([s.decision(_start(s, value, p)) for s, (value, p) in
                           zip(coarse.problem.scalings, [*self._starts(by_name[first]), *self._starts(by_name[second])])])
@@ -353,7 +355,11 @@ class PairSearch:
                       for t in (first_onset_s, second_onset_s)]
             z, _ = coarse.fit(onsets, z, search.x0_coefficients)
             onsets, z, _ = self._descend(coarse, onsets, z, int(grid[1] - grid[0]), whole_record=False)
-            ranked.append(self._finish((first, second), onsets, z, polish=True))
+            return self._finish((first, second), onsets, z, polish=True)
+
+        kept = [start for start in starts if start[0] in by_name and start[2] in by_name]
+        ranked = map_in_workers(fit_from, kept, workers, progress and (
+            lambda done, total, start: progress(done, total, f"{start[0]} + {start[2]} (refitted from its onsets)")))
         return sorted(ranked, key=lambda c: c.delta_bic)
 
     def member_changes(self, pair: JointCandidate) -> dict:
@@ -391,7 +397,12 @@ class PairSearch:
 
     def _fit(self, pairs: Sequence[tuple], workers: int, progress, stage: str = "") -> list[JointCandidate]:
         """Steps 2-4 for ``pairs`` of single candidates: every starting point, the descent for the
-        :data:`DESCENDED_PAIRS` of least RSS there, the :data:`POLISHED_PAIRS` best polished."""
+        :data:`DESCENDED_PAIRS` of least RSS there, the :data:`POLISHED_PAIRS` best polished.
+
+        Three parallel maps: the starting points of each pair; the descent from each starting point
+        kept (one item each: the descents of a pair are independent, and twice as many smaller
+        items keep both workers busy to the end); the polish of the best pairs and the scoring of
+        the others on the full series."""
 
         def start_pair(pair):
             starts = self._starting_points(*pair)[:_DESCENTS]
@@ -400,28 +411,44 @@ class PairSearch:
             scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
             return starts, (list(onsets), z, rss, scored)
 
-        def descend_pair(item):
-            names, starts = item
-            onsets, z, rss = self._descents(names, starts)
-            scored = self._finish(names, onsets, z, polish=False) if workers > 1 else None
-            return onsets, z, rss, scored
+        grid = self._onset_grid()
+        step = int(grid[1] - grid[0])
+
+        def descend_from(item):
+            names, (onsets, z_start, _) = item
+            return self._descend(self._structure(names, self.search.coarse), list(onsets), z_start, step)
+
+        def finish(item):
+            names, onsets, z, polish = item
+            return self._finish(names, onsets, z, polish)
+
+        def report(what):
+            """Progress of a map whose items start with the pair's names; ``what(item)`` says what was done."""
+            return progress and (lambda done, total, item: progress(done, total, f"{stage}{' + '.join(item[0])} "
+                                                                                 f"({what(item)})"))
 
         started = map_in_workers(start_pair, pairs, workers, progress and (
             lambda done, total, pair: progress(done, total, f"{stage}{pair[0].effect} + {pair[1].effect} "
                                                             "(onset grid)")))
+        names = [(first.effect, second.effect) for first, second in pairs]
         order = sorted(range(len(pairs)), key=lambda m: started[m][1][2])[:DESCENDED_PAIRS]
-        refined = map_in_workers(descend_pair, [((pairs[m][0].effect, pairs[m][1].effect), started[m][0])
-                                                for m in order], workers, progress and (
-            lambda done, total, item: progress(done, total, f"{stage}{' + '.join(item[0])} (onsets refined)")))
-        descended = dict(zip(order, refined))
+        descents = [(m, start) for m in order for start in started[m][0]]
+        refined = map_in_workers(descend_from, [(names[m], start) for m, start in descents], workers,
+                                 report(lambda item: "onsets refined"))
+        descended = {}
+        for (m, _), (onsets, z, rss) in zip(descents, refined):  # least RSS, the first start on a tie
+            if m not in descended or rss < descended[m][2]:
+                descended[m] = (onsets, z, rss, None)
         coarse = []
-        for m, (first, second) in enumerate(pairs):
+        for m in range(len(pairs)):
             onsets, z, rss, scored = descended.get(m, started[m][1])
-            coarse.append(((first.effect, second.effect), onsets, z, rss, scored))
+            coarse.append((names[m], onsets, z, rss, scored))
         coarse.sort(key=lambda item: item[3])
-        return [scored if rank >= POLISHED_PAIRS and scored is not None else
-                self._finish(names, onsets, z, rank < POLISHED_PAIRS)
-                for rank, (names, onsets, z, _, scored) in enumerate(coarse)]
+        unfinished = [rank for rank, item in enumerate(coarse) if rank < POLISHED_PAIRS or item[4] is None]
+        finished = dict(zip(unfinished, map_in_workers(
+            finish, [(*coarse[rank][:3], rank < POLISHED_PAIRS) for rank in unfinished], workers,
+            report(lambda item: f"on the full series: {'polished' if item[3] else 'scored'}"))))
+        return [finished.get(rank, item[4]) for rank, item in enumerate(coarse)]
 
     def rank(self, singles: Sequence[Candidate], pool: int = PAIR_POOL, progress=None,
              workers: int = 1) -> list[JointCandidate]:

@@ -5,11 +5,20 @@ inherit them (and everything the parent built) instead, and send back only their
 and small dataclasses). Where ``fork`` is not available (Windows, macOS default ``spawn``), or with
 one worker, the same function runs in this process, in order: the results do not depend on the
 number of workers.
+
+Each worker measures the CPU time of the items it runs and sends it back with the result;
+:data:`WORKER_CPU` adds them up over the life of this process, so that a caller can tell, stage by
+stage, how much CPU its workers used and how long the busiest of them needed (the critical path of
+a parallel map: on an idle machine its wall time cannot be less). :func:`cpu_clock` reads both
+together with this process's own CPU time.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
+import os
+import time
 from typing import Callable, Sequence
 
 from ..errors import InputError
@@ -17,9 +26,71 @@ from ..errors import InputError
 _TASK: tuple | None = None
 
 
+@dataclasses.dataclass
+class WorkerCPU:
+    """CPU seconds used by the workers of :func:`map_in_workers` since this process started.
+
+    Attributes
+    ----------
+    total_s : float
+        CPU time of every item run in a worker, s.
+    busiest_s : float
+        Sum over the parallel maps of the CPU time of the map's busiest worker, s: the time the
+        map needs at least with one free core per worker.
+    maps : int
+        Parallel maps run (maps that ran in this process are not counted).
+    """
+
+    total_s: float = 0.0
+    busiest_s: float = 0.0
+    maps: int = 0
+
+
+#: The workers' CPU time of this process (:class:`WorkerCPU`), updated as each item returns.
+WORKER_CPU = WorkerCPU()
+
+
+@dataclasses.dataclass(frozen=True)
+class CPUReading:
+    """CPU time at one moment (:func:`cpu_clock`); differences of two readings time a stage.
+
+    Attributes
+    ----------
+    own_s : float
+        CPU time of this process, s.
+    workers_s : float
+        CPU time of the items run in worker processes (:attr:`WorkerCPU.total_s`), s.
+    critical_s : float
+        ``own_s`` plus the busiest worker's CPU time of each parallel map
+        (:attr:`WorkerCPU.busiest_s`), s: the wall time the work needs at least with one core per
+        worker (this process waits while its workers run).
+    """
+
+    own_s: float
+    workers_s: float
+    critical_s: float
+
+    @property
+    def total_s(self) -> float:
+        """CPU time of this process and its workers, s."""
+        return self.own_s + self.workers_s
+
+    def __sub__(self, other: "CPUReading") -> "CPUReading":
+        return CPUReading(self.own_s - other.own_s, self.workers_s - other.workers_s,
+                          self.critical_s - other.critical_s)
+
+
+def cpu_clock() -> CPUReading:
+    """This process's CPU time and its workers' (:data:`WORKER_CPU`) now."""
+    own = time.process_time()
+    return CPUReading(own, WORKER_CPU.total_s, own + WORKER_CPU.busiest_s)
+
+
 def _run(index: int):
     function, items = _TASK
-    return index, function(items[index])
+    started = time.process_time()
+    result = function(items[index])
+    return index, result, os.getpid(), time.process_time() - started
 
 
 def can_fork() -> bool:
@@ -30,6 +101,10 @@ def can_fork() -> bool:
 def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
                    progress: Callable[[int, int, object], None] | None = None) -> list:
     """``[function(item) for item in items]``, in ``workers`` forked processes when that can help.
+
+    Items are handed out one at a time in their order, each to the next free worker: put the
+    costliest first when their costs are known, so that no worker is left with a long item at the
+    end.
 
     Parameters
     ----------
@@ -63,9 +138,15 @@ def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
     _TASK = (function, items)
     try:
         results = [None] * len(items)
+        busiest_before, per_worker = WORKER_CPU.busiest_s, {}
+        WORKER_CPU.maps += 1
         with multiprocessing.get_context("fork").Pool(min(int(workers), len(items))) as pool:
-            for done, (index, result) in enumerate(pool.imap_unordered(_run, range(len(items))), start=1):
+            for done, (index, result, pid, cpu_s) in enumerate(pool.imap_unordered(_run, range(len(items))),
+                                                                start=1):
                 results[index] = result
+                per_worker[pid] = per_worker.get(pid, 0.0) + cpu_s
+                WORKER_CPU.total_s += cpu_s
+                WORKER_CPU.busiest_s = busiest_before + max(per_worker.values())
                 report(done, len(items), items[index])
         return results
     finally:

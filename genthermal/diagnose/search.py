@@ -565,10 +565,10 @@ class EffectSearch:
 
     def rank(self, effects: Sequence[str] | None = None, workers: int = 1) -> list[Candidate]:
         """Fit every candidate effect (or ``effects``), polish the best, rank by ΔBIC; with
-        ``workers`` > 1 the candidates are searched in forked processes
+        ``workers`` > 1 the candidates are searched, then the best polished, in forked processes
         (:mod:`genthermal.diagnose.parallel`), with the same result."""
         self._require_fitted()
         names = self.candidates() if effects is None else list(effects)
         ranked = sorted(map_in_workers(self.search, names, workers), key=lambda c: c.delta_bic)
-        ranked[:POLISHED_CANDIDATES] = [self.polish(c) for c in ranked[:POLISHED_CANDIDATES]]
+        ranked[:POLISHED_CANDIDATES] = map_in_workers(self.polish, ranked[:POLISHED_CANDIDATES], workers)
         return sorted(ranked, key=lambda c: c.delta_bic)
