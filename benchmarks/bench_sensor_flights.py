@@ -8,15 +8,18 @@ healthy flight, so the plant, its noise and the plan are the same until a fault 
 Cases:
 
 * ``sensor``: bias ±4 K, drift ±1.5 K/h and stuck on the winding and the iron sensor (generator 1
-  or 2), onsets 50-90 min;
-* ``physical``: a shorted turn, an end-winding stray loss and a partial coolant blockage on
-  generator 1 from 60 min, no sensor fault (no sensor fault may be claimed).
+  or 2), onsets 50-90 min; bias ±3 K and drift 2 K/h of the coolant-inlet sensor, bias -8 and +5 K
+  of the ambient sensor (onsets 40-60 min);
+* ``physical``: a shorted turn, an end-winding stray loss and a partial coolant blockage (with a
+  5-K inlet rise: the inlet readings then disagree for real) on generator 1 from 60 min, no sensor
+  fault (no sensor fault may be claimed).
 
 Figures per case: ``claimed`` (sensor and kind claimed), ``claim_delay_min`` (claim time minus the
 true onset), ``replans_caused`` (re-plans at times the healthy flight did not re-plan, and the
 healthy flight's re-plans missing), ``load_changes`` (management cycles whose applied currents
 differ from the healthy flight's by more than 1 mA on any generator) and, for the physical cases,
-what was identified. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE]``.
+what was identified, the first re-plan after the onset, the hottest winding and the time above the
+limit. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE]``.
 """
 
 from __future__ import annotations
@@ -49,6 +52,11 @@ SENSOR_CASES = (
     {"generator": 1, "sensor": "T_iron", "kind": "drift", "onset_min": 90, "value": 1.5},
     {"generator": 2, "sensor": "T_iron", "kind": "drift", "onset_min": 60, "value": -1.5},
     {"generator": 2, "sensor": "T_iron", "kind": "stuck", "onset_min": 80},
+    {"generator": 1, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": 3.0},
+    {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0},
+    {"generator": 1, "sensor": "T_inlet", "kind": "drift", "onset_min": 60, "value": 2.0},
+    {"generator": 2, "sensor": "T_ambient", "kind": "bias", "onset_min": 40, "value": -8.0},
+    {"generator": 1, "sensor": "T_ambient", "kind": "bias", "onset_min": 60, "value": 5.0},
 )
 PHYSICAL_CASES = (
     {"generator": 1, "kind": "effect", "effect": "phase_short_circuit", "onset_min": 60, "values": {"R_short": 0.3}},
@@ -111,7 +119,12 @@ def main(argv=None) -> dict:
         rows.append({"case": "physical", "fault": entry,
                      "claimed": [(c["generator"], c["sensor"], c["kind"]) for c in summary["sensor_faults"]["claimed"]],
                      "identified": [(i["generator"], i["detected_at_s"], i["effect"]) for i in summary["identified"]],
-                     "beliefs_held": summary["sensor_faults"].get("beliefs_held", [])})
+                     "beliefs_held": summary["sensor_faults"].get("beliefs_held", []),
+                     "first_replan_after_onset_min": min((p["time_s"] / 60.0 for p in result.plans
+                                                          if p["time_s"] >= 60.0 * entry["onset_min"]), default=None),
+                     "max_T_winding_C": float(np.max(result.temperatures_C[:, 0, :])),
+                     "s_above_limit": float(np.count_nonzero(result.temperatures_C[:, 0, :] > LIMIT_C)
+                                            * settings.dt_s)})
         print(json.dumps(rows[-1]), flush=True)
     sensor_rows = [r for r in rows if r["case"] == "sensor"]
     delays = [r["claim_delay_min"] for r in sensor_rows if r["claim_delay_min"] is not None]

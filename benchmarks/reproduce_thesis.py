@@ -9,6 +9,11 @@ matches). Rig measurements are not available, so every "measured" input is synth
 plant whose parameters differ from the model's. ``--quick`` leaves out the closed-loop flights
 (chapter 7.3.3), a few seconds each (the large blockage about 15 s).
 
+The 7.3.3 flights are flown twice (``flights``): ``heuristic``, the thesis heuristic as the thesis
+ran it (the scenarios' ``generators.margin_K: 0`` and ``when_infeasible: best_effort``: no load
+shedding, a breach when nothing keeps θmax), which the verdicts judge; and ``optimal``, this
+project's optimal scheduler with the manager's own 2.5 K margin and load shedding.
+
 Two calibrations are used: the default (chapters 3-5: normal operation near 70 °C) and
 ``genco_rf201a:chapter7`` (fitted to the chapter-7 outcomes, :mod:`genthermal.machines.chapter7`).
 """
@@ -16,6 +21,7 @@ Two calibrations are used: the default (chapters 3-5: normal operation near 70 �
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -32,7 +38,7 @@ from genthermal.machines import build_model
 from genthermal.measurements import dataframe_to_measurements
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
-from genthermal.schedule.closed_loop import ManagerSettings, fly
+from genthermal.schedule.closed_loop import ManagerSettings, fly, infeasible_response, planning_margin_K
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.simulate import simulate
@@ -40,6 +46,9 @@ from genthermal.synth import synthesize
 
 #: The synthetic rig: parameters off the model's (as the demo's rig).
 RIG_MISMATCH = {"h_end_air": 0.85, "h_top_air": 1.1, "R0": 1.05, "P_iron": 1.2}
+#: Highest winding temperature of the thesis's managed large blockage, °C (7.3.3: "two small
+#: breaches of 110.7 °C at 2 hours and 111 °C at 3 hours").
+THESIS_BLOCKAGE_PEAK_C = 111.0
 
 
 def entry(section, outcome, thesis, genthermal, verdict, reason=""):
@@ -137,11 +146,17 @@ def healthy_peaks(model):
             "landing": float(winding[t >= 13200].max())}
 
 
-def flight_outcome(scenario):
+def flight_outcome(scenario, scheduler: str = "heuristic"):
     """Per mission action: largest current shed by gen1 (A), its rests (min) and those of them taken
-    before the action starts (min)."""
+    before the action starts (min).
+
+    The heuristic flies the scenario as the thesis did (its ``generators.margin_K`` 0 and
+    ``when_infeasible: best_effort``); any other scheduler flies with the manager's own margin and
+    load shedding (``ManagerSettings`` defaults), which are this project's, not the thesis's."""
     system = PowerSystem.from_mission(load_mission(scenario))
-    result = fly(system, "heuristic", ManagerSettings())
+    if scheduler != "heuristic":
+        system = dataclasses.replace(system, margin_K=None, when_infeasible=None)
+    result = fly(system, scheduler, ManagerSettings())
     dt = np.diff(result.time_s)
     actions = []
     for k, action in enumerate(system.mission.actions):
@@ -154,10 +169,17 @@ def flight_outcome(scenario):
                         "rest_min": float(np.sum(dt[here & result.resting]) / 60.0),
                         "rest_before_min": float(np.sum(dt[before]) / 60.0)})
     summary = flight_summary(result)
+    best_effort = [plan for plan in result.plans if plan.get("best_effort")]
     return {"actions": actions, "peak_C": float(result.temperatures_C[:, 0].max()),
+            "peak_gen1_C": float(result.temperatures_C[0, 0].max()),
+            "scheduler": scheduler, "margin_K": planning_margin_K(system, ManagerSettings()),
+            "when_infeasible": infeasible_response(system, ManagerSettings()),
+            "best_effort_from_min": best_effort[0]["time_s"] / 60.0 if best_effort else None,
+            "best_effort_planned_peak_C": max((plan["planned_peak_C"] for plan in best_effort), default=None),
             "peak_gen2_C": float(result.temperatures_C[1:, 0].max()),
             "breach_s": float(np.sum(dt[np.max(result.temperatures_C[:, 0, 1:], axis=0) > system.limit_C])),
             "added_rest_min": summary["added_rest_s"] / 60.0, "feasible": summary["feasible"],
+            "displaced_Ah": summary["displaced_Ah"],
             "lowest_reachable_peak_C": summary["lowest_reachable_peak_C"],
             "shed": [{"generators": e["shedding"], "switched_off": e["switched_off"], "at_min": e["time_s"] / 60.0,
                       "lowest_reachable_peak_C": e["lowest_reachable_peak_C"], "lowest_peak_action": e["lowest_peak_action"]}
@@ -176,10 +198,23 @@ def _shed_text(outcome) -> str:
             f"{sum(outcome['not_served_Ah'].values()):.1f} A·h not served")
 
 
-def _blockage_reason(outcome, displaced: bool, rested: bool) -> str:
+def _blockage_reason(outcome, displaced: bool, rested: bool, only_displaced: bool = True, near: bool = True) -> str:
     """Why the managed large blockage differs from the thesis's (empty when it does not)."""
-    if displaced and rested and not outcome["shed"]:
+    if displaced and rested and only_displaced and near and not outcome["shed"]:
         return ""
+    if outcome["best_effort_from_min"] is not None:
+        landing = outcome["actions"][7]
+        rests = "; ".join(f"{a['action']} {a['rest_min']:.0f} min ({a['rest_before_min']:.0f} before it)"
+                          for a in outcome["actions"][4:] if a["rest_min"] > 0) or "none"
+        return (f"from {outcome['best_effort_from_min']:.0f} min the manager finds no schedule within θmax 110 °C "
+                f"(lowest reachable peak {outcome['lowest_reachable_peak_C']:.1f} °C at worst, as the inlet rises to "
+                "51 °C) and flies the thesis heuristic's best effort, all load served (its predictions up to "
+                f"{outcome['best_effort_planned_peak_C']:.1f} °C): the healthy generator of the chapter-7 calibration "
+                "has too little spare capacity for gen1's load, so the heuristic rests wherever no displacement "
+                f"suffices (rests: {rests}; landing {landing['rest_before_min']:.0f} min before it, thesis 10) and "
+                f"the plant breaches by {outcome['peak_C'] - 110:.1f} K (gen1 {outcome['peak_gen1_C']:.1f} °C, gen2 "
+                f"{outcome['peak_gen2_C']:.1f} °C, {outcome['breach_s']:.0f} s above 110 °C) where the thesis breached "
+                "by 0.7 and 1 K")
     if displaced and rested:
         return ("displacement over the three conditions and a rest before landing as in the thesis, but the manager "
                 "also sheds the load it cannot place within 110 °C, where the thesis breaches 110.7 and 111 °C")
@@ -262,7 +297,7 @@ def chapter_7(default, chapter7, quick):
     early = not any(_shed(f16, range(5)))
     rows.append(entry("7.3.3, Figs 7.11-7.12", "inlet +16 K: displacement in cruise/combat (2 h), then rest before landing",
                       "displacement from 2 h in cruise/combat; short rest + displacement for landing",
-                      _actions_text(f16, 4) + f"; peak {f16['peak_C']:.1f} °C (gen2 {f16['peak_gen2_C']:.1f} °C)",
+                      _actions_text(f16, 4) + f"; peak {f16['peak_gen1_C']:.1f} °C (gen2 {f16['peak_gen2_C']:.1f} °C)",
                       "reproduced" if combat and early and f16["actions"][7]["rest_before_min"] > 0 else
                       ("qualitative" if f16["actions"][7]["rest_min"] > 0 else "contradicted"),
                       ("the thesis's cruise after cruise/combat needs no displacement; here "
@@ -271,16 +306,23 @@ def chapter_7(default, chapter7, quick):
                       "stays just within the planning limit"))
     three = _shed(fb, (4, 5, 6))
     rest = fb["actions"][7]["rest_before_min"]
+    only_displaced = sum(a["rest_min"] for a in fb["actions"][4:7]) == 0  # thesis: "using only load displacement"
+    near = fb["peak_C"] <= THESIS_BLOCKAGE_PEAK_C + 1.0  # the thesis's breaches, within 1 K
     rows.append(entry("7.3.3, Figs 7.13-7.15", "large blockage, managed: displacement over 3 K-conditions, then rest "
                       "before landing", "displacement in cruise, cruise/combat, cruise; 10 min rest (rig 20 min); "
                       "breaches of 110.7 and 111 °C",
-                      _actions_text(fb, 4) + f"; peak {fb['peak_C']:.1f} °C, {fb['breach_s']:.0f} s above "
-                      f"110 °C{_shed_text(fb)}",
-                      ("qualitative" if fb["shed"] else "reproduced") if all(three) and 10 <= rest <= 20 else
-                      "contradicted", _blockage_reason(fb, all(three), 10 <= rest <= 20)))
+                      _actions_text(fb, 4) + f"; landing: {rest:.0f}-min rest before it; peak {fb['peak_gen1_C']:.1f} °C "
+                      f"(gen2 {fb['peak_gen2_C']:.1f} °C), {fb['breach_s']:.0f} s above 110 °C"
+                      + (f"; best effort ({fb['when_infeasible']}) from {fb['best_effort_from_min']:.0f} min, all load served"
+                         if fb["best_effort_from_min"] is not None else "") + _shed_text(fb),
+                      ("reproduced" if only_displaced and near and not fb["shed"] else "qualitative")
+                      if all(three) and 10 <= rest <= 20 else
+                      ("qualitative" if all(three) and rest > 0 and only_displaced else "contradicted"),
+                      _blockage_reason(fb, all(three), 10 <= rest <= 20, only_displaced, near)))
     rows.append(entry("7.3.5", "rig test: 20-min rests", "rig data", "no rig", "not checkable",
                       "the rig is not available"))
-    return rows, flights
+    # the project's own scheduler on the same flights, with its own margin and load shedding
+    return rows, {"heuristic": flights, "optimal": {s: flight_outcome(s, "optimal") for s in flights}}
 
 
 def main() -> None:

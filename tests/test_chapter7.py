@@ -120,6 +120,15 @@ def test_chapter7_scenarios_fly_the_chapter7_machine():
         # the thesis's simulation: the plant is the model itself, and the heuristic checks θmax itself
         assert system.margin_K == 0.0 and dict(system.plant_mismatch) == {}, name
         assert system.filter == "kf", name  # and its manager's filter is the thesis's linear one (6.3)
+        assert system.when_infeasible == "best_effort", name  # the thesis heuristic has no load shedding
+
+
+def test_a_fixed_convection_exponent_outside_its_bounds_names_the_field():
+    from genthermal.machines.chapter7 import fit_chapter7
+
+    for bad in (0.2, 1.5, float("nan")):
+        with pytest.raises(InputError, match="n_flow"):
+            fit_chapter7(build_model(), n_flow=bad)
 
 
 def test_unknown_parameter_set_is_refused():

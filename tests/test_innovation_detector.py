@@ -64,3 +64,72 @@ def test_bad_records_and_settings_name_the_field(generator):
         innovation_cusum_alarms(generator, *_record(generator, currents), 20.0, DT, 0)
     with pytest.raises(InputError, match="drift_K"):
         InnovationCusumSettings(drift_K=-1.0)
+
+
+def _stepped(generator, record, references=None, settings=InnovationCusumSettings()):
+    """Run :class:`InnovationCusum` cycle by cycle over ``record``; the alarms ``(cycle, g)``."""
+    from genthermal.schedule.innovation_detector import InnovationCusum
+
+    currents, inlet, measured = record
+    test = InnovationCusum(currents.shape[0], DT, 20.0, generator, settings)
+    alarms = []
+    for cycle, start in enumerate(range(0, currents.shape[1] - CYCLE, CYCLE)):
+        stop = start + CYCLE
+        for g in range(currents.shape[0]):
+            test.predict(g, currents[g, start:stop], inlet[g, start:stop])
+        alarms += [(cycle, g) for g, _ in test.update(measured[:, :, stop - 1], currents[:, start:stop].mean(axis=1),
+                                                      references)]
+    return alarms
+
+
+def test_stepping_the_test_gives_the_record_runs_alarms(generator):
+    n = 20 * CYCLE
+    record = _record(generator, np.full((3, n), 5.0), heat_from_step=8 * CYCLE, extra_K=3.0)
+    alarms = innovation_cusum_alarms(generator, *record, 20.0, DT, CYCLE)
+    assert _stepped(generator, record) == [(round(a["time_s"] / (CYCLE * DT)) - 1, a["generator"]) for a in alarms]
+
+
+def test_a_generator_without_a_reference_is_not_tested(generator):
+    n = 12 * CYCLE
+    currents = np.full((2, n), 5.0)
+    hot = _record(generator, currents, heat_from_step=4 * CYCLE, extra_K=3.0)
+    assert {g for _, g in _stepped(generator, hot)} == {0}
+    assert _stepped(generator, hot, references=[[], [0]]) == []  # generator 1 believed faulty: 0 has none
+
+
+def test_switching_a_filter_to_another_model_carries_its_nodes_and_restarts_its_sum(generator):
+    from genthermal.schedule.innovation_detector import InnovationCusum
+
+    test = InnovationCusum(2, DT, 20.0, generator)
+    test.x[0] = test.x[0] + 5.0
+    test.sums[0] = 0.1
+    test.use(0, generator)  # the same model: nothing happens
+    assert test.sums[0] == 0.1
+    other = PowerSystem.from_mission(Mission.from_dict({"name": "other", "generators": {"count": 2},
+                                                        "actions": [{"condition": 5, "duration_min": 60}]}
+                                                       )).design_generator_for(
+        (("phase_short_circuit", (("R_short", 0.3),)),))
+    test.use(0, other)
+    assert test.sums[0] == 0.0 and test.generators[0] is other
+    assert test.x[0] == pytest.approx(np.full(len(test.x[0]), 25.0))
+    with pytest.raises(InputError, match="generators.count"):
+        InnovationCusum(1, DT, 20.0, generator)
+
+
+def test_a_reference_with_a_hotter_inlet_is_no_reference(generator):
+    """Generator 0's inlet is 10 K hotter and its winding reads 3 K cold (its filter's own error):
+    the original test has generator 1 alarm on the mirrored difference; with the inlet tolerance
+    generator 1 has no reference, and generator 0 is still tested."""
+    n = 12 * CYCLE
+    currents, inlet, measured = _record(generator, np.full((2, n), 5.0), heat_from_step=4 * CYCLE, extra_K=-3.0)
+    inlet = inlet.copy()
+    inlet[0, 4 * CYCLE:] += 10.0
+    record = (currents, inlet, measured)
+    assert {g for _, g in _stepped(generator, record)} == {1}
+    assert _stepped(generator, record, settings=InnovationCusumSettings(inlet_tolerance_K=1.0)) == []
+    # generator 0 reads 25 K hot instead (more than its 10 K hotter inlet can explain): it alarms
+    hot = (currents, inlet, measured + np.where(np.arange(2)[:, None, None] == 0, 28.0, 0.0) *
+           (np.arange(n) >= 4 * CYCLE))
+    assert {g for _, g in _stepped(generator, hot, settings=InnovationCusumSettings(inlet_tolerance_K=1.0))} == {0}
+    with pytest.raises(InputError, match="inlet_tolerance_K"):
+        InnovationCusumSettings(inlet_tolerance_K=-1.0)

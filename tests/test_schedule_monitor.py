@@ -127,3 +127,51 @@ def test_identification_admits_only_effects_that_heat_the_machine(k_flow, expect
     assert identification.effect == expected
     if expected:
         assert identification.values["k_flow"] == pytest.approx(k_flow, abs=0.1)
+
+
+def test_identification_fits_the_convection_exponent_of_a_blockage_that_holds_convection():
+    """A blockage that leaves the internal convection as it was (n_flow 0, as on blockage_large)
+    is sized by the variant with n_flow fitted; with n_flow held at the catalogue's 0.8 the same
+    record was sized k_flow 0.8-0.9 in flight."""
+    from genthermal.machines import build_model
+    from genthermal.mission import load_mission
+    from genthermal.resources import SCENARIO_DIR
+    from genthermal.schedule.monitor import DetectionSettings, identify_fault
+    from genthermal.synth import synthesize
+
+    model = build_model()
+    mission = load_mission(str(SCENARIO_DIR / "thesis_fig_7_7.yaml"))
+    changed = model.with_effect("coolant_flow_reduction", k_flow=0.25, n_flow=0.0)
+    record = synthesize(model, mission, dt_s=10.0, seed=1, switches=[(3600.0, changed)])
+    record = record[record["time_s"] <= 7200.0]
+    identification = identify_fault(model, record, 0, 7200.0, DetectionSettings())
+    assert identification.effect == "coolant_flow_reduction"
+    assert identification.values["k_flow"] == pytest.approx(0.25, abs=0.1)
+    assert identification.values["n_flow"] < 0.4
+    assert identification.onset_s == pytest.approx(3600.0, abs=600.0)
+    assert "coolant_flow_reduction" not in identification.equivalent  # its own variant is no other explanation
+
+
+def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_effect():
+    from genthermal.schedule.monitor import FAULT_EFFECTS, flight_catalogue, registered_effect_name
+
+    catalogue = flight_catalogue()
+    variants = [name for name in catalogue if name not in FAULT_EFFECTS]
+    assert variants == ["coolant_flow_reduction+shape"]
+    assert [p.name for p in catalogue[variants[0]].parameters] == ["k_flow", "n_flow"]
+    assert catalogue[variants[0]].shape_parameters == ()
+    assert registered_effect_name(variants[0]) == "coolant_flow_reduction"
+    assert registered_effect_name("phase_short_circuit") == "phase_short_circuit"
+
+
+def test_a_refinement_within_the_tolerance_confirms_the_belief():
+    from genthermal.schedule.monitor import confirms
+
+    believed = (("coolant_flow_reduction", (("k_flow", 0.197),)),)
+    assert confirms((("coolant_flow_reduction", (("k_flow", 0.174),)),), believed, 0.25)
+    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.05),)),), believed, 0.25)  # 0.147 > 0.25 x 0.5
+    assert confirms((("coolant_flow_reduction", (("k_flow", 0.26), ("n_flow", 0.036))),),
+                    (("coolant_flow_reduction", (("k_flow", 0.264), ("n_flow", 0.028))),), 0.25)
+    assert not confirms((("coolant_flow_reduction", (("k_flow", 0.2), ("n_flow", 0.0))),), believed, 0.25)
+    assert not confirms((("phase_short_circuit", (("R_short", 0.197),)),), believed, 0.25)
+    assert not confirms(believed, (), 0.25)

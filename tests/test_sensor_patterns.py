@@ -50,3 +50,21 @@ def test_a_masked_unit_is_neither_tested_nor_a_reference():
     # unit 0 against unit 1 alone: (5 - 0) / sqrt(2), not against the median of 1 and 2
     np.testing.assert_allclose(masked[0], (heat[0] - heat[1]) / np.sqrt(2.0))
     np.testing.assert_allclose(plain[0], (heat[0] - np.median([heat[1], heat[2]], axis=0)) / np.sqrt(2.0))
+
+
+def test_an_excess_above_the_healthy_range_is_held_until_an_alarm_or_the_longest_hold():
+    from genthermal.schedule.sensor_patterns import UnconfirmedExcess
+
+    held = UnconfirmedExcess([0.56, 1.15], max_hold_s=3600.0, n_generators=3)
+    r = np.array([[0.65, 0.3], [0.2, 1.3], [0.9, -0.2]])
+    held.update(600.0, r, believed_healthy=[True, True, False], masked_units={1})
+    assert held.holds(0) and not held.holds(1) and not held.holds(2)  # 1 masked, 2 believed faulty
+    held.update(900.0, np.zeros((3, 2)), [True, True, True], set())
+    assert held.holds(0)  # a statistic back in the healthy range does not end it
+    held.release(0, 1200.0, "fault test alarmed")
+    assert not held.holds(0) and held.events[0]["until_s"] == 1200.0
+    held.update(1500.0, r, [True, True, True], set())
+    assert held.holds(0) and held.holds(1) and held.holds(2)
+    held.update(1500.0 + 3600.0, np.zeros((3, 2)), [True, True, True], set())
+    assert not any(held.holds(g) for g in range(3))
+    assert {e["ended"] for e in held.events[1:]} == {"held 60 min without an alarm"}

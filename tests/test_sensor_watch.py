@@ -13,10 +13,12 @@ from genthermal.resources import SCENARIO_DIR
 from genthermal.schedule.closed_loop import ManagerSettings, fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sensor_watch import SensorFaultInjector, SensorWatchSettings, parse_sensor_faults
+from genthermal.schedule.sensor_injection import SensorFaultInjector, parse_sensor_faults
+from genthermal.schedule.sensor_watch import CORRECTED, SensorWatchSettings
 
 NAMES = ("gen1", "gen2")
 OUTPUTS = ("T_winding", "T_iron")
+INPUTS = ("T_inlet", "T_ambient")
 #: The Fig. 7.7 mission flown to 88 °C: the healthy flight peaks near 85 °C, so a winding sensor
 #: reading 6 K high would make the manager shed load for nothing.
 LIMIT_C = 88.0
@@ -31,11 +33,28 @@ WINDING_BIAS = {"generator": 1, "sensor": "T_winding", "kind": "bias", "onset_mi
     ({"generator": 1, "sensor": "T_iron", "kind": "bias", "value": 1}, "sensor_faults[0].onset_min"),
     ({"generator": 1, "sensor": "T_iron", "kind": "noise", "onset_min": 1, "value": 0.5}, "sensor_faults[0].value"),
     ({"generator": 1, "sensor": "T_iron", "kind": "bias", "onset_min": 1, "value": 1, "size": 2}, "size"),
+    ({"generator": 1, "sensor": "T_inlet", "kind": "noise", "onset_min": 1, "value": 2}, "sensor_faults[0].kind"),
 ])
 def test_bad_sensor_fault_entries_name_the_field(entry, field):
     with pytest.raises(InputError) as error:
-        parse_sensor_faults([entry], NAMES, OUTPUTS)
+        parse_sensor_faults([entry], NAMES, OUTPUTS, INPUTS)
     assert field in str(error.value)
+
+
+def test_input_sensor_faults_change_only_their_unit_s_input_reading():
+    faults = parse_sensor_faults([{"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 1, "value": -3},
+                                  {"generator": 1, "sensor": "T_ambient", "kind": "stuck", "onset_min": 0}],
+                                 NAMES, OUTPUTS, INPUTS)
+    assert [f.row for f in faults] == [None, None] and all(f.on_input for f in faults)
+    injector = SensorFaultInjector(faults, [0.1, 0.1])
+    times = np.arange(6) * 20.0
+    sensed = np.full((2, 2, 6), 50.0)
+    assert np.array_equal(injector.apply(times, sensed), sensed)  # outputs untouched
+    inlet, ambient = np.full((2, 6), 20.0), np.array([np.linspace(15.0, 16.0, 6)] * 2)
+    read = injector.apply_inputs(times, {"T_inlet": inlet, "T_ambient": ambient})
+    assert np.array_equal(read["T_inlet"][0], inlet[0])
+    assert np.array_equal(read["T_inlet"][1], np.where(times >= 60.0, 17.0, 20.0))
+    assert np.all(read["T_ambient"][0] == 15.0) and np.array_equal(read["T_ambient"][1], ambient[1])
 
 
 def test_injector_holds_a_stuck_reading_across_cycles_and_biases_only_its_sensor():
@@ -49,16 +68,6 @@ def test_injector_holds_a_stuck_reading_across_cycles_and_biases_only_its_sensor
     held = sensed[1, 1, 3]  # first sample at or after 60 s
     assert np.all(first[1, 1, 3:] == held) and np.all(second[1, 1] == held)
     assert np.allclose(first[0, 0], sensed[0, 0] + 2.0) and np.allclose(first[0, 1], sensed[0, 1])
-
-
-#: Why the "changes no load" tests are marked xfail at present.
-KNOWN_BIAS_REPLAN = ("known defect since offset-free planning (issue 9): before the claim the unit's disturbance "
-                     "heat flows absorb the faulty reading, and the plan now carries them, so a re-plan the healthy "
-                     "flight does not make follows (measured: winding bias at 6000 s, iron bias at 8100 s)")
-KNOWN_DRIFT_REPLAN = ("known defect since offset-free planning (issue 9): a 1.5 K/h winding drift from 60 min is "
-                      "claimed at 120 min; before it, the plan carries the heat flow the drift forces on the filter "
-                      "and re-plans at 75 and 100 min where the healthy flight does not; after the claim the "
-                      "last trusted heat flows are held (TrustedHeatFlows)")
 
 
 def _system(tmp_path: Path, sensor_faults) -> PowerSystem:
@@ -80,21 +89,20 @@ def healthy_flight(tmp_path_factory):
     return fly(_system(tmp_path_factory.mktemp("healthy"), []), "engineer", ManagerSettings())
 
 
-def test_a_biased_winding_sensor_is_masked_and_changes_no_load(tmp_path, healthy_flight):
+def test_a_biased_winding_sensor_is_corrected_and_changes_no_load(tmp_path, healthy_flight):
     result = fly(_system(tmp_path, [WINDING_BIAS]), "engineer", ManagerSettings())
     summary = flight_summary(result)
     [claim] = summary["sensor_faults"]["claimed"]
     assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen1", "T_winding", "bias")
-    assert claim["action"] == "masked"
+    assert claim["action"] == CORRECTED  # in the filter; the record is masked
     assert abs(claim["onset_s"] - 3600.0) <= 300.0 and claim["claimed_at_s"] <= 3600.0 + 600.0
     assert summary["sensor_faults"]["injected"][0]["value"] == 6.0
     onset = 60.0 * WINDING_BIAS["onset_min"]
     caused = set(_replans_from(result, onset)) - set(_replans_from(healthy_flight, onset))
     assert all(not plan.get("believed", {}).get("gen1") for plan in result.plans)
     assert not any(i.effect for i in result.monitor.identifications if i.generator == 0)
-    if caused:
-        pytest.xfail(KNOWN_BIAS_REPLAN)
     assert caused == set()  # no re-plan the healthy flight did not make
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)  # not one load change
 
 
 @pytest.mark.slow
@@ -114,8 +122,9 @@ def test_a_biased_iron_sensor_is_named_and_changes_no_load(tmp_path, healthy_fli
     assert [(c["generator"], c["sensor"], c["kind"]) for c in claims] == [("gen2", "T_iron", "bias")]
     onset = 60.0 * fault["onset_min"]
     assert abs(claims[0]["onset_s"] - onset) <= 300.0
-    if set(_replans_from(result, onset)) - set(_replans_from(healthy_flight, onset)):
-        pytest.xfail(KNOWN_BIAS_REPLAN)
+    # masked, the iron sensor left the filter blind to a node: 4 re-plans moved and 3 cycles' loads changed
+    assert set(_replans_from(result, onset)) == set(_replans_from(healthy_flight, onset))
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
 
 
 def test_a_stuck_winding_sensor_is_claimed_before_any_plan_change(tmp_path, healthy_flight):
@@ -144,8 +153,9 @@ def test_a_drifting_winding_sensor_is_claimed_and_moves_no_load(tmp_path, health
     assert claims[0]["value"] > 0 and claims[0]["claimed_at_s"] <= 3600.0 + 90 * 60.0
     onset = 60.0 * fault["onset_min"]
     assert result.monitor.beliefs == [(), ()]
-    if set(_replans_from(result, onset)) != set(_replans_from(healthy_flight, onset)):
-        pytest.xfail(KNOWN_DRIFT_REPLAN)
+    # before UnconfirmedExcess the plan carried the heat flow the drift forced on the filter and
+    # re-planned at 75 and 100 min, before the claim
+    assert set(_replans_from(result, onset)) == set(_replans_from(healthy_flight, onset))
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A)  # not one load change
 
 
@@ -159,15 +169,19 @@ def test_a_drifting_iron_sensor_is_claimed_and_moves_no_load(tmp_path, healthy_f
 
 
 @pytest.mark.slow
-def test_a_machine_fault_is_not_taken_for_a_sensor_fault():
-    result = fly(PowerSystem.from_mission(load_mission("blockage_large")), "engineer", ManagerSettings())
+@pytest.mark.parametrize("scheduler", ["heuristic", "engineer", "optimal"])
+def test_a_machine_fault_is_not_taken_for_a_sensor_fault(scheduler):
+    """blockage_large (k_flow 0.2, n_flow 0, onset 66 min, +31 K inlet): no sensor is claimed, and
+    the blockage is identified on gen1 in flight, sized within a factor of two of its flow with an
+    onset within 15 min of the truth (the convection exponent fitted: with it held at 0.8 the
+    flow was sized 0.80-0.86, and with the engineer's heuristic nothing was identified)."""
+    result = fly(PowerSystem.from_mission(load_mission("blockage_large")), scheduler, ManagerSettings())
     summary = flight_summary(result)
     assert summary["sensor_faults"]["claimed"] == []
-    if not any(i["effect"] for i in summary["identified"]):
-        pytest.xfail("known regression since offset-free planning (issue 9): on blockage_large the engineer's "
-                     "heuristic sees gen1's extra heat in the plan and moves load off it sooner; the blockage then "
-                     "shows less, and the four alarms on gen1 (185-220 min) identify nothing significant (before: "
-                     "the blockage at 135 min)")
+    blockages = [i for i in summary["identified"] if i["generator"] == "gen1" and i["effect"] == "coolant_flow_reduction"
+                 and 0.1 <= i["parameters"]["k_flow"] <= 0.4 and abs(i["onset_s"] - 66 * 60.0) <= 15 * 60.0]
+    assert blockages, summary["identified"]
+    assert not [i for i in summary["identified"] if i["generator"] == "gen2" and i["effect"]]
 
 
 @pytest.mark.slow
@@ -182,3 +196,60 @@ def test_a_real_blockage_is_not_masked_as_a_fast_sensor_drift():
     watch = flight["summary"]["sensor_faults"]
     assert watch["injected"] == [] and watch["claimed"] == []
     assert max(flight["summary"]["max_T_winding"].values()) < 200.0
+
+
+def test_a_biased_inlet_sensor_is_substituted_and_changes_no_load(tmp_path, healthy_flight):
+    """gen2's inlet PT100 reads 3 K low from 60 min: its model, driven by it, predicts the unit 3 K
+    cooler while its winding and iron do not move; its record fits gen1's inlet reading markedly
+    better than its own, so the sensor is claimed and its reading replaced by gen1's."""
+    fault = {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0}
+    result = fly(_system(tmp_path, [fault]), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    [claim] = watch["claimed"]
+    assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen2", "T_inlet", "bias")
+    assert claim["value"] == pytest.approx(-3.0, abs=0.1) and abs(claim["onset_s"] - 3600.0) <= 60.0
+    assert claim["claimed_at_s"] <= 3600.0 + 900.0 and claim["action"].startswith("substituted")
+    [injected] = watch["injected"]
+    assert (injected["generator"], injected["sensor"], injected["value"]) == ("gen2", "T_inlet", -3.0)
+    assert result.monitor.beliefs == [(), ()]  # the unit that looked hotter is not believed blocked
+    recorded = result.monitor.frame(1)
+    assert np.allclose(recorded["T_inlet"], result.monitor.frame(0)["T_inlet"])  # substituted back to the onset
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    fault = {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0}
+    settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(enabled=False))
+    result = fly(_system(tmp_path, [fault]), "engineer", settings)
+    assert flight_summary(result)["sensor_faults"]["claimed"] == []
+    assert result.monitor.beliefs[1]  # gen2's heating "fault" (measured: a coolant flow reduction)
+
+
+@pytest.mark.slow
+def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_path):
+    """A partial blockage that recirculates air heats gen1's inlet by 5 K: the inlet readings
+    disagree, but gen1's record fits its own reading better than gen2's, so nothing is claimed and
+    the blockage is identified."""
+    document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
+    document["generators"] = {"limit_C": LIMIT_C}
+    document["faults"] = [{"generator": 1, "kind": "coolant_blockage", "onset_min": 60, "k_flow": 0.6,
+                           "inlet_rise_C": 5}]
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(document))
+    result = fly(PowerSystem.from_mission(load_mission(str(path))), "engineer", ManagerSettings())
+    summary = flight_summary(result)
+    assert summary["sensor_faults"]["claimed"] == []
+    assert any(c["alarmed"] == ["T_inlet"] for c in summary["sensor_faults"]["checks"])  # it was looked at
+    assert [i["effect"] for i in summary["identified"] if i["effect"]][:1] == ["coolant_flow_reduction"]
+
+
+@pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),
+                                          ("max_checks", 2.5)])
+def test_bad_input_watch_settings_name_the_field(field, value):
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    with pytest.raises(InputError) as error:
+        InputWatchSettings(**{field: value})
+    assert f"input_watch.{field}" in str(error.value)

@@ -19,6 +19,7 @@ from ..schedule.closed_loop import (DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS
                                      plan_mission)
 from ..schedule.monitor import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
+from ..schedule.shed import INFEASIBLE_RESPONSES
 from ..schedule.report import flight_summary, plot_flight, summary_text
 
 
@@ -49,6 +50,12 @@ def add_schedule_arguments(parser) -> None:
     parser.add_argument("--confidence-sigmas", default=str(ManagerSettings.confidence_sigmas),
                         help="nonlinear planner: standard deviations of the predicted temperature kept below θmax "
                         f"(default {ManagerSettings.confidence_sigmas:g})")
+    parser.add_argument("--when-infeasible", default=None, metavar="|".join(INFEASIBLE_RESPONSES),
+                        help="when even the lowest reachable peak is above the limit — shed: shed load (each "
+                        "generator carries at most what keeps it within the limit, the rest is not served); "
+                        "best_effort: fly the scheduler's own plan, all load served, breaching the limit as "
+                        "predicted (the thesis heuristic has no shedding) (default: the scenario's "
+                        f"generators.when_infeasible, else {ManagerSettings.when_infeasible})")
     parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
                         "(genthermal.model_file); default the scenario's machine")
     parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
@@ -99,6 +106,11 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         if args.filter not in FLIGHT_FILTERS:
             raise InputError("--filter", args.filter, f"must be one of {', '.join(FLIGHT_FILTERS)}")
         settings = dataclasses.replace(settings, filter=args.filter)
+    when_infeasible = getattr(args, "when_infeasible", None)
+    if when_infeasible is not None:
+        if when_infeasible not in INFEASIBLE_RESPONSES:
+            raise InputError("--when-infeasible", when_infeasible, f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
+        settings = dataclasses.replace(settings, when_infeasible=when_infeasible)
     if getattr(args, "tell_fault", False):
         settings = dataclasses.replace(settings, tell_fault=True)
     system = PowerSystem.from_mission(load_mission(args.scenario))
@@ -106,6 +118,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         system = dataclasses.replace(system, margin_K=None)
     if getattr(args, "filter", None) is not None:  # and --filter the scenario's filter
         system = dataclasses.replace(system, filter=None)
+    if when_infeasible is not None:  # and --when-infeasible the scenario's response
+        system = dataclasses.replace(system, when_infeasible=None)
     models = {}
     for option in ("model", "plant"):
         if getattr(args, option, None):

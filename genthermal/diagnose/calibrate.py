@@ -115,7 +115,9 @@ def fit_least_squares(simulator: ParametricSimulator, measured: np.ndarray, scal
                        dict(_IPOPT_OPTIONS, hess_lag=hessian))
     bounds = [s.bounds() for s in scalings] + ([(-1.0, 1.0), (-0.5, 0.5)] if fit_initial_state else [])
     solution = solver(x0=np.zeros(n_z), lbx=[b[0] for b in bounds], ubx=[b[1] for b in bounds])
-    z_opt = np.asarray(solution["x"]).ravel()
+    # IPOPT relaxes the bounds by its bound_relax_factor (1e-8): a P_iron fitted to its lower bound
+    # 0 came back as -4e-7 W, which the model then refused as not physical, stopping a flight
+    z_opt = np.clip(np.asarray(solution["x"]).ravel(), [b[0] for b in bounds], [b[1] for b in bounds])
     theta_opt = np.array([s.value(float(z_opt[i])) for i, s in enumerate(scalings)])
     ac_opt = np.array([a0 + z_opt[n_theta], c0 + 10.0 * z_opt[n_theta + 1]]) if fit_initial_state \
         else np.array([a0, c0])

@@ -301,8 +301,10 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     effect = search.effect(candidate.effect)
     after = np.arange(series.time_s.size) >= candidate.onset_index
     when = (f"after t = {candidate.onset_s / 3600:.2f} h" if candidate.onset_index > 0 else "from the start")
-    biases = ", ".join(f"{'hot' if b > 0 else 'cold'} by {abs(b):.2f} K in {n}" for n, b in
-                       zip(outputs, np.nanmean(residual[:, after], axis=1)))
+    with np.errstate(all="ignore"):
+        means = [np.nanmean(row[after]) if np.isfinite(row[after]).any() else np.nan for row in residual]
+    biases = ", ".join(f"{'hot' if b > 0 else 'cold'} by {abs(b):.2f} K in {n}" for n, b in zip(outputs, means)
+                       if np.isfinite(b))
     inputs = series.inputs
     interface = search.model.spec.interface
     regressors = {"I^2": np.mean([inputs[p].to_numpy() ** 2 for p in interface.load_currents], axis=0),

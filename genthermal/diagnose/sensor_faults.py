@@ -82,7 +82,10 @@ class SensorHypothesis:
     delta_bic : float
     evidence : str
         ``"redundancy"`` (disagreement with the other sensors of its output), ``"model"`` (model
-        residual, compared with the physical effects) or ``"noise"`` (variance change).
+        residual, compared with the physical effects), ``"noise"`` (variance change), ``"input"``
+        (an input sensor, through the model's response to it), ``"jump"`` (a step no heat flow
+        can make) or ``"frozen"`` (the reading's noise vanished:
+        :mod:`~genthermal.diagnose.onset_signatures`).
     signal : numpy.ndarray
         Fitted :math:`f_c(t)`, K (what the fault adds to the reading).
     alternative : str
@@ -107,6 +110,13 @@ class SensorHypothesis:
 
     def __post_init__(self):
         self.columns = tuple(self.columns) or (self.fault.sensor,)
+
+    @property
+    def drops_reading(self) -> bool:
+        """True when the sensor's reading is dropped from the onset rather than corrected: it is
+        stuck or noisy and its output has other sensors, or it froze (what it should read after
+        the onset is not in the record)."""
+        return self.fault.kind in ("stuck", "noise") and self.evidence in ("redundancy", "frozen")
 
     def to_dict(self) -> dict:
         """JSON entry."""
@@ -415,9 +425,8 @@ def corrected_readings(readings: dict, hypotheses: Sequence[SensorHypothesis]) -
     (NaN) from the onset when it is stuck or noisy and its output has other sensors."""
     corrected = {name: np.array(values, dtype=float) for name, values in readings.items()}
     for hypothesis in hypotheses:
-        redundant = hypothesis.evidence == "redundancy"
         for name in (c for c in hypothesis.columns if c in corrected):
-            if hypothesis.fault.kind in ("stuck", "noise") and redundant:
+            if hypothesis.drops_reading:
                 corrected[name][hypothesis.onset_index:] = np.nan
             elif hypothesis.fault.kind != "noise":
                 corrected[name] = corrected[name] - hypothesis.signal

@@ -13,7 +13,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
    it still passes the four tests against that effect alone); the round is then run again on the
    record with that sensor corrected, so what the machine does is still judged. The faults of the
    input sensors (coolant inlet, ambient: :mod:`~genthermal.diagnose.input_sensors`) compete in
-   the same step; a claimed one is corrected in the inputs the model is driven with.
+   the same step; a claimed one is corrected in the inputs the model is driven with;
+3. on a record searched blind, when step 2 claimed nothing (a plant that differs from the model
+   leaves a misfit of kelvins that swamps a 1-3 K fault on the whole-record comparison): the
+   faults told by their onset (a reading that froze, a jump of a sensor with thermal inertia, an
+   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`), then
+   the sensor and input faults fitted jointly with a calibration of the model against the
+   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`).
 
 Redundant sensors are screened on the model's own sensor schema before the record's sensor view
 is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
@@ -28,7 +34,10 @@ import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
-from .input_sensors import corrected_inputs, screen_inputs
+from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
+                                misfit_from_start, sensor_hypotheses)
+from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
+from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
                             screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
@@ -66,7 +75,7 @@ def corrected_record(measurements, series: MeasuredSeries, hypotheses):
     frame = measurements.frame.copy()
     time_s = measurements.time_s
     for hypothesis in hypotheses:
-        drop = hypothesis.fault.kind in ("stuck", "noise") and hypothesis.evidence == "redundancy"
+        drop = hypothesis.drops_reading
         onset_s = float(series.time_s[0]) + hypothesis.fault.onset_s
         for column in (c for c in hypothesis.columns if c in frame):
             if drop:
@@ -109,6 +118,7 @@ class SensorScreen:
         self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
+        self.calibrated_alternative: SensorHypothesis | None = None
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
         noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
@@ -181,9 +191,61 @@ class SensorScreen:
                                           f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
                     candidate, claimed = on_top, True
         if not claimed:
-            return None
+            return self._onset_signatures(search, ranked, noise) if outputs is None and onsets is None else None
         self.found.append(candidate)
         return candidate
+
+    def _onset_signatures(self, search, ranked, noise: float) -> SensorHypothesis | None:
+        """Claim the sensor faults told by their onset alone (a reading that froze, a jump of a
+        sensor with thermal inertia, an input's jump the machine did not follow:
+        :mod:`~genthermal.diagnose.onset_signatures`), when the whole-record comparison did not
+        claim one; the first claimed, or None."""
+        model = search.viewed(search.model)
+        inputs = search.series.inputs
+        exclude = {h.fault.sensor for h in self.found}
+        claimed = screen_frozen(self.readings, self.elapsed_s, self.columns, exclude)
+        exclude |= {h.fault.sensor for h in claimed}
+        measured, predicted = search.series.outputs, search.predicted_before
+        responses = {name: input_step_response(model, inputs, name, self.output_names)
+                     for name in input_sensors(model.spec.interface)}
+        coolant = model.spec.interface.coolant_input
+        inertial = inertial_outputs(responses[coolant], self.output_names) if coolant in responses else set()
+        jump = screen_jumps(measured, predicted, self.readings, search.series.dt_s, self.elapsed_s,
+                            self.output_names, self.columns, inertial, noise, exclude)
+        claimed += [jump] if jump is not None else []
+        through_input = screen_input_jumps(inputs, measured - predicted, responses, search.series.dt_s,
+                                           self.elapsed_s, noise)
+        claimed += [through_input] if through_input is not None else []
+        if not claimed:
+            calibrated = self._calibrated(search, ranked, noise, responses, exclude)
+            claimed += [calibrated] if calibrated is not None else []
+        self.found += claimed
+        return claimed[0] if claimed else None
+
+    def _calibrated(self, search, ranked, noise: float, responses: dict, exclude) -> SensorHypothesis | None:
+        """The best sensor or input fault fitted jointly with a calibration of the model, if it
+        beats the physical effects fitted the same way
+        (:mod:`~genthermal.diagnose.calibrated_screen`)."""
+        from .discover import DEFAULT_BASELINE_PARAMETERS, passes_tests
+
+        model = search.viewed(search.model)
+        sensitivities = calibration_sensitivities(model, search.series.inputs, self.output_names,
+                                                  DEFAULT_BASELINE_PARAMETERS)
+        from_start = misfit_from_start(responses, ranked, search.coarse.time_s, search.series.time_s)
+        frame = CalibratedFrame(search.series.outputs - search.predicted_before, [*sensitivities, *from_start])
+        hypotheses = sensor_hypotheses(frame, self.readings, self.elapsed_s, self.output_names, self.columns,
+                                       exclude)
+        hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s, search.series.inputs)
+        if not hypotheses:
+            return None
+        best = min(hypotheses, key=lambda h: h.delta_bic)
+        physical_bic, physical = best_physical(frame, ranked, search.coarse.time_s, search.series.time_s)
+        best.alternative = f"calibrated: {physical or 'no physical effect'} ΔBIC {physical_bic:.0f}"
+        self.calibrated_alternative = best
+        if passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
+                best.delta_bic < physical_bic - PREFERENCE_BIC:
+            return best
+        return None
 
     def text(self, machine_verdict: str) -> str:
         """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""

@@ -4,7 +4,11 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
 
 1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
    model, ``ManagerSettings.filter``) with the plant's noisy measurements of
-   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10); the planner gets
+   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10), predicting with the
+   inlet and ambient temperatures as their sensors read them (a scenario's ``sensor_faults`` may
+   make any of these sensors misread: :mod:`~genthermal.schedule.sensor_injection`; the sensor
+   watches, :mod:`~genthermal.schedule.sensor_watch` and :mod:`~genthermal.schedule.input_watch`,
+   claim and mask, correct or substitute them before the fault monitor sees the cycle); the planner gets
    its node temperatures (:func:`~genthermal.schedule.monitor.planner_state`) and the filter's
    disturbance heat flows (:func:`~genthermal.schedule.monitor.planning_generator`: offset-free
    predictions); the fault monitor
@@ -28,11 +32,22 @@ replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
 When no schedule keeps the prediction within the limit, the lowest reachable peak is found
 (min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
-the generator and the action. When that peak is above θmax itself, rest cannot help and the manager
-**sheds** load (:mod:`genthermal.schedule.shed`): each generator carries at most what keeps it
-within the planning limit, the others take what their limits allow, the rest is not served; a
-generator too hot even when carrying nothing is switched off for the rest of the mission. The
-flight reports ``feasible: false`` and the load not served.
+the generator and the action. When that peak is above θmax itself, rest cannot help, and what the
+manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario's
+``generators.when_infeasible`` or ``ManagerSettings.when_infeasible``):
+
+* ``shed`` (default): the manager **sheds** load (:mod:`genthermal.schedule.shed`): each generator
+  carries at most what keeps it within the planning limit, the others take what their limits
+  allow, the rest is not served; a generator too hot even when carrying nothing is switched off
+  for the rest of the mission;
+* ``best_effort``: what the thesis heuristic does, which has no load shedding (thesis 7.2, Fig.
+  7.2; its large blockage breaches 110.7 and 111 °C, 7.3.3): the scheduler's own plan is flown,
+  all load served, knowing it breaches θmax by its predicted peak (the heuristic's, for a segment
+  no rest makes feasible: the longest rest left and the largest displacement the receivers can
+  take within θmax, so a healthy receiver is not planned past it; the optimal scheduler's: the
+  heuristic's, :func:`~genthermal.schedule.optimal.optimal_plan`).
+
+Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
@@ -59,9 +74,11 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, build_timeline, evaluate,
                    generator_inputs, mission_segments, predict, remaining_after, split_segments)
 from .power_system import PowerSystem
-from .sensor_watch import SensorFaultInjector, SensorWatch, SensorWatchSettings, parse_sensor_faults
+from .input_watch import InputWatch, InputWatchSettings
+from .sensor_injection import SensorFaultInjector, parse_sensor_faults
+from .sensor_watch import SensorWatch, SensorWatchSettings
 from .optimal_nlp import flown_optimal_plan
-from .shed import NOT_SERVED_TOLERANCE_A, shed_plan
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
 
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
@@ -126,6 +143,8 @@ class ManagerSettings:
         Fault detection and identification in flight.
     sensor_watch : SensorWatchSettings
         Sensor-fault detection and masking in flight (:mod:`genthermal.schedule.sensor_watch`).
+    input_watch : InputWatchSettings
+        Inlet and ambient sensor faults in flight (:mod:`genthermal.schedule.input_watch`).
     planner_model : str
         One of :data:`PLANNER_MODELS`: ``affine`` (default) plans on the design model within θmax −
         ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
@@ -141,6 +160,12 @@ class ManagerSettings:
         count against it); checked at every management cycle, a flight past it raises
         :class:`FlightTimeout` (a robustness sweep records it as such instead of waiting on it).
         None (default): no limit.
+    when_infeasible : str
+        One of :data:`INFEASIBLE_RESPONSES`: what the manager does when even the lowest reachable
+        peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
+        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A
+        scenario that gives ``generators.when_infeasible`` flies with that instead
+        (:func:`infeasible_response`).
     """
 
     cycle_s: float = 300.0
@@ -158,13 +183,18 @@ class ManagerSettings:
     confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
     detection: DetectionSettings = DetectionSettings()
     sensor_watch: SensorWatchSettings = SensorWatchSettings()
+    input_watch: InputWatchSettings = InputWatchSettings()
     heuristic: HeuristicSettings = HeuristicSettings()
     engineer: EngineerSettings = EngineerSettings()
     optimal: OptimalSettings = OptimalSettings()
     milp: MilpSettings = MilpSettings()
     cpu_limit_s: float | None = None
+    when_infeasible: str = "shed"
 
     def __post_init__(self):
+        if self.when_infeasible not in INFEASIBLE_RESPONSES:
+            raise InputError("when_infeasible", self.when_infeasible,
+                             f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
         if self.rest_budget_s is not None and not (np.isfinite(self.rest_budget_s) and self.rest_budget_s >= 0):
             raise ValueError(f"rest_budget_s = {self.rest_budget_s!r}: must be a number of seconds >= 0 or None")
         if self.cpu_limit_s is not None and not (np.isfinite(self.cpu_limit_s) and self.cpu_limit_s > 0):
@@ -285,8 +315,16 @@ def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
     return settings.margin_K if system.margin_K is None else float(system.margin_K)
 
 
+def infeasible_response(system: PowerSystem, settings: ManagerSettings) -> str:
+    """What a flight does when even the lowest reachable peak is above θmax, one of
+    :data:`INFEASIBLE_RESPONSES`: the scenario's (``generators.when_infeasible``, e.g.
+    ``best_effort`` in the thesis-reproduction scenarios, whose heuristic has no load shedding)
+    when it gives one, else ``settings.when_infeasible``."""
+    return settings.when_infeasible if system.when_infeasible is None else system.when_infeasible
+
+
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
-              previous=None, switched_off=None) -> PlanResult:
+              previous=None, switched_off=None, when_infeasible: str | None = None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
@@ -304,6 +342,9 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         Warm start of the optimal scheduler.
     switched_off : array-like of bool, optional
         (n_generators,) generators already switched off: the plan is :func:`~.shed.shed_plan`.
+    when_infeasible : str, optional
+        One of :data:`INFEASIBLE_RESPONSES`, what to do when the lowest reachable peak is above
+        θmax; None (default): ``settings.when_infeasible``.
 
     Returns
     -------
@@ -312,9 +353,14 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
         reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
         (``planned_peak_C``) and what the manager does about it (``response``); when that peak is
-        above θmax, the plan sheds load (``method`` ``shed``; ``shedding``: the generators whose
-        load is shed, ``switched_off``: the generators off).
+        above θmax and ``when_infeasible`` is ``shed``, the plan sheds load (``method`` ``shed``;
+        ``shedding``: the generators whose load is shed, ``switched_off``: the generators off); with
+        ``best_effort`` it is the scheduler's own plan, all load served (``best_effort`` True in
+        ``details``).
     """
+    response_mode = settings.when_infeasible if when_infeasible is None else when_infeasible
+    if response_mode not in INFEASIBLE_RESPONSES:
+        raise InputError("when_infeasible", response_mode, f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
     if switched_off is not None and np.any(switched_off):
         off = np.array(switched_off, dtype=bool)
         return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
@@ -336,7 +382,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
              f"action {segment.action_index + 1} ({segment.label})")
     found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
                  lowest_peak_action=segment.action_index + 1)
-    if lowest.peak_C > limit_C:
+    if lowest.peak_C > limit_C and response_mode == "shed":
         nobody = np.zeros(problem.n_generators, dtype=bool)
         if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
             shed = _flown_shed(problem, settings, previous, names, limit_C, where)
@@ -348,6 +394,10 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
+    if lowest.peak_C > limit_C:  # best effort: the scheduler's own plan, all load served
+        best = _best_effort(problem, result, names, limit_C, where, found)
+        best.solve_s += lowest.solve_s
+        return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
     relaxed = _within_budget(problem, run(within_lowest))
     if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
@@ -364,6 +414,22 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     relaxed.warnings.append(message)
     relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
     return relaxed
+
+
+def _best_effort(problem: PlanningProblem, result: PlanResult, names, limit_C: float, where: str,
+                 found: dict) -> PlanResult:
+    """The scheduler's own plan ``result`` flown although it breaches θmax (``when_infeasible``
+    ``best_effort``): every load served, the breach predicted and reported; ``details`` carry
+    ``best_effort`` True and the plan's predicted peak."""
+    rested = result.schedule.added_rest_s / 60.0
+    moved_Ah = result.schedule.displaced_Ah(problem.segments)
+    response = (f"best effort, no load shed: rest {rested:.1f} min, move {moved_Ah:.2f} "
+                f"A·h to the other generators; predicted peak {result.peak_C:.1f} °C on {names[result.peak_generator]}, "
+                f"{result.peak_C - limit_C:.1f} K above θmax {limit_C:g} °C")
+    result.feasible = False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(found, planned_peak_C=result.peak_C, response=response, best_effort=True)
+    return result
 
 
 def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
@@ -442,16 +508,24 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
 
 
 def _problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
-             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None) -> PlanningProblem:
+             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
+             inputs_C: dict | None = None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
     ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
-    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance."""
-    inlet = np.array([float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance.
+    ``inputs_C`` (input name → (n_gen, 1) readings at ``t_s``, °C): the measured inlet of each
+    generator and the median measured ambient, held over the plan (default the mission's)."""
+    generator = system.planning_model.spec.interface.generator
+    inputs_C = inputs_C or {}
+    inlet = np.array([float(inputs_C[generator.coolant_input][g, 0]) if generator.coolant_input in inputs_C
+                      else float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    ambient = float(np.median(inputs_C[generator.ambient_input][:, 0])) if generator.ambient_input in inputs_C \
+        else system.mission.T_ambient_C
     budget = max(float(rest_budget_s), 0.0)
     limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
         (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
-                           system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
+                           ambient, system.rest_current_A, system.current_limit_A,
                            limit, min(settings.max_rest_s, budget), settings.dt_s,
                            rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown)
 
@@ -633,7 +707,8 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         problem = _problem(system, settings, segments, nodes, t_plan, generators, np.floor(budget / dt + 1e-9) * dt,
                            flown=flown)
         if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
-            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C)
+            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
+                               when_infeasible=infeasible_response(system, settings))
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
             recorder.plan(t_plan, result)
         table = schedule.table(segments, system.generator_names)
@@ -656,6 +731,26 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     run = simulate(model, frame, x0=x0, switches=later)
     states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
     return run[list(model.output_names)].to_numpy()[1:].T, states[-1]
+
+
+def true_inputs(system: PowerSystem, input_names, times) -> dict:
+    """The true values of the measured inputs ``input_names`` (coolant inlet, ambient) of every
+    generator at ``times`` (s): input name → (n_gen, n) °C."""
+    generator = system.planning_model.spec.interface.generator
+    times = np.asarray(times, dtype=float)
+    values = {generator.coolant_input: np.array([system.inlet_C(g, times) for g in range(system.n_generators)]),
+              generator.ambient_input: np.full((system.n_generators, times.size), system.mission.T_ambient_C)}
+    return {name: values[name] for name in input_names if name in values}
+
+
+def _filter_inputs(system: PowerSystem, inputs_C: dict, times) -> tuple:
+    """Per generator, the inlet (n,) and ambient (n,) temperatures its filter is driven with, °C: the
+    readings in ``inputs_C`` (:func:`true_inputs` keys), the true values for an input not read."""
+    generator = system.planning_model.spec.interface.generator
+    true = true_inputs(system, (generator.coolant_input, generator.ambient_input), times)
+    inlet = inputs_C.get(generator.coolant_input, true[generator.coolant_input])
+    ambient = inputs_C.get(generator.ambient_input, true[generator.ambient_input])
+    return inlet, ambient
 
 
 def _told_beliefs(system: PowerSystem, t_s: float) -> list:
@@ -706,14 +801,22 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
                        detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
+    from ..diagnose.input_sensors import input_sensors
+
+    input_names = input_sensors(system.planning_model.spec.interface)
     sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
-                                        system.planning_model.output_names)
+                                        system.planning_model.output_names, input_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
+    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators)
+
+    def read_inputs(times):
+        """The inputs as the manager reads them at ``times`` (s): injected faults, claimed ones substituted."""
+        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(system, input_names, times)))
     trusted = TrustedHeatFlows(system.n_generators)
     recorder = _Recorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
-    measured, t, rested_s, resting_s, cycles = None, 0.0, 0.0, 0.0, 0
+    measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     while segments:
         if settings.cpu_limit_s is not None and time.process_time() - started > settings.cpu_limit_s:
             raise FlightTimeout(t, cycles, time.process_time() - started, settings.cpu_limit_s)
@@ -727,6 +830,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             if not settings.tell_fault:
                 # sensor faults first: never seen as heat
                 watch.cycle(t, estimators, measured, before, monitor, detectors)
+                inputs_watch.cycle(t, inputs_read, estimators, monitor)
                 believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
                 watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing
@@ -744,12 +848,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         problem = _problem(system, settings, segments, [e.x for e in estimators], t,
                            [trusted.planning_generator(g, e, watch.trusts_heat_flows(g, t))
                             for g, e in enumerate(estimators)], np.floor((budget - rested_s) / dt + 1e-9) * dt,
-                           resting_s, flown)
+                           resting_s, flown, inputs_watch.for_plan(read_inputs(np.array([t]))))
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                               previous=schedule, switched_off=schedule.switched_off)
+                               previous=schedule, switched_off=schedule.switched_off,
+                               when_infeasible=infeasible_response(system, settings))
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       _first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
@@ -758,16 +863,18 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         applied = timeline.head(n)
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
+        inputs_read = read_inputs(step_times)
+        inlets, ambients = _filter_inputs(system, inputs_read, step_times)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
-            estimator.predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+            estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
             if detectors is not estimators:
-                detectors[g].predict(applied.currents_A[g], system.inlet_C(g, step_times), system.mission.T_ambient_C)
+                detectors[g].predict(applied.currents_A[g], inlets[g], ambients[g])
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         sample_times = t + dt * np.arange(1, n + 1)
-        sensed = watch.correct(sample_times, injector.apply(sample_times, sensed))
-        monitor.record(t, applied.currents_A, sensed)
-        measured = sensed[:, :, -1]
+        read = injector.apply(sample_times, sensed)
+        monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
+        measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
         rested_s += float(np.count_nonzero(applied.resting)) * dt
         running = np.flatnonzero(~applied.resting)

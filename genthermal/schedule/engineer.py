@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from .heuristic import SegmentResponse
+from .heuristic import SegmentResponse, receiver_room
 from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict
 
 
@@ -40,17 +40,6 @@ class EngineerSettings:
     """
 
     rest_step_s: float = 10.0
-
-
-def receiver_room(response: SegmentResponse, limit_C: float) -> float:
-    """Largest extra current (A) a receiver can take keeping its peak (back-off rows included)
-    within ``limit_C``; 0 when it is already at the limit."""
-    heating = -response.yd  # temperature rise per ampere taken on
-    slack = limit_C - response.y0
-    if np.any(slack < -LIMIT_TOLERANCE_K):
-        return 0.0
-    rising = heating > 1e-12
-    return float(np.min(np.clip(slack[rising], 0.0, None) / heating[rising])) if rising.any() else np.inf
 
 
 def _largest_displacement(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray:

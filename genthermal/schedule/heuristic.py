@@ -23,7 +23,8 @@ import time
 
 import numpy as np
 
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, robust_outputs
+from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, predict,
+                   robust_outputs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,6 +84,45 @@ class SegmentResponse:
         return float(np.max(excess[over] / relief)) * (1.0 + 1e-9) + 1e-9
 
 
+def receiver_room(response: SegmentResponse, limit_C: float) -> float:
+    """Largest extra current (A) a receiver can take keeping its peak (back-off rows included)
+    within ``limit_C``; 0 when it is already at the limit."""
+    heating = -response.yd  # temperature rise per ampere taken on
+    slack = limit_C - response.y0
+    if np.any(slack < -LIMIT_TOLERANCE_K):
+        return 0.0
+    rising = heating > 1e-12
+    return float(np.min(np.clip(slack[rising], 0.0, None) / heating[rising])) if rising.any() else np.inf
+
+
+def future_room(problem: PlanningProblem, g: int, k: int, response: SegmentResponse, limit_C: float) -> float:
+    """Largest extra current (A) generator ``g`` can take in segment ``k`` such that, carrying its
+    own nominal load in the segments after ``k`` (no rests, back-off rows included), it stays
+    within ``limit_C`` wherever it would without the extra current; ``inf`` after the last segment.
+
+    The later temperatures are affine in the state at the end of segment ``k``, which is affine
+    in the current taken (``response``), so two predictions give them for any current.
+    """
+    later = problem.segments[k + 1:]
+    if not later:
+        return np.inf
+    alone = dataclasses.replace(problem, segments=later, generators=[problem.generators[g]],
+                                inlet_C=problem.inlet_C[[g]], x0=response.x_end0[None, :])
+    nominal = Schedule.nominal(1, len(later))
+
+    def future(x_end):
+        prediction = predict(dataclasses.replace(alone, x0=x_end[None, :]), nominal)
+        return np.maximum(prediction.outputs[0, :, 1:], robust_outputs(
+            prediction.outputs[0], prediction.timeline.window_start, problem.rise_backoff))
+
+    without = future(response.x_end0)
+    heating = future(response.x_end0 - response.x_end_d) - without  # per ampere taken on (d = -1 A)
+    kept = (without <= limit_C + LIMIT_TOLERANCE_K) & (heating > 1e-12)
+    if not kept.any():
+        return np.inf
+    return float(np.min(np.clip(limit_C - without[kept], 0.0, None) / heating[kept]))
+
+
 def _displacement(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray | None:
     """Eq. 7.2 for segment ``k``: least displacement off each violator, shared equally by the others;
     None when displacement alone cannot keep every generator within the limit."""
@@ -114,8 +154,10 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
     Returns
     -------
     PlanResult
-        When no rest up to ``problem.max_rest_s`` makes a segment feasible, that segment gets the
-        longest rest and the largest displacement off its violators, and ``feasible`` is False.
+        When no rest up to ``problem.max_rest_s`` (and what is left of ``problem.rest_budget_s``
+        after the earlier segments' rests) makes a segment feasible, that segment gets the longest
+        rest and the largest displacement off its violators that the receivers can take within the
+        limit, and ``feasible`` is False.
     """
     started = time.perf_counter()
     n_seg, n_gen = len(problem.segments), problem.n_generators
@@ -123,6 +165,12 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
     x = problem.x0.copy()
     warnings = []
     for k in range(n_seg):
+        # the rest this segment may still take: the longest before one action (less what was rested
+        # right before the first segment) and what is left of the flight's budget after the earlier
+        # segments' rests; a displacement planned after a rest the budget then cuts would load the
+        # receivers for a rest they never get
+        available = min(problem.max_rest_s - (problem.rest_taken_s if k == 0 else 0.0),
+                        problem.rest_budget_s - float(np.sum(rests[:k])))
         rest = 0.0
         while True:
             responses = [SegmentResponse(problem, g, k, x[g], rest) for g in range(n_gen)]
@@ -130,10 +178,10 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
             d = np.zeros(n_gen) if not violators else _displacement(problem, k, responses, violators)
             if d is not None:
                 break
-            if rest + settings.rest_step_s > problem.max_rest_s + 1e-9:
-                d = _best_effort(problem, k, violators)
+            if rest + settings.rest_step_s > available + 1e-9:
+                d = _best_effort(problem, k, responses, violators)
                 warnings.append(f"segment {k} ({problem.segments[k].label}): no rest up to "
-                                f"{problem.max_rest_s / 60:g} min keeps it within {problem.limit_C:g} °C")
+                                f"{max(available, 0.0) / 60:g} min keeps it within {problem.limit_C:g} °C")
                 break
             rest += settings.rest_step_s
         displaced[:, k], rests[k] = d, rest
@@ -142,12 +190,17 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
     return evaluate(problem, schedule, "heuristic", time.perf_counter() - started, warnings)
 
 
-def _best_effort(problem: PlanningProblem, k: int, violators) -> np.ndarray:
-    """Largest displacement off the violators that the receivers' current limit allows."""
+def _best_effort(problem: PlanningProblem, k: int, responses, violators) -> np.ndarray:
+    """Largest displacement off the violators that the receivers can take within their current
+    limit and the planning limit, in this segment and, carrying their own load, in the later ones
+    (:func:`future_room`), shared equally (eqs. 7.3-7.4): the receiver with the least room sets
+    each one's share, so a healthy receiver is not planned past the limit."""
     low, high = problem.displacement_bounds(k)
     receivers = [g for g in range(problem.n_generators) if g not in violators]
     d = np.zeros(problem.n_generators)
     if receivers:
-        d[violators] = max(0.0, min(high, -low * len(receivers) / len(violators)))
+        share = min([-low] + [min(receiver_room(responses[h], problem.limit_C),
+                                  future_room(problem, h, k, responses[h], problem.limit_C)) for h in receivers])
+        d[violators] = max(0.0, min(high, share * len(receivers) / len(violators)))
         d[receivers] = -np.sum(d[violators]) / len(receivers)
     return d

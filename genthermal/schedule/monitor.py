@@ -14,13 +14,28 @@ model whose cooling is 10 % short no longer lets the planner load a healthy gene
 (``ManagerSettings.planner_model``) plans on the filter's own model, state, disturbances and
 covariance (:mod:`genthermal.schedule.flown`).
 
-**Detection.** Faults are detected on the extended Kalman filter's disturbance heat flows, not
-on its innovations: the disturbance states absorb a fault within a cycle or two, so the
-innovations stay small. :class:`~genthermal.schedule.detector.DisturbanceDetector` compares each
-generator's estimated extra heat flow into the winding and the iron with the generators believed
-healthy, normalised by the filter's covariance, and runs a one-sided CUSUM on it (the statistic,
-its thresholds and their provenance are in :mod:`genthermal.schedule.detector`). With the linear
-filter (``kf``) in the loop the detector runs on a parallel extended Kalman filter of its own.
+**Detection.** Two one-sided tests raise fault alarms, each comparing a generator with the
+generators believed healthy; an alarm of either is an alarm. The *innovation test*
+(:class:`~genthermal.schedule.innovation_detector.InnovationCusum`) runs a linear Kalman filter
+per generator on the design model of the machine as believed, without disturbance states, and
+sums its winding innovation minus the healthy generators' median: a new heat flow shows in it
+from the first cycle (its provenance and its measured delays are in that module). The
+*disturbance test* (:class:`~genthermal.schedule.detector.DisturbanceDetector`) compares the
+extended Kalman filter's estimated extra heat flows into the winding and the iron, normalised by
+the filter's covariance; it alone watches the iron (an excitation iron loss). With the linear
+filter (``kf``) in the loop the disturbance test runs on a parallel extended Kalman filter of its
+own. Only a disturbance-test alarm starts an identification: an innovation-test alarm is a
+detection (``alarms``, ``detected_at_s``) and nothing more. The innovation test cannot tell a
+drifting sensor from heat (the reading moves, the filter has nothing else to follow): on a
+winding sensor drifting 1.5 K/h from 60 min it alarmed from 80 min, each alarm's identification
+named a shorted turn the plan then believed, and the sensor watch, whose record checks the new
+beliefs had spent, claimed the drift 10 min later than without it; the disturbance states take a
+drift up as opposite heat flows on the two nodes (the sensor watch's pattern), not as a fault.
+A generator whose sensor the sensor watch masked leaves both tests. A reading the sensor
+watch merely suspects (one sensor moved alone: it holds it out of the planner's filter until its
+record check) still reaches the innovation test: held out too, it delayed the detection of a
+blockage by a cycle (138 to 438 s on ``bench_detection.py``'s case 20); as it starts no
+identification, it changes no belief.
 
 A second test watches for a **model error** common to all generators: the mean :math:`\bar z`
 of the normalised winding innovations :math:`z_g = e_g/\sqrt{S_{ww}}` over the generators
@@ -42,7 +57,11 @@ and ``R0`` 1.00-1.13 Ω (plant 1.26): compensating errors that predict the recor
 generator's record, then the alarmed generator's record since the mission start (inputs and the
 noisy sensors, resampled to ``identify_dt_s``) is handed to :func:`genthermal.diagnose.diagnose`
 with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
-by ΔBIC, and accepted only when significant by diagnose's four tests. The manager then plans and
+by ΔBIC, and accepted only when significant by diagnose's four tests. The blockage competes
+twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
+(turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
+that leaves the internal convection as it was (blockage_large: k_flow 0.2, n_flow 0, +31 K
+inlet) was sized k_flow 0.80-0.84. The manager then plans and
 filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`), and
 every filter whose model changed restarts its disturbance states at zero (:meth:`StateEstimator.use`:
 the new model has taken in what they carried). An alarm that no effect explains is
@@ -63,6 +82,7 @@ from ..estimation.ekf import ExtendedKalmanFilter
 from ..estimation.kalman import KalmanFilter
 from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
+from .innovation_detector import InnovationCusum, InnovationCusumSettings
 
 #: Noise settings of the flight EKF: constant and load-scaled heat flows only, as random walks
 #: of 8 and 15 W per hour, no coolant-scaled states, no change detection. The fault detector's
@@ -81,6 +101,46 @@ FLIGHT_FILTERS = {"ekf": lambda generator, flown_model, dt_s: ExtendedKalmanFilt
 FAULT_EFFECTS = ("coolant_flow_reduction", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
 
 
+#: Suffix of a catalogue variant whose shape parameters are fitted (:func:`flight_catalogue`).
+FREE_SHAPE_SUFFIX = "+shape"
+
+
+def flight_catalogue(effects=FAULT_EFFECTS) -> dict:
+    """The candidate effects of the in-flight identification: the registered catalogue's
+    ``effects`` and, for each one with shape parameters, a variant named
+    ``name + FREE_SHAPE_SUFFIX`` that fits them too (the blockage's convection exponent
+    ``n_flow``, module docstring). Both compete by ΔBIC, so the extra parameter is kept only when
+    the record asks for it: on the detection benchmark's blockages of the default exponent the
+    free variant alone sized one k_flow 0.37 as 0.66 (n_flow 1.5) seven minutes after the onset.
+    A variant's values name the registered effect's parameters (:func:`registered_effect_name`).
+
+    Parameters
+    ----------
+    effects : sequence of str
+        Registered effect names.
+
+    Returns
+    -------
+    dict
+        Candidate name → :class:`~genthermal.effects.Effect`.
+    """
+    from ..effects import get_effect
+
+    catalogue = {}
+    for name in effects:
+        effect = get_effect(name)
+        catalogue[name] = effect
+        if effect.shape_parameters:
+            catalogue[name + FREE_SHAPE_SUFFIX] = dataclasses.replace(
+                effect, name=name + FREE_SHAPE_SUFFIX, parameters=effect.all_parameters, shape_parameters=())
+    return catalogue
+
+
+def registered_effect_name(candidate: str) -> str:
+    """The registered effect of a :func:`flight_catalogue` candidate (its variant suffix dropped)."""
+    return candidate[:-len(FREE_SHAPE_SUFFIX)] if candidate.endswith(FREE_SHAPE_SUFFIX) else candidate
+
+
 @dataclasses.dataclass(frozen=True)
 class DetectionSettings:
     """Fault detection and identification in flight (module docstring).
@@ -88,7 +148,10 @@ class DetectionSettings:
     Attributes
     ----------
     detector : DetectorSettings
-        Drifts and thresholds of the fault test (:mod:`genthermal.schedule.detector`).
+        Drifts and thresholds of the disturbance test (:mod:`genthermal.schedule.detector`).
+    innovation : InnovationCusumSettings or None
+        Drift and threshold of the innovation test
+        (:mod:`genthermal.schedule.innovation_detector`); None: the disturbance test alone.
     model_drift, model_threshold : float
         :math:`\nu_m, h_m` of the common (model error) CUSUM.
     calibrate_parameters : tuple of str
@@ -110,7 +173,10 @@ class DetectionSettings:
         Sample period of the records handed to calibration and identification, s.
     max_identifications : int
         Identifications (whatever their outcome) per generator and flight; later alarms are
-        recorded only.
+        recorded only. 8: with the innovation test alarming from 9 min after blockage_large's
+        onset (heuristic), the first four identifications (75-105 min) named a stray loss, a
+        shorted turn and a k_flow 0.86 blockage before the record told the blockage's size; with
+        4 the flight kept the last.
     identify_spacing_s : float
         Shortest time between two identifications of one generator, s (alarms in between are
         recorded only).
@@ -119,6 +185,22 @@ class DetectionSettings:
         compares the generators from the first cycles on, so a fault present much earlier would
         have alarmed earlier; an effect fitted from the mission start is the model error, not
         the fault.
+    late_onset_s : float
+        ... unless it starts at least this long after the mission start, s: a manager that moves
+        load off a generator it sees hot (the disturbance heat flows in the plan) can delay the
+        alarm by more than ``max_onset_lead_s``. On blockage_large with the optimal scheduler the
+        first alarm on the blocked generator came at 145 min, 79 min after the onset, and the
+        blockage fitted with onset 69 min (ΔBIC -712) was refused at four alarms in a row. The
+        model's own error shows from the first minutes (fits with onsets of 8-15 min on the same
+        flight), well before 60 min.
+    confirm_tolerance : float
+        A new identification of the believed effect whose parameters each differ from the
+        believed ones by at most this fraction of the larger of the believed value and the
+        parameter's typical value (:class:`~genthermal.effects.EffectParameter`; a convection
+        exponent near 0 does not count as changed by 0.01) confirms the belief, which is kept: the filters and plan
+        do not restart for a refinement, and the sensor watch does not re-check the record (on
+        the robustness grid's case 0 a k_flow 0.197 → 0.174 refinement had the watch claim the
+        blocked unit's winding sensor as stuck and mask it).
     equivalent_delta_bic : float
         Effects within this ΔBIC of the identified one are reported as equivalent explanations
         (Kass & Raftery 1995: a BIC difference below 2 is not worth more than a bare mention);
@@ -127,6 +209,7 @@ class DetectionSettings:
     """
 
     detector: DetectorSettings = DetectorSettings()
+    innovation: InnovationCusumSettings | None = InnovationCusumSettings(inlet_tolerance_K=1.0)
     model_drift: float = 2.5
     model_threshold: float = 5.0
     calibrate_parameters: tuple = ("R0", "h_end_air", "h_top_air", "P_iron", "m_dot_fan")
@@ -135,9 +218,11 @@ class DetectionSettings:
     max_recalibrations: int = 3
     fault_effects: tuple = FAULT_EFFECTS
     identify_dt_s: float = 60.0
-    max_identifications: int = 4
+    max_identifications: int = 8
     identify_spacing_s: float = 600.0
     max_onset_lead_s: float = 3600.0
+    late_onset_s: float = 3600.0
+    confirm_tolerance: float = 0.25
     equivalent_delta_bic: float = 2.0
 
 
@@ -287,10 +372,12 @@ class StateEstimator:
         step = self.filter.update(self.z, self.P, y)
         self.z, self.P, self.innovation = step.x, step.P, step.innovation
 
-    def predict(self, currents_A, inlets_C, ambient_C: float) -> None:
-        """Time updates over the applied phase currents and measured inlet temperatures, one per step."""
-        for current, inlet in zip(currents_A, inlets_C):
-            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, ambient_C))
+    def predict(self, currents_A, inlets_C, ambient_C) -> None:
+        """Time updates over the applied phase currents and the measured inlet and ambient
+        temperatures (°C; the ambient one per step or one for all), one per step."""
+        ambients = np.broadcast_to(np.asarray(ambient_C, dtype=float), np.shape(currents_A))
+        for current, inlet, ambient in zip(currents_A, inlets_C, ambients):
+            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, float(ambient)))
 
 
 def believed_model(base, effects):
@@ -374,7 +461,7 @@ class Identification:
                 "solve_s": self.solve_s}
 
 
-def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C: float,
+def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C,
                  measured_C) -> pd.DataFrame:
     """A generator's in-flight record in the measurement CSV schema (balanced phases).
 
@@ -386,7 +473,8 @@ def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C
         (n,) s.
     currents_A, excitation_A, inlet_C : array_like
         (n,) phase current, field current (A) and inlet temperature (°C) in force at each sample.
-    ambient_C : float
+    ambient_C : float or array_like
+        Ambient temperature, °C (one, or (n,) per sample).
     measured_C : array_like
         (n_sensors, n) measured sensor temperatures in the interface's output order, °C.
     """
@@ -396,7 +484,7 @@ def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C
         frame[name] = currents_A
     frame[generator.excitation_input] = excitation_A
     frame[generator.coolant_input] = inlet_C
-    frame[generator.ambient_input] = np.full(len(frame["time_s"]), ambient_C)
+    frame[generator.ambient_input] = np.broadcast_to(np.asarray(ambient_C, dtype=float), frame["time_s"].shape).copy()
     for sensor, measured in zip(interface.sensors, measured_C):
         for column in sensor.columns:
             frame[column] = measured
@@ -420,8 +508,9 @@ class FaultMonitor:
     beliefs : list of tuple
         Per generator, the identified effects (``(name, ((parameter, value), ...))``).
     alarms : list of dict
-        ``time_s``, ``generator``, ``node`` (``winding`` or ``iron``) and ``statistic`` (the
-        detector's :math:`r`) of every fault alarm.
+        ``time_s``, ``generator``, ``node`` (``winding`` or ``iron``), ``test`` (``innovation`` or
+        ``disturbance``) and ``statistic`` (the innovation test's CUSUM sum in K, or the
+        disturbance test's :math:`r`) of every fault alarm.
     identifications : list of Identification
     calibrations : list of dict
         ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
@@ -438,14 +527,32 @@ class FaultMonitor:
         #: ``(generator, node index)`` out of the fault test after a sensor of the generator was
         #: masked by the sensor watch (:meth:`mask`, :meth:`DisturbanceDetector.statistics`).
         self.masked: set = set()
-        self._time, self._currents, self._measured = [], [], []
+        self.innovation_test = None if settings.innovation is None or n < 2 else InnovationCusum(
+            n, dt_s, system.mission.T_ambient_C, system.design_generator_for(()), settings.innovation)
+        self._time, self._currents, self._measured, self._inputs = [], [], [], []
 
-    def record(self, t0: float, currents_A, measured_C) -> None:
+    def record(self, t0: float, currents_A, measured_C, inputs_C=None) -> None:
         """Add the steps flown from ``t0``: currents (n_gen, n) and sensors (n_gen, 2, n) at the end
-        of each step."""
+        of each step; ``inputs_C`` maps the measured inputs (coolant inlet, ambient) to their
+        readings (n_gen, n) °C in force during each step (default: the mission's true values)."""
         self._time.append(t0 + self.dt_s * np.arange(currents_A.shape[1]))
         self._currents.append(currents_A)
         self._measured.append(measured_C)
+        self._inputs.append({name: np.array(v, dtype=float, copy=True) for name, v in (inputs_C or {}).items()})
+        if self.innovation_test is not None:
+            coolant = self.system.planning_model.spec.interface.generator.coolant_input
+            for g in range(self.system.n_generators):
+                inlet = (self._inputs[-1][coolant][g] if coolant in self._inputs[-1]
+                         else self.system.inlet_C(g, self._time[-1]))
+                self.innovation_test.predict(g, currents_A[g], inlet)
+
+    def replace_input(self, g: int, name: str, from_s: float, replacement) -> None:
+        """Rewrite generator ``g``'s recorded reading of input ``name`` from ``from_s`` (s since the
+        mission start) on with ``replacement(times, readings (n_gen, n)) -> (n,)`` of each recorded
+        cycle (a claimed input sensor, :mod:`~genthermal.schedule.input_watch`)."""
+        for times, inputs in zip(self._time, self._inputs):
+            if name in inputs and np.any(times >= from_s):
+                inputs[name][g] = replacement(times, inputs[name])
 
     def mask(self, g: int, row: int, from_s: float) -> None:
         """Take generator ``g`` out of the fault test and its sensor ``row`` out of its record from
@@ -466,8 +573,18 @@ class FaultMonitor:
         interface = self.system.planning_model.spec.interface
         excitation = interface.generator.exciter_law(current, self.system.mission.power_factor,
                                                      self.system.rated_current_A)
-        return record_frame(interface, time_s, current, excitation, self.system.inlet_C(g, time_s - self.dt_s),
-                            self.system.mission.T_ambient_C, measured)
+        generator = interface.generator
+        inlet = self._recorded_input(g, generator.coolant_input, self.system.inlet_C(g, time_s - self.dt_s))
+        ambient = self._recorded_input(g, generator.ambient_input,
+                                       np.full(time_s.shape, self.system.mission.T_ambient_C))
+        return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)
+
+    def _recorded_input(self, g: int, name: str, true_values) -> np.ndarray:
+        """Generator ``g``'s recorded reading of input ``name`` over the record, ``true_values``
+        where none was recorded."""
+        if not all(name in inputs for inputs in self._inputs):
+            return np.asarray(true_values, dtype=float)
+        return np.concatenate([inputs[name][g] for inputs in self._inputs])
 
     def design_generator(self, g: int):
         """Design model of generator ``g`` as the manager believes it."""
@@ -491,20 +608,41 @@ class FaultMonitor:
             Extended Kalman filters whose disturbance states feed the fault test; default
             ``estimators`` (which must then be extended Kalman filters).
         """
+        innovation_alarms = self._innovation_cycle()
         if len(self._time) < 2:
             return
         detection_estimators = estimators if detection_estimators is None else detection_estimators
         z = np.array([e.innovation[0] / e.innovation_std[0] for e in estimators])
         healthy = [g for g in range(len(z)) if not self.beliefs[g]]
         r = self.statistics(detection_estimators)
-        for g, node in self.detector.update(t_s, r):
+        alarms = [(g, node, "disturbance", float(r[g, node])) for g, node in self.detector.update(t_s, r)]
+        alarms += [(g, self.node_roles.index("winding"), "innovation", sum_K) for g, sum_K in innovation_alarms]
+        for g, node, test, statistic in alarms:  # one alarm per generator and cycle: the disturbance test's first
             if not any(a["time_s"] == t_s and a["generator"] == g for a in self.alarms):
-                self._fault_alarm(g, t_s, z, node, float(r[g, node]))
+                self._fault_alarm(g, t_s, z, node, statistic, test)
         last = max((c["time_s"] for c in self.calibrations), default=-np.inf)
         if healthy and self.model_test.update(float(np.mean(z[healthy]))) and t_s >= self.settings.min_record_s and \
                 t_s - last >= self.settings.recalibrate_every_s and \
                 len(self.calibrations) < self.settings.max_recalibrations:
             self._recalibrate(t_s, healthy, z)
+
+    def _innovation_cycle(self) -> list:
+        """Measurement update and test of the innovation test with the readings recorded last
+        (masked sensors NaN), each filter first moved to the design model as now believed; its
+        alarms ``(generator, CUSUM sum K)``. A generator with a masked sensor is neither tested
+        nor a reference."""
+        test = self.innovation_test
+        if test is None or not self._measured:
+            return []
+        n = self.system.n_generators
+        for g in range(n):
+            test.use(g, self.design_generator(g))
+        measured = self._measured[-1][:, :, -1]
+        left_out = {g for g, _ in self.masked}
+        references = [[h for h in range(n) if h != g and not self.beliefs[h] and h not in left_out] for g in range(n)]
+        for g in left_out:
+            references[g] = []
+        return test.update(measured, np.mean(self._currents[-1], axis=1), references)
 
     def statistics(self, detection_estimators) -> np.ndarray:
         """The fault test's :math:`r_{gj}` (n_generators, n_nodes) of the cycle just recorded, from
@@ -537,8 +675,11 @@ class FaultMonitor:
         self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
                                   "parameters": dict(zip(result.names, result.values))})
 
-    def _fault_alarm(self, g: int, t_s: float, z, node: int, statistic: float) -> None:
-        self.alarms.append({"time_s": t_s, "generator": g, "node": self.node_roles[node], "statistic": statistic})
+    def _fault_alarm(self, g: int, t_s: float, z, node: int, statistic: float, test: str) -> None:
+        self.alarms.append({"time_s": t_s, "generator": g, "node": self.node_roles[node], "test": test,
+                            "statistic": statistic})
+        if test == "innovation":  # detection only: identification waits for the disturbance test
+            return
         earlier = [i for i in self.identifications if i.generator == g]
         if len(earlier) >= self.settings.max_identifications or \
                 (earlier and t_s - earlier[-1].detected_at_s < self.settings.identify_spacing_s):
@@ -548,9 +689,30 @@ class FaultMonitor:
             self._recalibrate(t_s, others, z)
         found = identify_fault(self.model, self.frame(g), g, t_s, self.settings)
         self.identifications.append(found)
-        if found.effect:
+        if found.effect and not confirms(found.effects, self.beliefs[g], self.settings.confirm_tolerance):
             self.beliefs[g] = found.effects
             self.detector.restart(g)
+            if self.innovation_test is not None:
+                self.innovation_test.restart(g)
+
+
+def confirms(new, believed, tolerance: float) -> bool:
+    """True when the effects ``new`` (``((name, ((parameter, value), ...)),)``, registered names)
+    are ``believed`` with every parameter within ``tolerance`` times the larger of the believed
+    value and the parameter's typical value (``DetectionSettings.confirm_tolerance``)."""
+    from ..effects import get_effect
+
+    if len(new) != len(believed) or not new:
+        return False
+    for (name, values), (old_name, old_values) in zip(new, believed):
+        values, old_values = dict(values), dict(old_values)
+        if name != old_name or set(values) != set(old_values):
+            return False
+        typical = {p.name: abs(p.typical or 0.0) for p in get_effect(name).all_parameters}
+        if any(abs(values[k] - old_values[k]) > tolerance * max(abs(old_values[k]), typical.get(k, 0.0))
+               for k in values):
+            return False
+    return True
 
 
 def detector_node_roles(model) -> list:
@@ -584,12 +746,13 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
     from ..diagnose import diagnose
 
     started = time.perf_counter()
-    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(settings.fault_effects),
+    catalogue = flight_catalogue(settings.fault_effects)
+    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(catalogue),
                          pairs=False, design_experiment=False,  # one fault at a time, no rig test in flight
-                         sensor_faults=False)
+                         sensor_faults=False, catalogue=catalogue)
     first = diagnosis.iterations[0]
     ranked = first.ranked
-    earliest = detected_at_s - settings.max_onset_lead_s
+    earliest = min(detected_at_s - settings.max_onset_lead_s, settings.late_onset_s)
 
     def heats(candidate) -> bool:
         after = slice(candidate.onset_index, None)
@@ -597,15 +760,18 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
 
     admissible = [c for c in ranked if c.onset_s >= earliest and heats(c)]
     best = admissible[0] if admissible and admissible[0].significant else None
-    others = [c for c in admissible if c is not best]
-    runner_up = (f"{others[0].effect} (ΔBIC +{others[0].delta_bic - admissible[0].delta_bic:.0f})"
-                 if best is not None and others else None)
+    effect = None if best is None else registered_effect_name(best.effect)
+    # the other explanations: other effects (a variant of the same effect is the same explanation)
+    others = [c for c in admissible if registered_effect_name(c.effect) != effect]
+    runner_up = (f"{registered_effect_name(others[0].effect)} "
+                 f"(ΔBIC +{others[0].delta_bic - admissible[0].delta_bic:.0f})" if best is not None and others else None)
     elapsed = time.perf_counter() - started
     if best is None:
         return Identification(generator, detected_at_s, None, {}, None,
                               float(admissible[0].delta_bic) if admissible else None,
                               diagnosis.iterations[0].rmse_before, None, runner_up, elapsed)
-    equivalent = [c.effect for c in others if c.delta_bic - best.delta_bic <= settings.equivalent_delta_bic]
-    return Identification(generator, detected_at_s, best.effect, dict(best.values), float(best.onset_s),
+    equivalent = list(dict.fromkeys(registered_effect_name(c.effect) for c in others
+                                    if c.delta_bic - best.delta_bic <= settings.equivalent_delta_bic))
+    return Identification(generator, detected_at_s, effect, dict(best.values), float(best.onset_s),
                           float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up,
                           elapsed, equivalent)

@@ -18,6 +18,10 @@ validated here)::
       margin_K: 0                  # the load manager's back-off margin below limit_C, K (default: the
                                    # manager's, 2.5 K; 0: plan to theta_max itself, as the thesis
                                    # heuristic does, eqs. 7.1-7.5); --margin overrides it
+      when_infeasible: best_effort # when even the lowest reachable peak is above limit_C: shed (default,
+                                   # shed load) or best_effort (fly the scheduler's own plan, all load
+                                   # served: the thesis heuristic has no shedding); --when-infeasible
+                                   # overrides it
       plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
       machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration), or any machine
                                    # with the generator role (a plug-in name or a .py machine file)
@@ -55,6 +59,7 @@ from ..machines import DEFAULT_MACHINE
 from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
+from .shed import INFEASIBLE_RESPONSES
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -73,8 +78,18 @@ def _filter_name(config: Mapping) -> str | None:
     return str(config["filter"])
 
 
+def _infeasible_response(value, field: str = "generators.when_infeasible") -> str | None:
+    """``value`` checked against :data:`genthermal.schedule.shed.INFEASIBLE_RESPONSES` (None
+    passes: the manager's own); InputError naming ``field`` otherwise."""
+    if value is None:
+        return None
+    if not isinstance(value, str) or value not in INFEASIBLE_RESPONSES:
+        raise InputError(field, value, f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
+    return value
+
+
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent", "margin_K",
-                   "filter", "plant_mismatch", "machine")
+                   "filter", "plant_mismatch", "machine", "when_infeasible")
 _FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C", "inlet_rise_tau_min"),
                "inlet_rise": ("inlet_rise_C", "inlet_rise_tau_min"),
                "effect": ("effect", "values", "inlet_rise_C", "inlet_rise_tau_min")}
@@ -394,6 +409,12 @@ class PowerSystem:
         The scenario's filter in the loop (``generators.filter``: ``"ekf"`` or ``"kf"``, e.g. the
         thesis's linear filter in the thesis-reproduction scenarios); None (default): the manager's
         own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.filter`).
+    when_infeasible : str, optional
+        The scenario's response when even the lowest reachable peak is above ``limit_C``
+        (``generators.when_infeasible``, one of :data:`~genthermal.schedule.shed.INFEASIBLE_RESPONSES`:
+        ``shed`` or ``best_effort``, e.g. the thesis heuristic's best effort in the
+        thesis-reproduction scenarios); None (default): the manager's own
+        (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.when_infeasible`).
     """
 
     mission: Mission
@@ -408,8 +429,10 @@ class PowerSystem:
     plant: Any = None
     margin_K: float | None = None
     filter: str | None = None
+    when_infeasible: str | None = None
 
     def __post_init__(self):
+        _infeasible_response(self.when_infeasible)
         if len(self.generator_names) < 2 or len(set(self.generator_names)) != len(self.generator_names):
             raise InputError("generators.names", list(self.generator_names), "need at least two distinct names")
         for index, action in enumerate(self.mission.actions):
@@ -475,7 +498,7 @@ class PowerSystem:
                                                  "%", 100.0),
                    plant_mismatch=factors, machine=machine,
                    margin_K=_number(config, "margin_K", "generators", 0.0, 50.0, "K") if "margin_K" in config else None,
-                   filter=_filter_name(config))
+                   filter=_filter_name(config), when_infeasible=_infeasible_response(config.get("when_infeasible")))
 
     # --- quantities -------------------------------------------------------------------------
     @property

@@ -11,12 +11,13 @@ back in flight):
   linear design model (:class:`~genthermal.schedule.heuristic.SegmentResponse`, temperatures
   affine in its current) the least load it must shed to stay within the planning limit and,
   when it needs none, the room it has for more (current limit and thermal room, as the
-  engineer's heuristic computes it, :func:`~genthermal.schedule.engineer.receiver_room`);
+  engineer's heuristic computes it, :func:`~genthermal.schedule.heuristic.receiver_room`);
 * a generator takes on others' load only up to the planning limit minus ``receiver_margin_K``
   (the manager's margin once more, :class:`~genthermal.schedule.closed_loop.ManagerSettings`):
   load moved onto it drives it where its model has not been checked in this flight;
 * and only as far as the heat it takes on does not make it exceed that limit later, flying its
-  own nominal load, where it would not without it (:func:`_future_room`): otherwise a healthy
+  own nominal load, where it would not without it
+  (:func:`~genthermal.schedule.heuristic.future_room`): otherwise a healthy
   generator helps in one segment and must shed its own load in the next (with offset-free
   predictions the healthy generator of ``tests/test_closed_loop_shed.py``'s plant hot at rest
   took 0.9 A in the combat cruise and shed 0.5 A of its own in the landing);
@@ -31,14 +32,20 @@ the mission goes on to its end.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import numpy as np
 
-from .engineer import receiver_room
-from .heuristic import SegmentResponse
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict, robust_outputs
+from .heuristic import SegmentResponse, future_room, receiver_room
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate
+
+#: What the load manager does when even the lowest reachable peak is above θmax
+#: (``ManagerSettings.when_infeasible``, scenario ``generators.when_infeasible``): ``shed``, shed
+#: load (this module; the project's default: no planned breach of θmax); ``best_effort``, fly the
+#: scheduler's own plan within the lowest reachable peak with all load served (the thesis
+#: heuristic, which has no load shedding: thesis 7.2, Fig. 7.2, and its large blockage breaching
+#: 110.7 and 111 °C in 7.3.3).
+INFEASIBLE_RESPONSES = ("shed", "best_effort")
 
 #: Smaller shortfalls of the total phase current are rounding of the schedulers' displacements, A.
 NOT_SERVED_TOLERANCE_A = 1e-6
@@ -79,7 +86,7 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
         shedding |= {g for g in on if must_shed[g] > 0}
         receiver_limit_C = problem.limit_C - receiver_margin_K
         room = {g: (max(min(-low, receiver_room(responses[g], receiver_limit_C),
-                            _future_room(problem, g, k, responses[g], receiver_limit_C)), 0.0)
+                            future_room(problem, g, k, responses[g], receiver_limit_C)), 0.0)
                     if must_shed[g] <= 0 else 0.0) for g in on}
         offered = np.count_nonzero(off) * segment.low_A + sum(must_shed.values())
         total_room = sum(room.values())
@@ -92,34 +99,6 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
     result = evaluate(problem, schedule, "shed", time.perf_counter() - started)
     result.details["shedding"] = sorted(set(np.flatnonzero(off)) | shedding)
     return result
-
-
-def _future_room(problem: PlanningProblem, g: int, k: int, response: SegmentResponse, limit_C: float) -> float:
-    """Largest extra current (A) generator ``g`` can take in segment ``k`` such that, carrying its
-    own nominal load in the segments after ``k`` (no rests, back-off rows included), it stays
-    within ``limit_C`` wherever it would without the extra current; ``inf`` after the last segment.
-
-    The later temperatures are affine in the state at the end of segment ``k``, which is affine
-    in the current taken (``response``), so two predictions give them for any current.
-    """
-    later = problem.segments[k + 1:]
-    if not later:
-        return np.inf
-    alone = dataclasses.replace(problem, segments=later, generators=[problem.generators[g]],
-                                inlet_C=problem.inlet_C[[g]], x0=response.x_end0[None, :])
-    nominal = Schedule.nominal(1, len(later))
-
-    def future(x_end):
-        prediction = predict(dataclasses.replace(alone, x0=x_end[None, :]), nominal)
-        return np.maximum(prediction.outputs[0, :, 1:], robust_outputs(
-            prediction.outputs[0], prediction.timeline.window_start, problem.rise_backoff))
-
-    without = future(response.x_end0)
-    heating = future(response.x_end0 - response.x_end_d) - without  # per ampere taken on (d = -1 A)
-    kept = (without <= limit_C + LIMIT_TOLERANCE_K) & (heating > 1e-12)
-    if not kept.any():
-        return np.inf
-    return float(np.min(np.clip(limit_C - without[kept], 0.0, None) / heating[kept]))
 
 
 def _least_shed(response: SegmentResponse, limit_C: float) -> float:

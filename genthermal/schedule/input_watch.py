@@ -1,0 +1,333 @@
+r"""Faulty input sensors in flight: the coolant-inlet and ambient PT100s each unit's filter is driven with.
+
+An input sensor's reading is not compared with a prediction: it *drives* the filter. A unit whose
+inlet PT100 reads 3 K high has its model predict every node about 3 K hotter (less after a step,
+through the machine's time constants), while the measured winding and iron do not move; the filter's
+disturbance states cool both nodes to follow them. That is the redundancy the check uses: one input
+error moves the model's prediction of every sensor by the model's own response to it
+(:mod:`genthermal.diagnose.input_sensors`), whatever the load, where a heat flow scales with the
+load and heats the winding more than the iron.
+
+**Looking.** Units of one power system take their cooling air from the same place (the mission has
+one inlet temperature; a recirculation that heats one unit's inlet is a real difference the check
+below does not claim) and see the same ambient. Every cycle, each unit's mean reading of each input
+over the cycle is compared with the median of the other units' (those whose sensor is not claimed):
+a difference above :attr:`InputWatchSettings.disagreement_K` sends the unit's record to the check.
+With two units both differ: both are checked, and the model says which one is at fault.
+
+**Checking.** The redundancy decides: the unit's model (as the manager believes it) is run over the
+unit's record twice, driven once by the unit's own reading and once by the other units' median
+reading of that input, and the two misfits of the measured sensors are compared over the
+disagreement (from :attr:`InputWatchSettings.lookback_s` before it began):
+:math:`\Delta = N \ln(RSS_{shared}/RSS_{own})`, no parameter fitted (the substitute is
+measured). The sensor is claimed when :math:`\Delta` is below
+-:data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (the record fits the shared air
+markedly better than the unit's own reading) and better than every other disagreeing unit's by as
+much; a unit whose inlet really is hotter (air recirculated by a blockage) fits its own reading
+better and is not claimed. The claim's shape (bias or drift) and onset are fitted to the difference
+of the two readings, which inputs logged without noise give exactly. Measured on the Fig. 7.7
+flight: the screen of :mod:`genthermal.diagnose.input_sensors` (one free bias against the heating
+faults on one unit's record) missed a -3 K inlet bias on every check, a shorted turn or a winding
+drift fitting the unit's record better; the shared-air comparison does not fit a heat flow at all.
+
+**Acting on a claim.** From the fitted onset on, the unit's reading of that input is replaced by
+the median of the other units' readings (the shared air), in the filter's inputs from now on and in
+the manager's record back to the onset; with no other unit to read, by the reading minus the fitted
+error. The unit's filter takes back its disturbance heat flows of the last cycle before the onset
+(those since were the filter's way of following a wrong input) plus the change the other units'
+heat flows made since (the model error every unit follows as the load changes), and the effects
+identified on the unit since the onset are dropped. Measured on the flights of
+``benchmarks/bench_sensor_flights.py``: keeping the heat flows the wrong input forced moved the plan
+(a ±3 K inlet bias: 1-2 re-plans, 3 load changes), taking back those before the onset alone moved
+it after a 25-min claim (a -8 K ambient bias: 3 load changes); with the common change, none. The believed machine, hence the plan, does not change. Stuck input
+sensors are not claimed: a constant input reads constant whether stuck or not
+(:mod:`genthermal.diagnose.input_sensors`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from ..diagnose.sensor_faults import PREFERENCE_BIC
+from ..errors import InputError
+from ..estimation.ekf import ExtendedKalmanFilter
+from ..sensor_faults import SensorFault
+
+
+@dataclasses.dataclass(frozen=True)
+class InputWatchSettings:
+    """Input-sensor faults in flight.
+
+    Attributes
+    ----------
+    disagreement_K : float
+        A unit's cycle-mean input reading this far from the other units' median is checked, K.
+        1 K: two healthy PT100s in the same air agree within a few tenths (class B tolerance
+        ±0.3 K at 0 °C, IEC 60751), and a 1-K input error moves the predicted winding by about 1 K
+        at steady state, what the plan's margin (2.5 K) can take.
+    max_checks : int
+        Record checks per unit and input.
+    lookback_s : float
+        The fault's onset is searched this long before the cycle that disagreed, s.
+    enabled : bool
+        False: input faults are injected but not looked for.
+    """
+
+    disagreement_K: float = 1.0
+    max_checks: int = 6
+    lookback_s: float = 1800.0
+    enabled: bool = True
+
+    def __post_init__(self):
+        for name in ("disagreement_K", "lookback_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise InputError(f"input_watch.{name}", value, "must be a finite number > 0")
+        if isinstance(self.max_checks, bool) or not isinstance(self.max_checks, int) or self.max_checks < 0:
+            raise InputError("input_watch.max_checks", self.max_checks, "must be a whole number >= 0")
+
+
+class InputWatch:
+    """Detects, identifies and substitutes faulty input sensors in flight (module docstring).
+
+    Parameters
+    ----------
+    watch : SensorWatch
+        The output sensors' watch: claims and checks are reported with its own, its record-check
+        settings (calibration, sample period) are used.
+    settings : InputWatchSettings
+    input_names : sequence of str
+        The measured temperature inputs (inlet, ambient).
+    n_generators : int
+
+    Attributes
+    ----------
+    claimed : dict
+        ``(generator, input)`` → SensorFault (onset since the mission start).
+    """
+
+    def __init__(self, watch, settings: InputWatchSettings, input_names, n_generators: int):
+        self.watch, self.settings = watch, settings
+        self.input_names, self.n_generators = tuple(input_names), n_generators
+        self.claimed: dict[tuple[int, str], SensorFault] = {}
+        self._checks: dict[tuple[int, str], int] = {}
+        self._agreed: dict[tuple[int, str], np.ndarray] = {}
+        #: ``(generator, input)`` → the last check's Δ (own reading against the shared one).
+        self._own_fits: dict[tuple[int, str], float] = {}
+        #: Per generator, (time s, state names, disturbance states) after each cycle's update.
+        self._flows: list[list] = [[] for _ in range(n_generators)]
+
+    def substitute(self, sample_times_s, readings: dict) -> dict:
+        """``readings`` (input name → (n_gen, n) °C at ``sample_times_s``) with every claimed sensor's
+        reading replaced from its fitted onset (module docstring)."""
+        used = {name: np.array(v, dtype=float, copy=True) for name, v in readings.items()}
+        times = np.asarray(sample_times_s, dtype=float)
+        for (g, name), fault in self.claimed.items():
+            if name in used:
+                used[name][g] = self.replacement(g, name, times, used[name])
+        return used
+
+    def replacement(self, g: int, name: str, times, values) -> np.ndarray:
+        """Generator ``g``'s reading of input ``name`` (row of ``values``, (n_gen, n) °C at ``times``)
+        with its claimed fault replaced: the other units' median, else the reading minus the fault."""
+        fault = self.claimed[(g, name)]
+        after = np.asarray(times) >= fault.onset_s
+        row = np.array(values[g], dtype=float, copy=True)
+        sources = [h for h in range(values.shape[0]) if h != g and (h, name) not in self.claimed]
+        if sources:
+            row[after] = np.median(values[sources][:, after], axis=0)
+        elif fault.kind == "bias":
+            row[after] -= fault.value
+        elif fault.kind == "drift":
+            row[after] -= fault.value * (np.asarray(times)[after] - fault.onset_s) / 3600.0
+        return row
+
+    def for_plan(self, readings: dict) -> dict:
+        """The inputs the plan holds (input name → (n_gen, 1) readings at the planning time, claimed
+        sensors substituted): a unit whose reading disagrees with the other units' median by more
+        than :attr:`InputWatchSettings.disagreement_K` and is still under check (checks left, and no
+        check found its record fitting its own reading markedly better than the shared one) plans
+        with its last reading that agreed where that is the warmer one, until a check claims its
+        sensor or runs out. A reading colder than the air was otherwise reaches the plan the cycle it
+        happens, before the filter or a check could tell it from the air, and would let the plan load
+        the unit. A warmer reading is planned with at once: a real inlet rise (air recirculated by a
+        blockage) cannot wait for the check (held, a 60-K rise on a nearly blocked unit made the
+        manager shed the healthy unit too, ``tests/test_closed_loop_shed.py``); the price is that
+        a sensor reading high moves the plan until its claim.
+        """
+        planned = {name: np.array(v, dtype=float, copy=True) for name, v in readings.items()}
+        if not self.settings.enabled or self.n_generators < 2:
+            return planned
+        for name, values in planned.items():
+            for g in range(self.n_generators):
+                others = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
+                if (g, name) in self.claimed or not others:
+                    continue
+                shared = np.median(readings[name][others], axis=0)
+                if not np.any(np.abs(readings[name][g] - shared) > self.settings.disagreement_K):
+                    self._agreed[(g, name)] = np.array(readings[name][g], dtype=float)
+                elif (g, name) in self._agreed and self._checks.get((g, name), 0) < self.settings.max_checks \
+                        and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC:
+                    values[g] = np.maximum(values[g], self._agreed[(g, name)])  # never a cooler plan
+        return planned
+
+    def cycle(self, t_s: float, readings: dict, estimators, monitor) -> list:
+        """Compare the units' input readings of the cycle just flown; check and claim.
+
+        Parameters
+        ----------
+        t_s : float
+            Time of the cycle's end, s.
+        readings : dict
+            Input name → (n_gen, n) readings of the cycle just flown as used (claimed sensors
+            already substituted), °C.
+        estimators : list of StateEstimator
+            Just updated; a claimed unit's disturbance heat flows are taken back.
+        monitor : FaultMonitor
+            Its record is checked and corrected.
+
+        Returns
+        -------
+        list of int
+            Generators with a new claim this cycle.
+        """
+        for g, estimator in enumerate(estimators):
+            self._flows[g].append((t_s, list(estimator.filter.state_names), np.array(estimator.z, dtype=float)))
+        if not self.settings.enabled or self.n_generators < 2:
+            return []
+        new = []
+        for name in self.input_names:
+            if name not in readings:
+                continue
+            means = np.mean(readings[name], axis=1)
+            disagree = []
+            for g in range(self.n_generators):
+                others = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
+                if (g, name) in self.claimed or not others:
+                    continue
+                if abs(means[g] - float(np.median(means[others]))) > self.settings.disagreement_K and \
+                        self._checks.get((g, name), 0) < self.settings.max_checks:
+                    disagree.append(g)
+            found = {g: self._fit(g, name, t_s, monitor) for g in disagree}
+            found = {g: h for g, h in found.items() if h is not None}
+            if not found:
+                continue
+
+            best = min(found, key=lambda g: found[g].delta_bic)
+            # the other disagreeing units must fit their own reading markedly better than this one's:
+            # the model's own error favours the warmer reading (it runs cooler than the plant), and
+            # with an input as weak as the ambient that alone picked the wrong unit
+            if all(self._own_fits[(g, name)] > PREFERENCE_BIC for g in disagree if g != best):
+                self._claim(best, name, found[best], t_s, estimators, monitor)
+                new.append(best)
+        return new
+
+    def _fit(self, g: int, name: str, t_s: float, monitor):
+        """Generator ``g``'s record checked for a fault of input ``name`` (module docstring,
+        "Checking"): the hypothesis (onset since the mission start) or None."""
+        from ..diagnose.calibrate import calibrate
+        from ..diagnose.discover import series_for
+        from ..diagnose.sensor_faults import SensorHypothesis
+        from ..simulate import simulate
+
+        started = time.perf_counter()
+        self._checks[(g, name)] = self._checks.get((g, name), 0) + 1
+        dt_s = self.watch.settings.identify_dt_s
+        model = monitor.flown_model(g)
+        record = monitor.frame(g)
+        sources = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
+        shared = np.median([monitor.frame(h)[name].to_numpy(float) for h in sources], axis=0)
+        substituted = record.copy()
+        substituted[name] = shared
+        own, other = series_for(model, record, dt_s), series_for(model, substituted, dt_s)
+        elapsed = own.time_s - own.time_s[0]
+        error = own.inputs[name].to_numpy(float) - other.inputs[name].to_numpy(float)
+        since = np.flatnonzero(np.abs(error) > self.settings.disagreement_K)
+        delta, fault = None, None
+        if since.size:
+            first = int(np.searchsorted(elapsed, max(elapsed[since[0]] - self.settings.lookback_s, 0.0)))
+            fault = _input_error_shape(name, elapsed, error, first)
+            window = elapsed >= fault.onset_s
+            before = record[record["time_s"] < own.time_s[0] + fault.onset_s]
+            span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
+            if span_s >= self.watch.settings.min_calibration_s:  # the model's error is not the input's
+                model = calibrate(model, before, [p for p in self.watch.settings.calibrate_parameters
+                                                  if p in model.parameters], dt_s).model
+            rss = []
+            for series in (own, other):
+                run = simulate(model, series.inputs)
+                predicted = np.array([run[o].to_numpy(float) for o in model.output_names])
+                residual = (series.outputs - predicted)[:, window]
+                rss.append(float(np.nansum(residual ** 2)))
+            n = int(np.count_nonzero(np.isfinite(own.outputs[:, window])))
+            delta = n * math.log(max(rss[1], 1e-300) / max(rss[0], 1e-300))  # the substitute has no free parameter
+            if not delta < -PREFERENCE_BIC:
+                fault = None
+        found = None
+        if fault is not None:
+            onset_index = int(np.searchsorted(elapsed, fault.onset_s))
+            # the record's samples are stamped at the end of their step; an input reading is in force
+            # from the start of it, which is when the fault begins on the mission clock
+            start_s = float(own.time_s[0]) - monitor.dt_s
+            found = SensorHypothesis(dataclasses.replace(fault, onset_s=start_s + fault.onset_s),
+                                     onset_index, math.sqrt(rss[0] / n), math.sqrt(rss[1] / n), delta, "input",
+                                     error, alternative=f"its own reading: RMSE {math.sqrt(rss[0] / n):.3f} K against "
+                                     f"{math.sqrt(rss[1] / n):.3f} K with the other units' {name}", columns=(name,),
+                                     output="")
+        self._own_fits[(g, name)] = math.inf if delta is None else delta
+        self.watch.checks.append({"time_s": t_s, "generator": g, "alarmed": [name], "claimed": found is not None,
+                                  "refused": [], "best_machine_fault": None,
+                                  "delta_ic_with_shared_input": delta, "solve_s": time.perf_counter() - started})
+        return found
+
+    def _claim(self, g: int, name: str, hypothesis, t_s: float, estimators, monitor) -> None:
+        """Claim generator ``g``'s sensor of input ``name``: substitute it, take the unit's heat
+        flows back to before the onset plus the common change since, drop the effects identified
+        since (module docstring)."""
+        fault = hypothesis.fault
+        self.claimed[(g, name)] = fault
+        monitor.replace_input(g, name, fault.onset_s, lambda times, values: self.replacement(g, name, times, values))
+        kept = [entry for entry in self._flows[g] if entry[0] < fault.onset_s]
+        estimator = estimators[g]
+        if kept and kept[-1][1] == list(estimator.filter.state_names):
+            nodes = estimator.filter.model.n_states if isinstance(estimator.filter, ExtendedKalmanFilter) \
+                else estimator.z.size
+            t_kept, names, flows = kept[-1][0], kept[-1][1], kept[-1][2][nodes:]
+            changes = []  # the common change since: what every unit's heat flows followed meanwhile
+            for h in range(self.n_generators):
+                then = [entry for entry in self._flows[h] if entry[0] == t_kept and entry[1] == names]
+                if h != g and then and list(estimators[h].filter.state_names) == names:
+                    changes.append(np.asarray(estimators[h].z)[nodes:] - then[0][2][nodes:])
+            if changes:
+                flows = flows + np.median(changes, axis=0)
+            estimator.z = np.concatenate([estimator.z[:nodes], flows])
+        self.watch.undo_beliefs_since(g, fault.onset_s, monitor)
+        monitor.detector.restart(g)
+        for h in range(self.n_generators):  # every unit was compared with heat flows that followed a wrong input
+            self.watch.unconfirmed.release(h, t_s, f"input sensor {name} of unit {g + 1} claimed")
+        self.watch.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
+                                  "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
+                                  "evidence": "input record check",
+                                  "action": "substituted by the other units' reading" if self.n_generators > 1
+                                  else "corrected by the fitted error"})
+
+
+def _input_error_shape(name: str, elapsed_s, error, first: int) -> SensorFault:
+    """The bias or drift (onset at a sample from ``first`` on) that best fits ``error`` (N,), K, the
+    reading minus the shared one, by least squares; onset from the record start, s."""
+    best = None
+    for onset in range(first, elapsed_s.size - 1):
+        after = np.arange(elapsed_s.size) >= onset
+        for kind, shape in (("bias", after.astype(float)), ("drift", after * (elapsed_s - elapsed_s[onset]) / 3600.0)):
+            norm = float(shape @ shape)
+            if norm <= 0.0:
+                continue
+            value = float(shape @ error) / norm
+            rss = float(np.sum((error - value * shape) ** 2))
+            if best is None or rss < best[0]:
+                best = (rss, SensorFault(name, kind, value, float(elapsed_s[onset])))
+    return best[1]
