@@ -12,8 +12,21 @@ When the catalogue does not explain the data, the missing physics may still be a
   (:math:`I_{exc}^2`, W/A²), and into the slot winding also the per-phase ``I_u2``, ``I_v2``,
   ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
   W/(A²K));
+* (in :mod:`genthermal.diagnose.loss_terms`) a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
+  kind (the copper loss of the windings) grows by a fraction
+  :math:`k` per kelvin of the node's temperature above the temperature the model evaluates that
+  loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
+  :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` (1/K);
+* the copper loss re-formed (``loss_I2``, two parameters): a fraction :math:`k_P` of the modelled
+  loss and :math:`k_{I2}\,\sum_p I_p^2` added to the winding nodes, the latter shared by heat
+  capacity :math:`s_n` (copper mass, as the machine shares its copper loss),
+  :math:`q_n \mathrel{+}= k_P P_n + k_{I2}\,s_n \sum_p I_p^2` — the loss refitted on two
+  shapes, its modelled one and I² (:math:`k_P = -1`: the modelled form replaced by
+  :math:`k_{I2} I^2`, a linearised loss undone);
 * a change of a conductance by a factor: the winding insulation, the frame to ambient, the
-  coolant air streams.
+  coolant air streams (their advective conductance :math:`\dot m c_p`), the internal convection
+  to the cooling air (every heat-transfer coefficient the machine lists as swept by the coolant,
+  :class:`~genthermal.machines.interface.Role` ``INTERNAL_CONVECTION``).
 
 Each is an ordinary :class:`~genthermal.effects.Effect`, so the search is the catalogue search
 with this library in place of the catalogue (:func:`open_search` calls
@@ -35,12 +48,14 @@ from ..losses import input_symbol, mass_shares
 from ..machines.interface import Role
 from ..model import ThermalModel
 from ..network import HeatSource
+from .loss_terms import (I2_BOUND, I2_TYPICAL, LOSS_GROUPS, REFORMED_LOSSES, loss_reform_effect,
+                         loss_temperature_effect)
 from .search import FoundEffect
 
 #: Extra heat-flow forms: name → (plain-language factor, unit of k, bound on |k|, typical k).
 HEAT_FORMS = {
     "constant": ("", "W", 500.0, 20.0),
-    "I2": ("ΣI²", "W/A^2", 5.0, 0.2),
+    "I2": ("ΣI²", "W/A^2", I2_BOUND, I2_TYPICAL),
     "I_exc2": ("I_exc²", "W/A^2", 200.0, 20.0),
     "I_u2": ("I_u²", "W/A^2", 5.0, 0.3),
     "I_v2": ("I_v²", "W/A^2", 5.0, 0.3),
@@ -52,7 +67,11 @@ COMMON_FORMS = ("constant", "I2", "I_exc2")
 #: Conductances that can change: name → plain language.
 CONDUCTANCES = {"winding_insulation": "the winding-to-core conductance",
                 "frame_to_ambient": "the frame-to-ambient conductance",
-                "air_streams": "the coolant air flow"}
+                "air_streams": "the coolant air flow",
+                "internal_convection": "the internal convection to the cooling air"}
+#: Machine roles each conductance change reads.
+CONDUCTANCE_NEEDS = {"winding_insulation": (Role.WINDING_INSULATION,), "frame_to_ambient": (Role.FRAME_TO_AMBIENT,),
+                     "air_streams": (Role.COOLANT_FLOW,), "internal_convection": (Role.INTERNAL_CONVECTION,)}
 
 
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
@@ -127,14 +146,24 @@ def conductance_effect(role: str, name: str | None = None) -> Effect:
     def transform(network, roles, k):
         if role == "air_streams":
             return network.scale_air_streams(k)
+        if role == "internal_convection":
+            return _scale_convection(network, roles[Role.INTERNAL_CONVECTION], k)
         for a, b in roles[Role(role)]:
             network = network.scale_links(a, b, k)
         return network
 
     return Effect(name, f"{CONDUCTANCES[role]} multiplied by a factor", r"G \to k\,G",
                   (EffectParameter(f"k_{name}", 1.0, "1", 0.05, 20.0, 0.5),), transform,
-                  f"{CONDUCTANCES[role]} changed",
-                  needs=(Role.COOLANT_FLOW,) if role == "air_streams" else (Role(role),))
+                  f"{CONDUCTANCES[role]} changed", needs=CONDUCTANCE_NEEDS[role])
+
+
+def _scale_convection(network, coefficients, k):
+    """``network`` with every heat-transfer coefficient named in ``coefficients`` multiplied by ``k``."""
+    symbols = {symbol.name: symbol for link in network.links for symbol in link.resistance.free_symbols}
+    missing = [name for name in coefficients if name not in symbols]
+    if missing:
+        raise InputError("internal_convection", missing[0], "no link of the network uses this coefficient")
+    return network.substitute_in_links({symbols[name]: k * symbols[name] for name in coefficients})
 
 
 def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
@@ -146,6 +175,10 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
             if all(model.spec.interface.has_role(role) for role in FORM_NEEDS[form]):
                 effect = heat_flow_effect(group, nodes, form)
                 library[effect.name] = effect
+    for effect in ([loss_temperature_effect(label) for label in LOSS_GROUPS]
+                   + [loss_reform_effect(label) for label in REFORMED_LOSSES]):
+        if effect.unavailable_reason(model) is None:
+            library[effect.name] = effect
     for role in CONDUCTANCES:
         effect = conductance_effect(role)
         if all(model.spec.interface.has_role(need) for need in effect.needs):
@@ -156,11 +189,20 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
 def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
     """Plain language for one found term of the library, e.g. "about 0.6 W/A² × I_v² into the slot
     winding from 0.90 h"."""
-    (parameter,) = catalogue[found.effect].parameters
-    value = found.values[parameter.name]
+    parameters = catalogue[found.effect].parameters
+    value = found.values[parameters[0].name]
     when = "from the start" if found.onset_index == 0 else f"from {found.onset_s / 3600:.2f} h"
     if found.effect.startswith("conductance_"):
         return f"{CONDUCTANCES[found.effect[len('conductance_'):]]} multiplied by about {value:.2f} {when}"
+    if found.effect.startswith("loss_theta_"):
+        label = found.effect[len("loss_theta_"):]
+        return (f"the {label} loss of the {LOSS_GROUPS[label]} {'rising' if value > 0 else 'falling'} by about "
+                f"{abs(value) * 100:.2g} % per K of their temperature {when}")
+    if found.effect.startswith("loss_I2_"):
+        label = found.effect[len("loss_I2_"):]
+        square = found.values[parameters[1].name]
+        return (f"the {label} loss of the {LOSS_GROUPS[label]} about {(1 + value) * 100:.2g} % of the model's "
+                f"{'plus' if square >= 0 else 'minus'} {abs(square):.3g} W/A² × ΣI² (shared as the {label} loss) {when}")
     form, group = _form_and_group(found.effect)
     label, unit = HEAT_FORMS[form][:2]
     return (f"about {abs(value):.3g} {unit.replace('^2', '²')}{' × ' + label if label else ''} "
@@ -169,22 +211,28 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
 
 def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) -> str:
     """Python source that builds the found term as a new effect called ``name`` and adds it to
-    ``model`` at the fitted value. The code changes no global state; its last line, commented
+    ``model`` at the fitted values. The code changes no global state; its last line, commented
     out, registers the effect so that model files and the command line know it by name."""
     effect = catalogue[found.effect]
-    (parameter,) = effect.parameters
-    value = found.values[parameter.name]
     if found.effect.startswith("conductance_"):
         role = found.effect[len("conductance_"):]
         build = f"conductance_effect({role!r}, name={name!r})"
+    elif found.effect.startswith("loss_theta_"):
+        build = f"loss_temperature_effect({found.effect[len('loss_theta_'):]!r}, name={name!r})"
+    elif found.effect.startswith("loss_I2_"):
+        build = f"loss_reform_effect({found.effect[len('loss_I2_'):]!r}, name={name!r})"
     else:
         form, group = _form_and_group(found.effect)
         build = f"heat_flow_effect({group!r}, NODES, {form!r}, name={name!r})"
-    lines = ["from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups", ""]
+    lines = ["from genthermal.diagnose.loss_terms import loss_reform_effect, loss_temperature_effect",
+             "from genthermal.diagnose.open_search import conductance_effect, heat_flow_effect, node_groups", ""]
     if "NODES" in build:
         lines.append(f"NODES = node_groups(model)[{_form_and_group(found.effect)[1]!r}]   # model: your ThermalModel")
+    # the new effect's parameters are the found term's with its name in place of the term's
+    values = ", ".join(f"k_{name}{p.name[len('k_' + found.effect):]}={found.values[p.name]:.6g}"
+                       for p in effect.parameters)
     lines += [f"effect = {build}",
-              f"model = model.with_effect(effect, k_{name}={value:.6g})   # fitted: {describe_term(found, catalogue)}",
+              f"model = model.with_effect(effect, {values})   # fitted: {describe_term(found, catalogue)}",
               "# from genthermal.effects import register_effect; register_effect(effect)   # to use it by name"]
     return "\n".join(lines) + "\n"
 
