@@ -354,8 +354,10 @@ class SensorWatch:
         if not self.settings.enabled:
             return []
         undone = []
-        for g in {a["generator"] for a in monitor.alarms if a["time_s"] == t_s}:
-            self.unconfirmed.release(g, t_s, "fault test alarmed")  # its belief is reviewed below
+        # only the disturbance test starts an identification, whose belief is reviewed below; an
+        # innovation-test alarm is a detection alone, and a sensor drift raises it too
+        for g in {a["generator"] for a in monitor.alarms if a["time_s"] == t_s and a.get("test") != "innovation"}:
+            self.unconfirmed.release(g, t_s, "fault test alarmed")
         recalibrated = previous_model is not None and monitor.calibrations and \
             monitor.calibrations[-1]["time_s"] == t_s
         alarmed = {a["generator"] for a in monitor.alarms if a["time_s"] == t_s}
