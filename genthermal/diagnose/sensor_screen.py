@@ -118,7 +118,6 @@ class SensorScreen:
         self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
         self.model_round_done = False
-        self.calibrated_alternative: SensorHypothesis | None = None
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
         noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
@@ -241,7 +240,6 @@ class SensorScreen:
         best = min(hypotheses, key=lambda h: h.delta_bic)
         physical_bic, physical = best_physical(frame, ranked, search.coarse.time_s, search.series.time_s)
         best.alternative = f"calibrated: {physical or 'no physical effect'} ΔBIC {physical_bic:.0f}"
-        self.calibrated_alternative = best
         if passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
                 best.delta_bic < physical_bic - PREFERENCE_BIC:
             return best

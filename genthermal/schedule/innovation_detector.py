@@ -114,8 +114,6 @@ class InnovationCusum:
         self.last_statistic = np.full(n_generators, np.nan)
         #: Mean inlet temperature of each generator over the steps last predicted, °C.
         self.last_inlet_C = np.full(n_generators, np.nan)
-        #: Innovations of every sensor (winding first) of the last update, K, (n_generators, n_sensors).
-        self.last_innovation = np.full((n_generators, 2), np.nan)
         #: Measurement updates so far: the test runs from the second on.
         self.updates = 0
 
@@ -183,7 +181,6 @@ class InnovationCusum:
             self.x[g], self.P[g], all_innovations[g] = step.x, step.P, step.innovation
         innovations = all_innovations[:, 0]
         self.updates += 1
-        self.last_innovation = all_innovations
         self.last_statistic = np.full(n, np.nan)
         if self.updates < 2:  # the first update corrects the ambient start: nothing to compare yet
             return []
