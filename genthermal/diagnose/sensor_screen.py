@@ -17,9 +17,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
 3. on a record searched blind, when step 2 claimed nothing (a plant that differs from the model
    leaves a misfit of kelvins that swamps a 1-3 K fault on the whole-record comparison): the
    faults told by their onset (a reading that froze, a jump of a sensor with thermal inertia, an
-   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`), then
+   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`; an
+   ambient reading that left the inlet reading of the same air, the machine not contradicting it:
+   :mod:`~genthermal.diagnose.shared_air`), then
    the sensor and input faults fitted jointly with a calibration of the model against the
-   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`).
+   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`). When no
+   ambient fault is claimed, the smallest ambient error the outputs alone could tell from a frame
+   cooling change on this record is reported (:attr:`SensorScreen.limits`).
 
 Redundant sensors are screened on the model's own sensor schema before the record's sensor view
 is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per

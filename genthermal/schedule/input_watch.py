@@ -15,6 +15,19 @@ over the cycle is compared with the median of the other units' (those whose sens
 a difference above :attr:`InputWatchSettings.disagreement_K` sends the unit's record to the check.
 With two units both differ: both are checked, and the model says which one is at fault.
 
+**A step of one unit's ambient.** The units see one ambient (the mission has one ambient
+temperature, every unit's filter is driven with it): a real change reaches every unit's sensor. A unit whose ambient reading stepped by more than
+:attr:`InputWatchSettings.disagreement_K` in one sample while every other unit's moved less than
+:attr:`InputWatchSettings.shared_step_K`, and has disagreed since, has the faulty sensor; it is
+claimed (a bias of the step's size from that sample) at the first check, unless its record fits its
+own reading markedly better than the others' (the check below: the machine followed it). This
+names the unit with two units too, where the median cannot. The record check alone did not: a
++5 K ambient bias moves the unit's sensors by about 0.25 K through the frame, and the model's own
+error (it runs cooler than the plant) made the faulty unit's record fit its own warmer reading
+better (+6 at 90 min) and the healthy unit's fit the faulty reading (-10): nothing was claimed in
+6 checks. The inlet has no such rule: a blockage that recirculates air raises one unit's inlet for
+real. A drift of one unit's ambient is left to the check.
+
 **Checking.** The redundancy decides: the unit's model (as the manager believes it) is run over the
 unit's record twice, driven once by the unit's own reading and once by the other units' median
 reading of that input, and the two misfits of the measured sensors are compared over the
