@@ -129,6 +129,8 @@ class SensorScreen:
         #: Input → the smallest error of it the record could tell from its physical look-alike, K
         #: (:meth:`_ambient_limit`).
         self.limits: dict[str, float] = {}
+        #: Input → what its limit was measured against (:meth:`limit_text`).
+        self.limit_look_alikes: dict[str, str] = {}
         self._frame_for, self._frame = None, None  # the search the calibrated frame is of, and the frame
         self.model_round_done = False
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
@@ -291,6 +293,8 @@ class SensorScreen:
                 coarse_onset = int(np.argmin(np.abs(search.coarse.time_s[responses.onsets] - search.series.time_s[onset])))
                 look_alike = on_series_grid(responses.changes[coarse_onset], search.coarse.time_s, search.series.time_s)
         residual = search.series.outputs - search.predicted_before
+        self.limit_look_alikes[search.viewed(search.model).spec.interface.ambient_input] = "a frame cooling change" if look_alike is not None else \
+            "the calibration misfit alone (no frame cooling change was fitted to compare with)"
         return minimal_detectable_error(lambda extra: CalibratedFrame(residual, [*sensitivities, *from_start, *extra]),
                                         step_response, look_alike, onset, noise, frame.n)
 
@@ -307,9 +311,10 @@ class SensorScreen:
         """Plain language for :attr:`limits`: ``"an ambient error below 4.2 K cannot be told from
         frame cooling on this record"``."""
         claimed = {h.fault.sensor for h in self.found}
-        parts = [f"an error of the {name} sensor below {value:.1f} K cannot be told from a frame cooling change on "
+        against = {name: self.limit_look_alikes.get(name, "a frame cooling change") for name in self.limits}
+        parts = [f"an error of the {name} sensor below {value:.1f} K cannot be told from {against[name]} on "
                  "this record" if math.isfinite(value) else
-                 f"no error of the {name} sensor can be told from a frame cooling change on this record"
+                 f"no error of the {name} sensor can be told from {against[name]} on this record"
                  for name, value in self.limits.items() if name not in claimed]
         return ("Limit: " + "; ".join(parts) + ".") if parts else ""
 
