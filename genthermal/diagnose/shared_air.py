@@ -48,9 +48,9 @@ import numpy as np
 from ..sensor_faults import SensorFault
 from .sensor_faults import PREFERENCE_BIC, SensorHypothesis
 
-#: Two PT100s in the same air read within this, K: class B is ±(0.3 + 0.005·|T|) K (IEC 60751),
-#: ±0.4 K at 20 °C each; 0.6 K leaves their sum a margin of the readings' resolution only where
-#: both err the same way, which a factory pair of one batch usually does.
+#: Two PT100s in the same air read within this, K: class B is ±(0.30 + 0.005·|T|) K (IEC 60751),
+#: ±0.40 K at 20 °C each; two independent errors of that tolerance differ by at most
+#: √2 · 0.40 = 0.57 K in root-sum-square, rounded to 0.6 K.
 SHARED_AIR_TOLERANCE_K = 0.6
 #: A disagreement of the two readings that counts, K (as the flight's input watch,
 #: :attr:`~genthermal.schedule.input_watch.InputWatchSettings.disagreement_K`: a 1-K input error is
@@ -102,10 +102,10 @@ def fit_difference(difference, elapsed_s) -> tuple[str, int, float, float, np.nd
             continue
         centre = min(coarse, key=coarse.get)
         near = {o: rss(kind, o) for o in range(max(first, centre - ONSET_STEP), min(n - 2, centre + ONSET_STEP + 1))}
-        onset = min({**coarse, **near}, key={**coarse, **near}.get)
-        score = min(coarse.get(onset, math.inf), near.get(onset, math.inf))
-        if best is None or score < best[0]:
-            best = (score, kind, onset)
+        results = {**coarse, **near}
+        onset = min(results, key=results.get)
+        if best is None or results[onset] < best[0]:
+            best = (results[onset], kind, onset)
     if best is None:
         return "bias", n, 0.0, 0.0, np.zeros(n)
     _, kind, onset = best
