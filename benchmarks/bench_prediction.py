@@ -58,6 +58,7 @@ from genthermal.commands.synth import apply_scenario_faults
 from genthermal.design import linear_design_model
 from genthermal.diagnose.calibrate import calibrate
 from genthermal.diagnose.discover import DEFAULT_BASELINE_PARAMETERS
+from genthermal.estimation.disturbance_prior import learn_disturbance_prior
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.estimation.prediction import on_grid, prediction_study
@@ -156,7 +157,7 @@ def plant_study(plant_file: Path, seed_offset: int = 0, all_methods: bool = True
     for key, (scenario, seed) in CALIBRATIONS.items():
         healthy = record(plant, scenario, seed=seed + seed_offset)
         fit = calibrate(built_in, healthy, list(DEFAULT_BASELINE_PARAMETERS))
-        calibrated[key] = fit.model
+        calibrated[key] = fit.model.with_disturbance_prior(learn_disturbance_prior(fit.model, healthy, DT_S))
         results["calibration"][key] = {
             "record": healthy.source, "fitted": {n: round(v, 4) for n, v in zip(fit.names, fit.values)},
             "rmse_after_K": round(fit.after["rmse_all_sensors"], 3)}
