@@ -17,7 +17,10 @@ Their records carry sensor noise of thesis eq. 6.10 and 1 % current noise
 1. The built-in model is calibrated (:func:`genthermal.diagnose.calibrate`, the baseline parameters
    of ``diagnose``) on ONE healthy record of the plant: the thesis Fig. 7.7 mission (27-100 %
    load), and separately the ground-running mission ``scenarios/data/low_load_calibration.yaml``
-   (27.3 % / 55 % only: a calibration fitted over a different load range than the test).
+   (27.3 % / 55 % only: a calibration fitted over a different load range than the test). As
+   ``genthermal calibrate --out`` does, the calibrated model carries the disturbance prior learnt
+   on that same record (:func:`genthermal.estimation.disturbance_prior.learn_disturbance_prior`),
+   where the EKF on it starts; the open loop is the calibrated model without it.
 2. Filters and predictions are scored on DIFFERENT records of the same plant (:data:`RECORDS`):
    the varying-load test (27 % <-> 100 % every 30 min) and the thesis Fig. 3.2 flight with the
    Fig. 7.7 calibration, the thesis large-blockage flight (coolant flow 20 % and inlet +31 K from
@@ -38,7 +41,8 @@ Reported per record and method: winding and iron prediction RMS and max at 15/30
 every 10 min), the open-loop error at the same samples, their ratio, one-step RMS, and the issue's
 targets; per record a ``reference`` (:mod:`prediction_references`): the calibrated model from the
 plant's TRUE state, the same with the disturbances the filter held at the end of the record
-(hindsight: what is left once the model error is learnt), the noise floor, and the filter's RMS
+(hindsight: what is left once the model error is learnt), the calibrated model open loop with
+its disturbance prior held (what the prior alone gives), the noise floor, and the filter's RMS
 over the starts before and after it could know the model error (31 min; on a fault the first
 change alarm); per healthy record ``half_open_loop``: ``met``, ``missed`` or ``below the noise
 floor`` (half the open loop at or under the noise floor: no prediction can score that). Per plant
@@ -210,6 +214,10 @@ def seed_summary(studies: list[dict]) -> dict:
             hindsight = np.array([[s["reference"]["hindsight_rmse_by_horizon"][h]["T_winding"] for h in HORIZONS]
                                   for s in sections])
             entry["hindsight_mean"] = _triple(hindsight.mean(0))
+        if all("prior_open_loop_rmse_by_horizon" in s["reference"] for s in sections):
+            entry["prior_open_loop_mean"] = _triple(np.mean(
+                [[s["reference"]["prior_open_loop_rmse_by_horizon"][h]["T_winding"] for h in HORIZONS]
+                 for s in sections], axis=0))
         splits = [s["reference"]["split"] for s in sections]
         for which in ("before", "from"):
             rows = [[split[which][h]["T_winding"] for h in HORIZONS] for split in splits if split[which]["15"]]
@@ -222,7 +230,8 @@ def seed_summary(studies: list[dict]) -> dict:
 
 def winding_table(results: dict) -> list[str]:
     """One line per plant and record, over the seeds: calibrated EKF winding RMS mean (worst), ratio
-    to the open loop mean (worst), open loop, noise floor and half-open-loop verdicts."""
+    to the open loop mean (worst), open loop, open loop with the disturbance prior, noise floor and
+    half-open-loop verdicts."""
     lines = []
     for plant, summary in results["summary"].items():
         for name, entry in summary.items():
@@ -230,7 +239,8 @@ def winding_table(results: dict) -> list[str]:
                                  for h, v in entry.get("half_open_loop", {}).items())
             lines.append(f"{plant:12s} {name:36s} EKF {entry['ekf_rmse_mean']} (worst {entry['ekf_rmse_worst']}), "
                          f"ratio {entry['ratio_mean']} (worst {entry['ratio_worst']}), "
-                         f"open loop {entry['open_loop_mean']}, noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
+                         f"open loop {entry['open_loop_mean']}, with the prior {entry.get('prior_open_loop_mean', '-')}, "
+                         f"noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
     return lines
 
 

@@ -12,6 +12,10 @@ horizons of one :class:`~genthermal.estimation.prediction.PredictionStudy`:
   filter's structure scores once it has learnt the model error, so the gap to the filter's own
   figure is the cost of learning it during the record, and what is left the model error its
   disturbance bases cannot carry;
+* ``prior_open_loop_rmse_by_horizon`` (a model with a disturbance prior, written by
+  ``calibrate``): the calibrated model with the disturbances its calibration left
+  (:mod:`genthermal.estimation.disturbance_prior`) held, run open loop from the first sample:
+  how much of the filter's figure the prior gives without any update on this record;
 * ``noise_floor_K``: RMS of measured - true; a perfect prediction scores this much;
 * ``split``: the filter's RMS over the starts before and from a split time: for a healthy
   record :data:`LEARNING_SPLIT_MIN` (the filter has then seen a load change on the varying-load
@@ -102,6 +106,12 @@ def references(calibrated, truth_states: np.ndarray, truth_outputs: np.ndarray, 
         result["hindsight_rmse_by_horizon"] = forecast_rmse(filter_, truth_states,
                                                             study.filter_result.disturbances[-1],
                                                             U, Y, starts, horizons, dt_s, names)
+    if calibrated.disturbance_prior is not None:
+        prior_filter = ExtendedKalmanFilter(calibrated, dt_s)
+        prior_open_loop = prior_filter.forecast(prior_filter.initial_state(Y[0], U[:, 0]), U)
+        result["prior_open_loop_rmse_by_horizon"] = {
+            label: _rms(prior_open_loop[starts + int(round(float(label) * 60.0 / dt_s))]
+                        - Y[starts + int(round(float(label) * 60.0 / dt_s))], names) for label in horizons}
     result["noise_floor_K"] = _rms(Y - truth_outputs, names)
     alarms = study.filter_result.change_alarm_times_s
     time_s = study.filter_result.time_s
