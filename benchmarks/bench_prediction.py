@@ -44,7 +44,8 @@ plant's TRUE state, the same with the disturbances the filter held at the end of
 (hindsight: what is left once the model error is learnt), the calibrated model open loop with
 its disturbance prior held (what the prior alone gives), the noise floor, and the filter's RMS
 over the starts before and after it could know the model error (31 min; on a fault the first
-change alarm); per healthy record ``half_open_loop``: ``met``, ``missed`` or ``below the noise
+change alarm; there also the RMS the starts before the alarm give alone, a floor no filter that
+cannot know the onset beats); per healthy record ``half_open_loop``: ``met``, ``missed`` or ``below the noise
 floor`` (half the open loop at or under the noise floor: no prediction can score that). Per plant
 and record, ``summary`` gives the mean and worst over the noise draws.
 """
@@ -218,6 +219,11 @@ def seed_summary(studies: list[dict]) -> dict:
             entry["prior_open_loop_mean"] = _triple(np.mean(
                 [[s["reference"]["prior_open_loop_rmse_by_horizon"][h]["T_winding"] for h in HORIZONS]
                  for s in sections], axis=0))
+        if all("floor_from_starts_before_alarm_by_horizon" in s["reference"] for s in sections):
+            floor = np.array([[s["reference"]["floor_from_starts_before_alarm_by_horizon"][h]["T_winding"]
+                               for h in HORIZONS] for s in sections])
+            entry["floor_from_starts_before_alarm_mean"] = _triple(floor.mean(0))
+            entry["floor_from_starts_before_alarm_worst"] = _triple(floor.max(0))
         splits = [s["reference"]["split"] for s in sections]
         for which in ("before", "from"):
             rows = [[split[which][h]["T_winding"] for h in HORIZONS] for split in splits if split[which]["15"]]

@@ -20,6 +20,9 @@ horizons of one :class:`~genthermal.estimation.prediction.PredictionStudy`:
 * ``split``: the filter's RMS over the starts before and from a split time: for a healthy
   record :data:`LEARNING_SPLIT_MIN` (the filter has then seen a load change on the varying-load
   test), for a fault the first change alarm (earlier starts cannot know the fault);
+* ``floor_from_starts_before_alarm_by_horizon`` (a fault): the filter's RMS over ALL starts with
+  the errors of the starts from the first change alarm on set to zero: what the starts that
+  cannot know of the fault score alone, however well the filter does after the alarm;
 * ``half_open_loop``: per target horizon, ``met``, ``missed``, or ``below the noise floor`` when
   half the open-loop error is at or under ``noise_floor_K`` (no prediction can score that).
 """
@@ -123,6 +126,11 @@ def references(calibrated, truth_states: np.ndarray, truth_outputs: np.ndarray, 
         split_text = ("starts in the first 31 min (the filter still learning the model error; on the varying-load "
                       "test it has seen no load change yet)") if not fault else "no change alarm: at 31 min"
     split_sample = int(np.ceil(split_min * 60.0 / dt_s))
+    if fault and alarms:
+        before = starts < split_sample
+        result["floor_from_starts_before_alarm_by_horizon"] = {
+            label: _rms(np.where(before[:, None], errors, 0.0), names)
+            for label, errors in study.horizon_errors["prediction"].items()}
     result["split"] = {"at_min": round(split_min, 1), "why": split_text,
                        "starts_before": int(np.sum(starts < split_sample)),
                        **split_rmse(study, split_sample)}
