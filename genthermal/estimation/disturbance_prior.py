@@ -14,9 +14,18 @@ record starts its disturbance states from :math:`(\mu, \Sigma)` instead of :math
 \sigma_0^2 I)`: a Bayesian prior whose spread is what the calibration record could not pin down.
 The node temperatures start as before (from the first measurement).
 
-Measured with ``benchmarks/bench_prediction.py`` (two plants, three noise draws, README):
-with the prior, the rig's varying-load 60-min winding RMS went from 0.42 K to 0.22 K (open loop
-0.51 K) and no row got worse beyond noise.
+Measured with ``benchmarks/bench_prediction.py`` (two plants, three noise draws, README): with
+the prior, the rig's varying-load winding RMS at 15 / 30 / 60 min went from 0.26 / 0.40 / 0.42 K to
+0.20 / 0.25 / 0.22 K (open loop 0.60 / 0.50 / 0.51 K); there the flight starts with 30 min at one
+load, where the filter cannot tell a constant from a load-scaled heat flow, and the calibration
+record has seen both. No row got worse by more than 0.02 K. The covariance matters: the
+calibration's mean with the default wide covariance made plant B's varying load worse at 30 min
+(0.12 to 0.18 K); doubling or tripling the posterior covariance, or adding a 2-W floor to it, was
+no better than the posterior itself.
+
+``genthermal calibrate --out`` learns the prior and writes it into the model file
+(:mod:`genthermal.model_file`); from Python,
+``fit.model.with_disturbance_prior(learn_disturbance_prior(fit.model, record))``.
 """
 
 from __future__ import annotations
