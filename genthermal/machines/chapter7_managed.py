@@ -109,6 +109,7 @@ class ManagedBlockageProxy:
         self.time_s, self.masks = line["time_s"], line["masks"]
         generator = model.spec.interface.generator
         mission = line["mission"]
+        self.ambient_C = mission.T_ambient_C
         current = line["current_A"]
         law = generator.exciter_law
         exciter = law(current, mission.power_factor, mission.rated_current_A)
@@ -145,8 +146,9 @@ class ManagedBlockageProxy:
         ``theta`` and :attr:`displaced`."""
         peaks = {}
         for unit, simulator in self.simulators.items():
-            winding = simulator._trajectory(theta, ca.DM([0.0, 20.0]), ca.DM(self.indicators[unit]),
-                                            self.inputs[unit])[0, :]
+            # both start cold, every node at the mission's ambient (x0 = a (steady - inlet) + c, a = 0)
+            winding = simulator.symbolic(theta, ca.DM([0.0, self.ambient_C]), ca.DM(self.indicators[unit]),
+                                         self.inputs[unit])[0, :]
             values = []
             for mask in self.masks:
                 inside = np.flatnonzero(mask > 0)
