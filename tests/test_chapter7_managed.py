@@ -63,3 +63,19 @@ def test_smooth_excess_is_near_the_hinge():
     values = [float(smooth_excess(ca.DM(v), LIMIT_C)) for v in (100.0, 110.0, 112.0, 150.0)]
     assert values[0] < 1e-6 and values[1] == pytest.approx(0.1 * np.log(2)) and values[2] == pytest.approx(2.0, abs=1e-6)
     assert values[3] == pytest.approx(40.0)
+
+
+def test_the_excess_has_exact_derivatives_in_the_fitted_values_and_the_displacement(chapter7):
+    """The fit (fit_chapter7 managed=True) differentiates the proxy exactly: its Jacobian in the
+    blockage's flow fraction and in the displaced currents is finite, and a smaller flow or less
+    displacement never lowers gen1's excess."""
+    proxy = ManagedBlockageProxy(blockable(chapter7), ["k_flow", "n_flow"], 60.0, None, 31.0, 41.5 * 60, ONSET_S)
+    theta = ca.MX.sym("theta", 2)
+    excess = proxy.residuals(theta, 0.1)
+    jacobian = ca.Function("jacobian", [theta, proxy.displaced],
+                           [ca.jacobian(excess, theta), ca.jacobian(excess, proxy.displaced)])
+    by_theta, by_displaced = (np.asarray(m) for m in jacobian([0.53, 0.5], np.full(4, 0.5)))
+    assert np.all(np.isfinite(by_theta)) and np.all(np.isfinite(by_displaced))
+    gen1 = slice(0, len(CONDITIONS))
+    assert np.all(by_theta[gen1, 0] <= 1e-9)  # more flow, less excess
+    assert np.all(np.diag(by_displaced[gen1]) <= 1e-9) and np.any(np.diag(by_displaced[gen1]) < -0.1)
