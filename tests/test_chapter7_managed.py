@@ -79,3 +79,15 @@ def test_the_excess_has_exact_derivatives_in_the_fitted_values_and_the_displacem
     gen1 = slice(0, len(CONDITIONS))
     assert np.all(by_theta[gen1, 0] <= 1e-9)  # more flow, less excess
     assert np.all(np.diag(by_displaced[gen1]) <= 1e-9) and np.any(np.diag(by_displaced[gen1]) < -0.1)
+
+
+def test_bad_inputs_name_their_field(chapter7):
+    from genthermal.errors import InputError
+
+    for bad in (0.0, -30.0, 7.0, float("nan")):
+        with pytest.raises(InputError, match="dt_s"):
+            managed_timeline(bad)
+    with pytest.raises(InputError, match="k_flow"):
+        best_displacement(chapter7, 1.5, 0.5, 31.0, 0.0, ONSET_S)
+    with pytest.raises(InputError, match="n_flow"):
+        best_displacement(chapter7, 0.5, float("nan"), 31.0, 0.0, ONSET_S)

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..coolant import inlet_rise
 from ..diagnose.trajectory import ParametricSimulator
+from ..errors import InputError
 from ..mission import load_mission
 from ..model import ThermalModel
 
@@ -68,6 +69,9 @@ def managed_timeline(dt_s: float) -> dict:
         ``mission_time_s`` (n,) the mission clock (time without the inserted rest), ``masks``
         (4, n): 1 where each K-condition runs, and ``rest`` (n,) bool.
     """
+    if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0
+            and abs(300.0 / dt_s - round(300.0 / dt_s)) < 1e-9):
+        raise InputError("dt_s", dt_s, "must be a sample period in s that divides 300 s (the mission's 5-min levels)")
     mission = load_mission("thesis_fig_7_7")
     rest_start = CONDITIONS[-1][1]
     end = mission.duration_s + REST_BEFORE_LANDING_S
@@ -193,6 +197,10 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
     """
     from .chapter7 import blockable  # chapter7 imports this module
 
+    if not (isinstance(k_flow, (int, float)) and 0.0 < k_flow <= 1.0):
+        raise InputError("k_flow", k_flow, "must be a flow fraction in (0, 1]")
+    if not (isinstance(n_flow, (int, float)) and 0.0 <= n_flow <= 1.5):
+        raise InputError("n_flow", n_flow, "must be a convection exponent in [0, 1.5] (the effect's range)")
     model = blockable(plant)
     proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s)
     peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
