@@ -55,3 +55,18 @@ def test_a_grid_that_is_not_a_whole_multiple_of_the_step_is_refused(plant_model)
         on_fit_grid(record, 45.0, ["I_u"], ["T_iron"])
     with pytest.raises(InputError, match="record columns"):
         on_fit_grid(record, 60.0, ["I_x"], ["T_iron"])
+
+
+def test_a_flight_whose_fit_grid_is_not_a_whole_number_of_steps_is_refused_before_it_flies():
+    import dataclasses
+
+    from genthermal.mission import load_mission
+    from genthermal.schedule.closed_loop import fly
+    from genthermal.schedule.manager_settings import ManagerSettings
+    from genthermal.schedule.power_system import PowerSystem
+    from genthermal.schedule.sensor_watch import SensorWatchSettings
+
+    system = PowerSystem.from_mission(load_mission("blockage_large"))
+    settings = dataclasses.replace(ManagerSettings(), sensor_watch=SensorWatchSettings(identify_dt_s=45.0))
+    with pytest.raises(InputError, match="sensor_watch.identify_dt_s"):
+        fly(system, "heuristic", settings)

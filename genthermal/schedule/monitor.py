@@ -61,7 +61,7 @@ from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 from .fault_identification import FAULT_EFFECTS, confirms, identify_fault
 from .innovation_detector import InnovationCusum, InnovationCusumSettings
-from .record_grid import on_fit_grid
+from .record_grid import check_fit_step, on_fit_grid
 from .state_estimator import believed_model
 
 
@@ -236,11 +236,7 @@ class FaultMonitor:
     """
 
     def __init__(self, system, settings: DetectionSettings, dt_s: float):
-        steps = settings.identify_dt_s / dt_s
-        if steps < 1.0 or abs(steps - round(steps)) > 1e-9 * steps:
-            raise InputError("detection.identify_dt_s", settings.identify_dt_s,
-                             f"must be a whole multiple of the flight's step {dt_s:g} s (the record is "
-                             "averaged over whole steps for the fits)")
+        check_fit_step("detection.identify_dt_s", settings.identify_dt_s, dt_s)
         self.system, self.settings, self.dt_s = system, settings, dt_s
         n = system.n_generators
         self.node_roles = detector_node_roles(system.planning_model)
@@ -303,14 +299,15 @@ class FaultMonitor:
                                        np.full(time_s.shape, self.system.mission.T_ambient_C))
         return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)
 
-    def fit_record(self, g: int) -> pd.DataFrame:
-        """Generator ``g``'s record so far on the grid of ``identify_dt_s``, each row's inputs
-        averaged over the steps it is held for (currents as root mean square): what recalibration
-        and identification fit (:func:`~genthermal.schedule.record_grid.on_fit_grid`, module
+    def fit_record(self, g: int, dt_s: float | None = None) -> pd.DataFrame:
+        """Generator ``g``'s record so far on the grid of ``dt_s`` (default ``identify_dt_s``; a
+        whole multiple of the record's step), each row's inputs averaged over the steps it is held
+        for (currents as root mean square): what recalibration, identification and the sensor
+        watch's record checks fit (:func:`~genthermal.schedule.record_grid.on_fit_grid`, module
         docstring)."""
         interface = self.system.planning_model.spec.interface
         generator = interface.generator
-        return on_fit_grid(self.frame(g), self.settings.identify_dt_s,
+        return on_fit_grid(self.frame(g), self.settings.identify_dt_s if dt_s is None else dt_s,
                            [*generator.phase_inputs, generator.excitation_input],
                            [column for sensor in interface.sensors for column in sensor.columns])
 

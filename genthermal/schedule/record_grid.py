@@ -33,6 +33,16 @@ import pandas as pd
 from ..errors import InputError
 
 
+def check_fit_step(field: str, fit_dt_s: float, step_s: float) -> int:
+    """Steps of ``step_s`` per grid step ``fit_dt_s`` (s); InputError naming ``field`` unless it
+    is a whole number >= 1."""
+    factor = float(fit_dt_s) / float(step_s)
+    if not np.isfinite(factor) or factor < 1.0 or abs(factor - round(factor)) > 1e-9 * factor:
+        raise InputError(field, fit_dt_s, f"must be a whole multiple (>= 1) of the record's step {step_s:g} s "
+                         "(the record is averaged over whole steps for the fits)")
+    return int(round(factor))
+
+
 def on_fit_grid(record: pd.DataFrame, fit_dt_s: float, current_columns: Sequence[str],
                 sensor_columns: Sequence[str]) -> pd.DataFrame:
     """``record`` on a grid of ``fit_dt_s`` with each row's inputs averaged over the interval the
@@ -64,10 +74,7 @@ def on_fit_grid(record: pd.DataFrame, fit_dt_s: float, current_columns: Sequence
     if step_s <= 0.0 or not np.allclose(np.diff(time_s), step_s, rtol=1e-9, atol=1e-9 * step_s):
         raise InputError("record.time_s", f"steps {np.unique(np.diff(time_s))[:3]} s",
                          "must be uniform and increasing (one row per simulation step)")
-    factor = float(fit_dt_s) / step_s
-    if not np.isfinite(factor) or factor < 1.0 or abs(factor - round(factor)) > 1e-9 * factor:
-        raise InputError("fit_dt_s", fit_dt_s, f"must be a whole multiple (>= 1) of the record's step {step_s:g} s")
-    factor = int(round(factor))
+    factor = check_fit_step("fit_dt_s", fit_dt_s, step_s)
     missing = [c for c in (*current_columns, *sensor_columns) if c not in record.columns]
     if missing:
         raise InputError("record columns", missing, f"not in the record (it has {', '.join(record.columns)})")
