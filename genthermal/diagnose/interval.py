@@ -20,8 +20,8 @@ number of samples of white noise would.
 Checked against a profile likelihood (each parameter held, the rest refitted, the likelihood
 ratio with :math:`N_{eff}` against :math:`\chi^2_1`) on blockage_large's in-flight records: the
 same ends within 0.005 for a single parameter (k_flow 0.601-0.687 by the curvature, 0.605-0.687
-by the profile), wider where two are correlated (k_flow with n_flow fitted: 0.317-0.560 against 0.398-0.448), at 0.1 s instead
-of 3-9 s per identification.
+by the profile), wider where two are correlated (k_flow with n_flow fitted: 0.317-0.560 against
+0.398-0.448), at 0.1 s instead of 3-9 s per identification.
 
 References
 ----------

@@ -3,8 +3,8 @@ r"""Identification of a fault from the in-flight record, with diagnose's effect 
 **Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
 generator's record, then the alarmed generator's record since the mission start (inputs and the
 noisy sensors, on the grid of ``identify_dt_s`` with each row's inputs averaged over it:
-:meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`) is handed to :func:`genthermal.diagnose.diagnose`
-with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
+:meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`) is handed
+to diagnose's search (:class:`~genthermal.diagnose.discovery.Discovery`) with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
 by ΔBIC, and accepted only when significant by diagnose's four tests. The blockage competes
 twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
 (turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
@@ -194,7 +194,8 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
     ``k_flow`` > 1, more coolant than designed) is the model's error, not a fault: believing it
     made the planner load a healthy generator that had taken over shed load 1.7 K past θmax
     (``tests/test_closed_loop_shed.py``). Sensor faults are the sensor watch's
-    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen."""
+    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen. Each
+    parameter of the effect carries its interval (module docstring, "Uncertainty")."""
     from ..diagnose.catalogue import Catalogue
     from ..diagnose.discover import series_for
     from ..diagnose.discovery import Discovery
@@ -235,8 +236,8 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
 
 
 def parameter_intervals(model, series, catalogue, candidate, level: float, memo: dict | None = None) -> dict:
-    """Interval of each switching parameter of ``candidate`` (a first-round candidate of the
-    search of ``model`` on ``series`` over ``catalogue``; module docstring, "Uncertainty"); ``memo``
+    """Interval of each parameter of ``candidate`` (a first-round candidate of the search of
+    ``model`` on ``series`` over ``catalogue``; module docstring, "Uncertainty"); ``memo``
     the search's (:attr:`Discovery.memo <genthermal.diagnose.discovery.Discovery.memo>`), whose
     simulators it reuses."""
     from ..diagnose.interval import fitted_intervals

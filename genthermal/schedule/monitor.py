@@ -45,8 +45,8 @@ schedulers' 10-s rests at the cycle starts: on blockage_large (optimal scheduler
 healthy generator's record gave ``h_top_air`` 125/102/56/28 W/(m² K) (plant 15.5), ``m_dot_fan``
 0.003-0.007 kg/s (plant 0.02) and ``R0`` 1.00-1.13 Ω (plant 1.26), compensating errors that took
 up the misfit, and the blockage sized against that fan flow came out as k_flow 0.64, then 0.42
-(plant 0.20). On the fit grid the same fit at 200 min gives 13.9, 0.0195 kg/s and 1.257 Ω
-(``h_end_air`` 13.9 against the plant's 13.95) and the blockage k_flow 0.201.
+(plant 0.20). On the fit grid the same fit at 200 min gives ``h_top_air`` 15.6, ``m_dot_fan``
+0.0195 kg/s, ``R0`` 1.257 Ω and ``h_end_air`` 13.94 (plant 13.95), and the blockage k_flow 0.201.
 """
 
 from __future__ import annotations
