@@ -5,7 +5,8 @@ generator's record, then the alarmed generator's record since the mission start 
 noisy sensors, on the grid of ``identify_dt_s`` with each row's inputs averaged over it:
 :meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`) is handed
 to diagnose's search (:class:`~genthermal.diagnose.discovery.Discovery`) with the candidate
-effects restricted to ``fault_effects``: each is fitted with its onset, ranked by ΔBIC, and accepted only when significant by diagnose's four tests. The blockage competes
+effects restricted to ``fault_effects``: each is fitted with its onset, ranked by ΔBIC, and
+accepted only when significant by diagnose's four tests. The blockage competes
 twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
 (turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
 that leaves the internal convection as it was (blockage_large: k_flow 0.2, n_flow 0, +31 K
