@@ -219,6 +219,39 @@ def test_a_biased_inlet_sensor_is_substituted_and_changes_no_load(tmp_path, heal
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
 
 
+INLET_HIGH = {"generator": 1, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": 3.0}
+
+
+def test_an_inlet_sensor_reading_high_is_held_from_the_plan_claimed_and_changes_no_load(tmp_path, healthy_flight):
+    """gen1's inlet PT100 reads 3 K high from 60 min: the warmer reading is unconfirmed (the
+    machine does not follow it), so the plan keeps the last agreeing inlet until the record check
+    claims the sensor; not one re-plan or load change (planned at once, it re-planned at 60 min and
+    changed three cycles' loads)."""
+    result = fly(_system(tmp_path, [INLET_HIGH]), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    [claim] = watch["claimed"]
+    assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen1", "T_inlet", "bias")
+    assert claim["value"] == pytest.approx(3.0, abs=0.1) and claim["claimed_at_s"] <= 3600.0 + 600.0
+    [hold] = watch["inlet_readings_unconfirmed"]
+    assert hold["generator"] == "gen1" and hold["since_s"] == 3600.0 and hold["until_s"] == claim["claimed_at_s"]
+    assert hold["rise_K"] == pytest.approx(3.0) and "claimed" in hold["ended"]
+    assert result.monitor.beliefs == [(), ()]
+    assert _replans_from(result, 3600.0) == _replans_from(healthy_flight, 3600.0)
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_without_the_inlet_hold_the_same_high_reading_moves_the_load(tmp_path, healthy_flight):
+    """The comparison case of the test above: with nothing held back, the plan takes the 3-K warmer
+    reading at its onset."""
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(unconfirmed_rise_K=0.0))
+    result = fly(_system(tmp_path, [INLET_HIGH]), "engineer", settings)
+    assert 3600.0 in _replans_from(result, 3600.0) and 3600.0 not in _replans_from(healthy_flight, 3600.0)
+    assert result.currents_A.shape != healthy_flight.currents_A.shape or \
+        not np.allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
 def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):
     from genthermal.schedule.input_watch import InputWatchSettings
 
@@ -248,7 +281,8 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
 
 
 @pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),
-                                          ("max_checks", 2.5)])
+                                          ("max_checks", 2.5), ("unconfirmed_rise_K", -1.0),
+                                          ("max_unconfirmed_s", float("inf"))])
 def test_bad_input_watch_settings_name_the_field(field, value):
     from genthermal.schedule.input_watch import InputWatchSettings
 

@@ -56,6 +56,7 @@ from ..diagnose.sensor_faults import PREFERENCE_BIC
 from ..errors import InputError
 from ..estimation.ekf import ExtendedKalmanFilter
 from ..sensor_faults import SensorFault
+from .unconfirmed_inlet import UnconfirmedInlet
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,18 +76,33 @@ class InputWatchSettings:
         The fault's onset is searched this long before the cycle that disagreed, s.
     enabled : bool
         False: input faults are injected but not looked for.
+    unconfirmed_rise_K : float
+        Most of a warmer coolant-inlet reading the plan holds back while it is unconfirmed, K
+        (:mod:`~genthermal.schedule.unconfirmed_inlet`). 4 K: the largest step whose real rise
+        heats the thesis generator's winding by no more than the plan's 2.5-K margin over
+        ``max_unconfirmed_s`` plus one 5-min cycle (0.59 K per K after 15 min, the planning
+        model's response to an inlet step, :func:`~genthermal.diagnose.input_sensors.input_step_response`).
+    max_unconfirmed_s : float
+        Longest such hold, from the first held plan, s. 600 s: the record check decided a 3-K bias
+        two cycles after its onset (ΔBIC -7.6 after one, -36 after two, Fig. 7.7 flight).
     """
 
     disagreement_K: float = 1.0
     max_checks: int = 6
     lookback_s: float = 1800.0
     enabled: bool = True
+    unconfirmed_rise_K: float = 4.0
+    max_unconfirmed_s: float = 600.0
 
     def __post_init__(self):
         for name in ("disagreement_K", "lookback_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InputError(f"input_watch.{name}", value, "must be a finite number > 0")
+        for name in ("unconfirmed_rise_K", "max_unconfirmed_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise InputError(f"input_watch.{name}", value, "must be a finite number >= 0 (0: no hold)")
         if isinstance(self.max_checks, bool) or not isinstance(self.max_checks, int) or self.max_checks < 0:
             raise InputError("input_watch.max_checks", self.max_checks, "must be a whole number >= 0")
 
@@ -108,6 +124,8 @@ class InputWatch:
     ----------
     claimed : dict
         ``(generator, input)`` → SensorFault (onset since the mission start).
+    unconfirmed_inlet : UnconfirmedInlet
+        Warmer coolant-inlet readings held back from the plan while under check.
     """
 
     def __init__(self, watch, settings: InputWatchSettings, input_names, n_generators: int):
@@ -120,6 +138,13 @@ class InputWatch:
         self._own_fits: dict[tuple[int, str], float] = {}
         #: Per generator, (time s, state names, disturbance states) after each cycle's update.
         self._flows: list[list] = [[] for _ in range(n_generators)]
+        interface = getattr(getattr(getattr(watch, "system", None), "planning_model", None), "spec", None)
+        generator = getattr(getattr(interface, "interface", None), "generator", None)
+        #: The coolant-inlet input, whose warmer reading is held while unconfirmed (None: no hold).
+        self.coolant_input = getattr(generator, "coolant_input", None)
+        self.unconfirmed_inlet = UnconfirmedInlet(settings.unconfirmed_rise_K, settings.max_unconfirmed_s, n_generators)
+        watch.inlet_holds = self.unconfirmed_inlet.events  # reported with the sensor watch's figures
+        self._now_s = 0.0
 
     def substitute(self, sample_times_s, readings: dict) -> dict:
         """``readings`` (input name → (n_gen, n) °C at ``sample_times_s``) with every claimed sensor's
@@ -146,19 +171,25 @@ class InputWatch:
             row[after] -= fault.value * (np.asarray(times)[after] - fault.onset_s) / 3600.0
         return row
 
-    def for_plan(self, readings: dict) -> dict:
-        """The inputs the plan holds (input name → (n_gen, 1) readings at the planning time, claimed
-        sensors substituted): a unit whose reading disagrees with the other units' median by more
-        than :attr:`InputWatchSettings.disagreement_K` and is still under check (checks left, and no
+    def for_plan(self, readings: dict, t_s: float | None = None) -> dict:
+        """The inputs the plan holds (input name → (n_gen, 1) readings at the planning time ``t_s``,
+        s, by default the end of the last cycle checked; claimed sensors substituted).
+
+        A unit whose reading disagrees with the other units' median by more than
+        :attr:`InputWatchSettings.disagreement_K` and is still under check (checks left, and no
         check found its record fitting its own reading markedly better than the shared one) plans
         with its last reading that agreed where that is the warmer one, until a check claims its
-        sensor or runs out. A reading colder than the air was otherwise reaches the plan the cycle it
-        happens, before the filter or a check could tell it from the air, and would let the plan load
-        the unit. A warmer reading is planned with at once: a real inlet rise (air recirculated by a
-        blockage) cannot wait for the check (held, a 60-K rise on a nearly blocked unit made the
-        manager shed the healthy unit too, ``tests/test_closed_loop_shed.py``); the price is that
-        a sensor reading high moves the plan until its claim.
+        sensor or runs out: a reading colder than the air was otherwise reaches the plan the cycle
+        it happens, before the filter or a check could tell it from the air, and would let the plan
+        load the unit. A warmer coolant-inlet reading under check is *unconfirmed*
+        (:mod:`~genthermal.schedule.unconfirmed_inlet`): the plan holds back at most
+        :attr:`InputWatchSettings.unconfirmed_rise_K` of it for at most
+        :attr:`InputWatchSettings.max_unconfirmed_s`, so that a sensor reading high moves no load
+        before its claim while a real rise (a blockage recirculating hot air) stays within the
+        plan's margin until the check confirms it. A warmer reading of any other input is planned
+        at once.
         """
+        now = self._now_s if t_s is None else float(t_s)
         planned = {name: np.array(v, dtype=float, copy=True) for name, v in readings.items()}
         if not self.settings.enabled or self.n_generators < 2:
             return planned
@@ -170,9 +201,22 @@ class InputWatch:
                 shared = np.median(readings[name][others], axis=0)
                 if not np.any(np.abs(readings[name][g] - shared) > self.settings.disagreement_K):
                     self._agreed[(g, name)] = np.array(readings[name][g], dtype=float)
-                elif (g, name) in self._agreed and self._checks.get((g, name), 0) < self.settings.max_checks \
-                        and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC:
-                    values[g] = np.maximum(values[g], self._agreed[(g, name)])  # never a cooler plan
+                    if name == self.coolant_input:
+                        self.unconfirmed_inlet.agrees(g, now)
+                    continue
+                under_check = (g, name) in self._agreed and self._checks.get((g, name), 0) < self.settings.max_checks \
+                    and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC
+                if name == self.coolant_input and not under_check:
+                    self.unconfirmed_inlet.release(g, now, "confirmed by the record check: its own reading fits "
+                                                   "markedly better" if self._own_fits.get((g, name), -math.inf)
+                                                   > PREFERENCE_BIC else "no check left")
+                if not under_check:
+                    continue
+                trusted = self._agreed[(g, name)]
+                if name == self.coolant_input and np.any(values[g] > trusted):
+                    values[g] = self.unconfirmed_inlet.planned(g, now, values[g], trusted)
+                else:
+                    values[g] = np.maximum(values[g], trusted)  # never a cooler plan
         return planned
 
     def cycle(self, t_s: float, readings: dict, estimators, monitor) -> list:
@@ -195,6 +239,7 @@ class InputWatch:
         list of int
             Generators with a new claim this cycle.
         """
+        self._now_s = float(t_s)
         for g, estimator in enumerate(estimators):
             self._flows[g].append((t_s, list(estimator.filter.state_names), np.array(estimator.z, dtype=float)))
         if not self.settings.enabled or self.n_generators < 2:
@@ -305,6 +350,8 @@ class InputWatch:
             if changes:
                 flows = flows + np.median(changes, axis=0)
             estimator.z = np.concatenate([estimator.z[:nodes], flows])
+        if name == self.coolant_input:
+            self.unconfirmed_inlet.release(g, t_s, "its sensor claimed: the other units' reading is planned")
         self.watch.undo_beliefs_since(g, fault.onset_s, monitor)
         monitor.detector.restart(g)
         for h in range(self.n_generators):  # every unit was compared with heat flows that followed a wrong input

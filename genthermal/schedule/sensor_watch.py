@@ -221,6 +221,9 @@ class SensorWatch:
         self.deferrals: list[dict] = []
         self._last_check = [-math.inf] * n
         roles = detector_node_roles(system.planning_model)
+        #: Warmer coolant-inlet readings the plan held back while unconfirmed (the input watch's
+        #: :class:`~genthermal.schedule.unconfirmed_inlet.UnconfirmedInlet` events).
+        self.inlet_holds: list[dict] = []
         self.unconfirmed = UnconfirmedExcess([getattr(settings, f"unconfirmed_{role}") for role in roles],
                                              settings.max_unconfirmed_s, n)
 
@@ -593,4 +596,5 @@ class SensorWatch:
                 "pattern_alarms": [{**a, "generator": names[a["generator"]]} for a in self.pattern_alarms],
                 "beliefs_held": [{**d, "generator": names[d["generator"]]} for d in self.deferrals],
                 "heat_flows_unconfirmed": [{**e, "generator": names[e["generator"]]} for e in self.unconfirmed.events],
+                "inlet_readings_unconfirmed": [{**e, "generator": names[e["generator"]]} for e in self.inlet_holds],
                 "load_plan": "unchanged by sensor faults: the believed machine is not changed by a claim"}

@@ -1,0 +1,106 @@
+r"""A warmer coolant-inlet reading the physics has not confirmed yet: what the plan holds meanwhile.
+
+A unit's inlet PT100 drives its filter and its plan. When it suddenly reads warmer than the other
+units' (which take their air from the same place, :mod:`~genthermal.schedule.input_watch`), two
+things can have happened, and they look alike at the inlet reading alone:
+
+* the air really got warmer at that unit (a blockage recirculates hot air): the winding and the
+  iron follow, along the model's response to the inlet step (on the thesis generator 0.31 K per K
+  after 5 min, 0.48 after 10 min, 0.59 after 15 min for the winding; the iron about half that),
+  and the outlet-air reading, where the record has one, follows within a minute;
+* the sensor reads high (a bias, a drift): only the reading moves.
+
+The input watch's record check tells them apart (its :math:`\Delta`, the record's misfit with the
+unit's own reading against the other units' reading): a bias is claimed at :math:`\Delta <
+-10`, a real rise is *confirmed* at :math:`\Delta > +10`. On the Fig. 7.7 flight a 3-K bias gave
+-7.6 one cycle after its onset and -36 two cycles after, so the check needs one to two
+management cycles. Planning the warmer reading at once (the rule before this module) moved the
+plan for a sensor fault: a +3 K inlet bias on a flight planned 0.1-0.2 K below its limit re-planned
+at its onset and changed three cycles' loads before its claim
+(``benchmarks/bench_sensor_flights.py``).
+
+**The hold.** While the warmer reading is unconfirmed (under check, neither claimed nor
+confirmed), the plan takes the unit's last agreeing (trusted) inlet reading plus whatever of the
+rise exceeds :attr:`~genthermal.schedule.input_watch.InputWatchSettings.unconfirmed_rise_K`: the
+part held back is bounded, and so is the time, at most
+:attr:`~genthermal.schedule.input_watch.InputWatchSettings.max_unconfirmed_s` from the first held
+plan. The bound makes a real rise safe: over the hold and the cycle the last held plan is flown, a
+real rise of the held size heats the winding by at most the response to a step of that size over
+that time (0.59 K per K after 15 min: 4 K held for 10 min plus one 5-min cycle is 2.4 K), within
+the plan's margin (2.5 K, ``ManagerSettings.margin_K``). A rise larger than the held part is
+planned at once for the excess (a 31-K blockage inlet is planned 27 K warmer from its first cycle).
+The hold ends when the readings agree again, when the check confirms the rise (the reading is then
+planned) or claims the sensor (the other units' reading is then planned, as for any claimed input
+sensor), when the checks run out, or at the time bound (the reading is then planned).
+
+A colder reading is not held here: the input watch plans the last agreeing reading while it is
+under check (:meth:`~genthermal.schedule.input_watch.InputWatch.for_plan`), which can only be the
+safer side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class UnconfirmedInlet:
+    """Per unit, the warmer inlet reading under check and since when the plan has held it back.
+
+    Parameters
+    ----------
+    held_K : float
+        Most of the rise the plan holds back, K.
+    max_hold_s : float
+        Longest hold from the first held plan, s.
+    n_generators : int
+
+    Attributes
+    ----------
+    events : list of dict
+        Every hold: ``generator``, ``since_s``, ``until_s``, ``rise_K`` (largest reading minus
+        trusted seen) and why it ended (``ended``).
+    """
+
+    def __init__(self, held_K: float, max_hold_s: float, n_generators: int):
+        self.held_K, self.max_hold_s, self.n_generators = float(held_K), float(max_hold_s), n_generators
+        self.since: dict[int, float] = {}
+        #: Units whose hold reached its time bound: not held again until their readings agree.
+        self._expired: set = set()
+        self.events: list[dict] = []
+
+    def planned(self, g: int, t_s: float, reading, trusted):
+        """The inlet unit ``g``'s plan takes at ``t_s`` (s) for its warmer ``reading`` (°C) while
+        it is unconfirmed: ``trusted`` (its last agreeing reading, °C) plus the rise beyond
+        :attr:`held_K`; the reading itself once the hold has lasted :attr:`max_hold_s`."""
+        reading, trusted = np.asarray(reading, dtype=float), np.asarray(trusted, dtype=float)
+        if g in self._expired:
+            return reading
+        if g not in self.since:
+            self.since[g] = t_s
+            self.events.append({"generator": g, "since_s": t_s, "until_s": None, "rise_K": 0.0, "ended": None})
+        event = self._open(g)
+        event["rise_K"] = max(event["rise_K"], float(np.max(reading - trusted)))
+        if t_s - self.since[g] > self.max_hold_s:
+            self.release(g, t_s, f"held {self.max_hold_s / 60:g} min without a decision: the reading is planned")
+            self._expired.add(g)
+            return reading
+        return np.maximum(trusted, reading - self.held_K)
+
+    def agrees(self, g: int, t_s: float) -> None:
+        """Unit ``g``'s reading agrees with the other units' again: any hold ends."""
+        self._expired.discard(g)
+        self.release(g, t_s, "the readings agree again")
+
+    def release(self, g: int, t_s: float, why: str) -> None:
+        """End unit ``g``'s hold (if any) at ``t_s``, s, for the reason ``why``."""
+        if self.since.pop(g, None) is None:
+            return
+        event = self._open(g)
+        event["until_s"], event["ended"] = t_s, why
+
+    def holds(self, g: int) -> bool:
+        """True while unit ``g``'s warmer inlet reading is held back from its plan."""
+        return g in self.since
+
+    def _open(self, g: int) -> dict:
+        return next(e for e in reversed(self.events) if e["generator"] == g and e["until_s"] is None)
