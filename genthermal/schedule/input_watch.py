@@ -145,6 +145,8 @@ class InputWatch:
         self.unconfirmed_inlet = UnconfirmedInlet(settings.unconfirmed_rise_K, settings.max_unconfirmed_s, n_generators)
         watch.inlet_holds = self.unconfirmed_inlet.events  # reported with the sensor watch's figures
         self._now_s = 0.0
+        #: ``(generator, input)`` whose warmer reading the unit's heating confirmed (until they agree).
+        self._heating: set = set()
 
     def substitute(self, sample_times_s, readings: dict) -> dict:
         """``readings`` (input name → (n_gen, n) °C at ``sample_times_s``) with every claimed sensor's
@@ -201,11 +203,12 @@ class InputWatch:
                 shared = np.median(readings[name][others], axis=0)
                 if not np.any(np.abs(readings[name][g] - shared) > self.settings.disagreement_K):
                     self._agreed[(g, name)] = np.array(readings[name][g], dtype=float)
+                    self._heating.discard((g, name))
                     if name == self.coolant_input:
                         self.unconfirmed_inlet.agrees(g, now)
                     continue
                 under_check = (g, name) in self._agreed and self._checks.get((g, name), 0) < self.settings.max_checks \
-                    and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC
+                    and not self._own_fits.get((g, name), -math.inf) > PREFERENCE_BIC and (g, name) not in self._heating
                 if name == self.coolant_input and not under_check:
                     self.unconfirmed_inlet.release(g, now, "confirmed by the record check: its own reading fits "
                                                    "markedly better" if self._own_fits.get((g, name), -math.inf)
@@ -257,6 +260,8 @@ class InputWatch:
                 if abs(means[g] - float(np.median(means[others]))) > self.settings.disagreement_K and \
                         self._checks.get((g, name), 0) < self.settings.max_checks:
                     disagree.append(g)
+            if name == self.coolant_input:
+                self._confirm_by_heating(t_s, name, means)
             found = {g: self._fit(g, name, t_s, monitor) for g in disagree}
             found = {g: h for g, h in found.items() if h is not None}
             if not found:
@@ -270,6 +275,31 @@ class InputWatch:
                 self._claim(best, name, found[best], t_s, estimators, monitor)
                 new.append(best)
         return new
+
+    def _confirm_by_heating(self, t_s: float, name: str, means) -> None:
+        """Confirm the warmer inlet reading of every unit that heats: its fault statistic
+        (:attr:`SensorWatch.last_statistics <genthermal.schedule.sensor_watch.SensorWatch>`, the
+        unit's heat flows against the other units', its filter driven by its own reading) above the
+        range healthy flights reach on some node. A sensor reading high makes its unit's model run
+        hot, so the filter *cools* the unit to follow its winding and iron (its statistic goes
+        negative: -1.6 on the winding for a 3-K bias, Fig. 7.7 flight); a unit hotter than even the
+        warmer reading predicts has air at least that warm (a blockage that recirculates its air
+        both heats the inlet and cuts the flow), and holding the reading back would delay acting on
+        a real fault."""
+        statistics = np.asarray(getattr(self.watch, "last_statistics", ()), dtype=float)
+        bounds = self.watch.unconfirmed.bounds
+        if statistics.ndim != 2 or statistics.shape[1] != bounds.size:
+            return
+        for g in range(self.n_generators):
+            others = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
+            if not others or (g, name) in self._heating or \
+                    not means[g] - float(np.median(means[others])) > self.settings.disagreement_K:
+                continue
+            above = np.isfinite(statistics[g]) & (statistics[g] > bounds)
+            if above.any():
+                self._heating.add((g, name))
+                self.unconfirmed_inlet.release(g, t_s, "confirmed: the unit heats (fault statistic "
+                                               + ", ".join(f"{v:.2f}" for v in statistics[g]) + ")")
 
     def _fit(self, g: int, name: str, t_s: float, monitor):
         """Generator ``g``'s record checked for a fault of input ``name`` (module docstring,
@@ -355,7 +385,11 @@ class InputWatch:
         self.watch.undo_beliefs_since(g, fault.onset_s, monitor)
         monitor.detector.restart(g)
         for h in range(self.n_generators):  # every unit was compared with heat flows that followed a wrong input
-            self.watch.unconfirmed.release(h, t_s, f"input sensor {name} of unit {g + 1} claimed")
+            # since the onset; a hold older than that is not the input's doing (releasing one that
+            # began 50 min before a 3-K inlet bias let its unit's heat flows into the plan at the
+            # claim: 3 re-plans and 7 load changes, seed 1 of benchmarks/bench_inlet_confirmation.py)
+            if self.watch.unconfirmed.since.get(h, -math.inf) >= fault.onset_s:
+                self.watch.unconfirmed.release(h, t_s, f"input sensor {name} of unit {g + 1} claimed")
         self.watch.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                   "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
                                   "evidence": "input record check",
