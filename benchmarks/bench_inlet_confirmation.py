@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from bench_sensor_flights import LIMIT_C, compared, flight
-from genthermal.schedule.closed_loop import ManagerSettings
+from genthermal.schedule.manager_settings import ManagerSettings
 from genthermal.schedule.input_watch import InputWatchSettings
 from genthermal.schedule.report import flight_summary
 
@@ -91,6 +91,8 @@ def main(argv=None) -> dict:
                           "first_replan_min": _first_replan_min(result, 3600.0),
                           "holds": [(h["generator"], h["since_s"] / 60.0, None if h["until_s"] is None
                                      else h["until_s"] / 60.0, h["ended"]) for h in watch["inlet_readings_unconfirmed"]],
+                          "identified": [(i["generator"], i["detected_at_s"] / 60.0, i["effect"])
+                                         for i in flight_summary(result)["identified"]],
                           "max_T_winding_C": float(np.max(result.temperatures_C[:, 0, :])),
                           "s_above_limit": float(np.count_nonzero(result.temperatures_C[:, 0, :] > LIMIT_C)
                                                  * ManagerSettings().dt_s)}

@@ -232,7 +232,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
         inputs_read = read_inputs(step_times)
-        inlets, ambients = _filter_inputs(system, inputs_read, step_times)
+        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
