@@ -236,9 +236,29 @@ def test_an_inlet_sensor_reading_high_is_held_from_the_plan_claimed_and_changes_
     [hold] = watch["inlet_readings_unconfirmed"]
     assert hold["generator"] == "gen1" and hold["since_s"] == 3600.0 and hold["until_s"] == claim["claimed_at_s"]
     assert hold["rise_K"] == pytest.approx(3.0) and "claimed" in hold["ended"]
+    assert "filter held" in claim["action"]  # its filter never took the bias: nothing to take back
     assert result.monitor.beliefs == [(), ()]
     assert _replans_from(result, 3600.0) == _replans_from(healthy_flight, 3600.0)
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_a_real_inlet_rise_is_confirmed_a_cycle_later_and_planned(tmp_path):
+    """The air at gen1's inlet really rises by 3 K at 60 min: the held reading is confirmed by the
+    record check one cycle later (the winding and iron followed the model's response to it), the
+    plan takes it from then on, and nothing is claimed."""
+    document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
+    document["generators"] = {"limit_C": LIMIT_C}
+    document["faults"] = [{"generator": 1, "kind": "inlet_rise", "onset_min": 60, "inlet_rise_C": 3}]
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(document))
+    result = fly(PowerSystem.from_mission(load_mission(str(path))), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    assert watch["claimed"] == []
+    [hold] = watch["inlet_readings_unconfirmed"]
+    assert (hold["generator"], hold["since_s"], hold["until_s"]) == ("gen1", 3600.0, 3900.0)
+    assert hold["ended"].startswith("confirmed by the record check")
+    assert min(_replans_from(result, 3600.0)) == 3900.0  # the first plan after the confirmation
+    assert float(np.max(result.temperatures_C[:, 0, :])) < LIMIT_C
 
 
 def test_without_the_inlet_hold_the_same_high_reading_moves_the_load(tmp_path, healthy_flight):
@@ -279,6 +299,10 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
     assert summary["sensor_faults"]["claimed"] == []
     assert any(c["alarmed"] == ["T_inlet"] for c in summary["sensor_faults"]["checks"])  # it was looked at
     assert [i["effect"] for i in summary["identified"] if i["effect"]][:1] == ["coolant_flow_reduction"]
+    # its held inlet reading is confirmed by its fault test alarming (the blockage heats the unit)
+    assert [h["ended"].split(",")[0] for h in summary["sensor_faults"]["inlet_readings_unconfirmed"]] == \
+        ["confirmed: the unit heats"]
+    assert min(plan["time_s"] for plan in result.plans if plan["time_s"] >= 3600.0) == 3600.0  # as before the hold
 
 
 @pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),

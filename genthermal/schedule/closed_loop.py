@@ -47,7 +47,7 @@ from ..simulate import simulate
 from .flight_result import FlightRecorder, FlightResult, FlightTimeout
 from .flown import FlownPlanning
 from .input_watch import InputWatch
-from .manager_settings import ManagerSettings, flight_filter, infeasible_response
+from .manager_settings import ManagerSettings, flight_filter, infeasible_response, planning_margin_K
 from .monitor import FaultMonitor
 from .state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
@@ -172,7 +172,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                                         system.planning_model.output_names, input_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
-    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators)
+    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators,
+                              planning_margin_K(system, settings))
 
     def read_inputs(times):
         """The inputs as the manager reads them at ``times`` (s): injected faults, claimed ones substituted."""

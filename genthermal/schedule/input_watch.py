@@ -81,11 +81,15 @@ class InputWatchSettings:
     enabled : bool
         False: input faults are injected but not looked for.
     unconfirmed_rise_K : float
-        Most of a warmer coolant-inlet reading the plan holds back while it is unconfirmed, K
-        (:mod:`~genthermal.schedule.unconfirmed_inlet`). 4 K: the largest step whose real rise
-        heats the thesis generator's winding by no more than the plan's 2.5-K margin over
-        ``max_unconfirmed_s`` plus one 5-min cycle (0.59 K per K after 15 min, the planning
-        model's response to an inlet step, :func:`~genthermal.diagnose.input_sensors.input_step_response`).
+        Most of a warmer coolant-inlet reading the plan holds back while it is unconfirmed, K, on a
+        flight planned with the default 2.5-K margin
+        (:data:`~genthermal.schedule.manager_settings.DEFAULT_MARGIN_K`); a flight planned with a
+        smaller margin holds back proportionally less, none at 0 (the thesis-reproduction
+        scenarios, which plan to θmax itself) (:mod:`~genthermal.schedule.unconfirmed_inlet`). 4 K:
+        the largest step whose real rise heats the thesis generator's winding by no more than the
+        2.5-K margin over ``max_unconfirmed_s`` plus one 5-min cycle (0.59 K per K after 15 min, the
+        planning model's response to an inlet step,
+        :func:`~genthermal.diagnose.input_sensors.input_step_response`).
     max_unconfirmed_s : float
         Longest such hold, from the first held plan, s. 600 s: the record check decided a 3-K bias
         two cycles after its onset (ΔBIC -7.6 after one, -36 after two, Fig. 7.7 flight).
@@ -123,6 +127,10 @@ class InputWatch:
     input_names : sequence of str
         The measured temperature inputs (inlet, ambient).
     n_generators : int
+    margin_K : float, optional
+        The flight's planning margin, K (:func:`~genthermal.schedule.manager_settings.planning_margin_K`;
+        default :data:`~genthermal.schedule.manager_settings.DEFAULT_MARGIN_K`): scales the inlet
+        hold (:attr:`InputWatchSettings.unconfirmed_rise_K`).
 
     Attributes
     ----------
@@ -132,7 +140,8 @@ class InputWatch:
         Warmer coolant-inlet readings held back from the plan while under check.
     """
 
-    def __init__(self, watch, settings: InputWatchSettings, input_names, n_generators: int):
+    def __init__(self, watch, settings: InputWatchSettings, input_names, n_generators: int,
+                 margin_K: float | None = None):
         self.watch, self.settings = watch, settings
         self.input_names, self.n_generators = tuple(input_names), n_generators
         self.claimed: dict[tuple[int, str], SensorFault] = {}
@@ -146,7 +155,12 @@ class InputWatch:
         generator = getattr(getattr(interface, "interface", None), "generator", None)
         #: The coolant-inlet input, whose warmer reading is held while unconfirmed (None: no hold).
         self.coolant_input = getattr(generator, "coolant_input", None)
-        self.unconfirmed_inlet = UnconfirmedInlet(settings.unconfirmed_rise_K, settings.max_unconfirmed_s, n_generators)
+        #: Most of a warmer inlet reading held back, K: the setting scaled to the flight's margin.
+        from .manager_settings import DEFAULT_MARGIN_K  # it holds these settings: imported here
+
+        margin_K = DEFAULT_MARGIN_K if margin_K is None else float(margin_K)
+        self.held_K = settings.unconfirmed_rise_K * min(max(margin_K, 0.0) / DEFAULT_MARGIN_K, 1.0)
+        self.unconfirmed_inlet = UnconfirmedInlet(self.held_K, settings.max_unconfirmed_s, n_generators)
         watch.inlet_holds = self.unconfirmed_inlet.events  # reported with the sensor watch's figures
         self._now_s = 0.0
         #: ``(generator, input)`` whose warmer reading the unit's heating confirmed (until they agree).
@@ -276,9 +290,9 @@ class InputWatch:
             row[cold] = trusted
             if self.unconfirmed_inlet.expired(g):
                 warm[:] = False
-            row[warm] = np.maximum(trusted, row[warm] - self.settings.unconfirmed_rise_K)
+            row[warm] = np.maximum(trusted, row[warm] - self.held_K)
             self._filter_held_since.setdefault((g, name), float(times[np.flatnonzero(away)[0]]))
-            if np.any(values[g][warm] - self.settings.unconfirmed_rise_K > trusted) or \
+            if np.any(values[g][warm] - self.held_K > trusted) or \
                     np.any(away & ~(warm | cold)):
                 self._filter_partial.add((g, name))
         return used
