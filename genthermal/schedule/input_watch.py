@@ -258,8 +258,9 @@ class InputWatch:
         (input name → (n_gen, n) °C at ``sample_times_s``, s) with each unit's coolant-inlet reading
         held, sample by sample, as the plan holds it (:meth:`for_plan`) while it is under check:
         a sample farther than :attr:`InputWatchSettings.disagreement_K` from the other units'
-        reading is replaced by the last agreeing reading, a warmer one plus whatever exceeds
-        :attr:`InputWatchSettings.unconfirmed_rise_K` (the hold's time bound over).
+        reading is replaced by the last agreeing reading; a warmer sample by the last agreeing
+        reading plus whatever of the rise exceeds :attr:`held_K`, and by itself once the plan's
+        hold has reached its time bound.
 
         Why the filter too: held from the plan only, a 3-K bias still drove the filter, whose
         disturbance heat flows cooled the unit to follow its sensors; the claim takes those back
@@ -479,6 +480,8 @@ class InputWatch:
         self._record_claim(g, name, hypothesis, t_s, "its heat flows taken back to before the onset")
 
     def _record_claim(self, g: int, name: str, hypothesis, t_s: float, filter_action: str) -> None:
+        """Report the claim of generator ``g``'s sensor of input ``name`` with the watch's claims;
+        ``filter_action`` says what was done to the unit's filter."""
         self.watch.claims.append({"generator": g, "claimed_at_s": t_s, "fault": hypothesis.fault,
                                   "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
                                   "evidence": "input record check",
