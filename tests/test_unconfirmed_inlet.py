@@ -35,3 +35,9 @@ def test_a_release_says_why_and_a_second_release_changes_nothing():
     [event] = hold.events
     assert (event["until_s"], event["ended"]) == (3900.0, "confirmed by the record check")
     assert not hold.holds(0)
+
+
+def test_nothing_is_held_or_reported_when_the_hold_is_zero():
+    hold = UnconfirmedInlet(held_K=0.0, max_hold_s=600.0, n_generators=1)
+    np.testing.assert_allclose(hold.planned(0, 3600.0, np.array([23.0]), np.array([20.0])), [23.0])
+    assert not hold.holds(0) and hold.events == []

@@ -83,7 +83,7 @@ class UnconfirmedInlet:
         it is unconfirmed: ``trusted`` (its last agreeing reading, °C) plus the rise beyond
         :attr:`held_K`; the reading itself once the hold has lasted :attr:`max_hold_s`."""
         reading, trusted = np.asarray(reading, dtype=float), np.asarray(trusted, dtype=float)
-        if g in self._expired:
+        if g in self._expired or self.held_K <= 0.0:  # nothing held (a flight planned without margin)
             return reading
         if g not in self.since:
             self.since[g] = t_s
