@@ -27,7 +27,12 @@ An effect is *significant* when all four hold:
   :math:`RMSE_{before}^2 - RMSE_{after}^2 \ge \tfrac12(RMSE_{before}^2 - \hat\sigma^2)`: an effect
   that only nibbles at a misfit is not the missing physics.
 
-The verdict is the best-ranked significant effect, else ``"none"``.
+The verdict is the best-ranked significant effect, else ``"none"``. When the phase sensors are
+fitted one by one (:mod:`genthermal.diagnose.phase_winding`), the three practical tests pass on
+every sensor or on the design sensors, the phase sensors averaged
+(:mod:`genthermal.diagnose.design_scale`); the evidence is always the ΔBIC on every sensor. The
+onsets of the verdict are then refined on their profile, and the interval of onsets the data allow
+is reported (:mod:`genthermal.diagnose.onset_profile`).
 
 Beyond one effect:
 
