@@ -2,7 +2,8 @@
 
 Random pairs of the catalogue effects the nonlinear plant takes, with random values and onsets
 (:func:`genthermal.diagnose.hidden.make_hidden_effect_case`), on 4-hour missions at 60 s. Per record:
-both effects named, both onsets within 10 min, the final RMSE within 1.5 x the estimated noise,
+both effects named, both onsets within 10 min (and the interval of onsets the data allow,
+:mod:`genthermal.diagnose.onset_profile`), the final RMSE within 1.5 x the estimated noise,
 whether the residual test says something is still missing, and whether a look-alike was flagged
 with a designed test. A shorted turn and an end-winding stray loss under balanced load are
 look-alikes (see README); a record where one stands in for the other and the look-alike is flagged
@@ -72,7 +73,10 @@ def main() -> int:
         onsets_ok = named and all(abs(found[e] - truth[e]) <= 600.0 for e in truth)
         rmse = result.iterations[-1].rmse_after
         row = {"seed": seed, "truth": {e: round(t / 3600, 2) for e, t in truth.items()},
-               "found": {e: round(t / 3600, 2) for e, t in found.items()}, "verdict": result.verdict,
+               "found": {e: round(t / 3600, 2) for e, t in found.items()},
+               "onset_interval_h": {f.effect: [round(t / 3600, 2) for t in f.onset_interval_s] for f in result.found
+                                    if f.onset_interval_s is not None},
+               "verdict": result.verdict,
                "both_named": named, "onsets_within_10_min": onsets_ok,
                "rmse_K": round(rmse, 4), "noise_K": round(result.noise_std, 4),
                "rmse_within_1_5_noise": bool(rmse <= 1.5 * result.noise_std),

@@ -204,8 +204,9 @@ class Discovery:
             "the other values and the initial state refitted at each): "
             + "; ".join(f"{p.effect} {p.interval_s[0] / 3600:.2f}-{p.interval_s[1] / 3600:.2f} h" for p in profiles)
             + ".")
+        onsets = chosen.onsets_s if iteration.added_pair else {chosen.effect: chosen.onset_s}
         self._report("onsets profiled: " + "; ".join(
-            f"{p.effect} {p.onset_s / 3600:.2f} h ({p.interval_s[0] / 3600:.2f}-{p.interval_s[1] / 3600:.2f} h)"
+            f"{p.effect} {onsets[p.effect] / 3600:.2f} h ({p.interval_s[0] / 3600:.2f}-{p.interval_s[1] / 3600:.2f} h)"
             for p in profiles))
         return iteration.added
 

@@ -17,9 +17,12 @@ a single onset says nothing of how well the record fixes it. Here, for each effe
 
   (the same for BIC and AIC: the onsets compared have the same number of parameters); the walk
   stops on each side at the first onset above the threshold, or at the end of the record;
-* the onset moves to the least RSS of its profile, then the profile of the other effect is taken
-  at that onset, and so on until no onset moves (at most :data:`MAX_ROUNDS` rounds): a joint
-  refinement on a fine grid near the optimum;
+* when the profile rejects the onset the search found (its :math:`\Delta\mathrm{IC}` above the
+  threshold), the onset moves to the least RSS of its profile, then the profile of the other
+  effect is taken at that onset, and so on until no onset moves (at most :data:`MAX_ROUNDS`
+  rounds): a joint refinement on a fine grid near the optimum. An onset the profile does not
+  reject stays where the search put it: within the interval the data cannot tell onsets apart,
+  and a move there would trade an effect "from the start" for one from the next sample on noise;
 * the *onset interval*: from the earliest to the latest onset sample of the last profile whose
   :math:`\Delta\mathrm{IC}` lies within the threshold (by default the magnitude of the
   criterion's evidence limit, 10: onsets the data do not reject with "very strong" evidence),
@@ -61,7 +64,8 @@ class OnsetProfile:
     delta_ic : tuple of float
         Criterion change of each against the best onset of the profile.
     onset_s : float
-        Onset of least RSS, s.
+        Onset of least RSS of the profile, s (the verdict keeps the search's onset when the
+        profile does not reject it).
     interval_s : (float, float)
         Onsets the data allow, s: from one sample period before the earliest onset sample with
         ``delta_ic`` within ``threshold`` (not before the start) to the latest.
@@ -162,8 +166,10 @@ class OnsetProfiler:
             for position in range(len(onsets)):
                 points = last[position] = self.profile(onsets, position, z)
                 best = min(points, key=lambda o: points[o][1])
-                moved |= best != onsets[position]
-                onsets[position], z = best, points[best][0]
+                current = onsets[position]
+                if self._delta(points[current][1], points[best][1]) > self.threshold:
+                    moved, onsets[position] = True, best
+                z = points[onsets[position]][0]
             if not moved:
                 break
         rss = self._fit(onsets, z)[1]
