@@ -66,7 +66,8 @@ import numpy as np
 
 from genthermal.mission import Mission
 from genthermal.commands.sweep import source_commit
-from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import SCHEDULERS, ManagerSettings
 from genthermal.schedule.innovation_detector import innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary

@@ -65,7 +65,7 @@ from genthermal.machines import build_model
 from genthermal.measurements import dataframe_to_measurements
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
-from genthermal.schedule.monitor import FLIGHT_EKF_SETTINGS
+from genthermal.schedule.state_estimator import FLIGHT_EKF_SETTINGS
 from genthermal.simulate import simulate
 from genthermal.synth import synthesize
 from prediction_references import half_open_loop_verdicts, references

@@ -32,7 +32,8 @@ import matplotlib
 import numpy as np
 
 from genthermal.mission import Mission
-from genthermal.schedule.closed_loop import SCHEDULERS, ManagerSettings, fly
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import SCHEDULERS, ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

@@ -38,7 +38,8 @@ from genthermal.machines import build_model
 from genthermal.measurements import dataframe_to_measurements
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
-from genthermal.schedule.closed_loop import ManagerSettings, fly, infeasible_response, planning_margin_K
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import ManagerSettings, infeasible_response, planning_margin_K
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.simulate import simulate

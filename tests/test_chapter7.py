@@ -7,7 +7,6 @@ import pytest
 
 from genthermal.errors import InputError
 from genthermal.machines import build_model
-from genthermal.coolant import inlet_rise
 from genthermal.machines.chapter7 import (BLOCKAGE_MINUTES, FIT_BOUNDS, ONSET_S, PLANNING_LIMIT_C, PROXIES,
                                           ProxySimulator, manager_lags, no_action_blockage_minutes, with_lags)
 from genthermal.machines.chapter7_lag import manager_prediction_lag
@@ -147,7 +146,8 @@ def _flown(scenario):
     """Per action of the chapter-7 scenario flown by the heuristic in closed loop (fault not told):
     (rest before or within it, min; largest current gen1 sheds in it, A; whether its first step is
     a rest), and the result."""
-    from genthermal.schedule.closed_loop import ManagerSettings, fly
+    from genthermal.schedule.closed_loop import fly
+    from genthermal.schedule.manager_settings import ManagerSettings
 
     system = PowerSystem.from_mission(load_mission(scenario))
     result = fly(system, "heuristic", ManagerSettings())

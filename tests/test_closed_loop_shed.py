@@ -9,7 +9,8 @@ import pytest
 
 from genthermal.cli import main
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import DEFAULT_REST_BUDGET_FRACTION, ManagerSettings, fly
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import DEFAULT_REST_BUDGET_FRACTION, ManagerSettings
 from genthermal.schedule.plan import PlanningProblem, Schedule, build_timeline, mission_segments, predict
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
@@ -128,7 +129,7 @@ def test_shed_plan_keeps_the_generators_on_within_the_planning_limit(tmp_path):
 
 
 def test_a_generator_too_hot_even_carrying_nothing_is_switched_off(tmp_path):
-    from genthermal.schedule.closed_loop import plan_with
+    from genthermal.schedule.replanning import plan_with
 
     system = _system(tmp_path, HOT_AT_REST)
     segments = mission_segments(system.mission)
@@ -148,7 +149,7 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     """The chapter-7 scenarios plan to θmax itself (margin 0): a receiver then takes load up to θmax,
     where its predicted peak lands a few 1e-14 K above it (measured in the large-blockage flight:
     110.00000000000003 °C). That is not "too hot even carrying nothing": it stays on."""
-    from genthermal.schedule import closed_loop
+    from genthermal.schedule import replanning
     from genthermal.schedule.plan import PlanResult
 
     system = _system(tmp_path, HOT_AT_REST)
@@ -161,9 +162,9 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     def receiver_on_the_limit(problem, off, receiver_margin_K):
         return PlanResult(Schedule.nominal(2, len(problem.segments), off), False, system.limit_C + 3e-14, 1, 0, 0.0,
                           "shed", details={"shedding": [0]})
-    monkeypatch.setattr(closed_loop, "shed_plan", receiver_on_the_limit)
-    result = closed_loop._shed(problem, np.zeros(2, bool), np.zeros(2, bool), system.generator_names,
-                               system.limit_C, "", 0.0)
+    monkeypatch.setattr(replanning, "shed_plan", receiver_on_the_limit)
+    result = replanning._shed(problem, np.zeros(2, bool), np.zeros(2, bool), system.generator_names,
+                                system.limit_C, "", 0.0)
     assert not result.schedule.switched_off.any()
     assert "switch off" not in result.details.get("response", "")
 

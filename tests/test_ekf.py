@@ -213,7 +213,7 @@ def test_disturbance_states_cost_little_on_a_matched_plant(plant_model, ekf):
     prediction, open_loop = _horizon_rms(study, "prediction"), _horizon_rms(study, "open_loop")
     for horizon in ("15", "30", "60"):
         assert prediction[horizon] <= open_loop[horizon] + 0.1, (horizon, prediction, open_loop)
-    from genthermal.schedule.monitor import FLIGHT_EKF_SETTINGS
+    from genthermal.schedule.state_estimator import FLIGHT_EKF_SETTINGS
 
     fast = prediction_study(plant_model, data, starts_min=(60,),
                             kalman=ExtendedKalmanFilter(plant_model, DT_S, **FLIGHT_EKF_SETTINGS))

@@ -7,8 +7,9 @@ from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.mission import Mission
-from genthermal.schedule.closed_loop import ManagerSettings, fly
-from genthermal.schedule.monitor import FLIGHT_EKF_SETTINGS
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.state_estimator import FLIGHT_EKF_SETTINGS
 from genthermal.schedule.detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary

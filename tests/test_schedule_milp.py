@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import ManagerSettings, plan_mission
+from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.open_loop import plan_mission
 from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
 from genthermal.schedule.plan import PlanningProblem, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator, PowerSystem

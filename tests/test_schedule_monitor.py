@@ -71,7 +71,7 @@ def _filtered_winding_errors(plant_model, filter_names, hours=1.5, dt=10.0, seed
     ``hours`` with noisy measurements; return each filter's winding error (K) of the state it
     hands the planner at the end."""
     from genthermal.schedule.linearise import planning_design_model
-    from genthermal.schedule.monitor import StateEstimator
+    from genthermal.schedule.state_estimator import StateEstimator
 
     plant = plant_model.with_parameters("assumed", "test mismatch", R0=1.2 * plant_model.parameters.value("R0"),
                                         h_end_air=0.8 * plant_model.parameters.value("h_end_air"))
@@ -98,7 +98,7 @@ def test_flight_ekf_hands_the_planner_design_model_nodes_closer_to_a_mismatched_
 
 def test_planner_state_maps_nodes_by_name_and_names_missing_nodes(plant_model, design_model):
     from genthermal.errors import InputError
-    from genthermal.schedule.monitor import planner_state
+    from genthermal.schedule.state_estimator import planner_state
 
     names = [*reversed(plant_model.state_names), "q_extra"]
     state = np.arange(len(names), dtype=float)
@@ -115,7 +115,8 @@ def test_identification_admits_only_effects_that_heat_the_machine(k_flow, expect
     from genthermal.machines import build_model
     from genthermal.mission import load_mission
     from genthermal.resources import SCENARIO_DIR
-    from genthermal.schedule.monitor import DetectionSettings, identify_fault
+    from genthermal.schedule.fault_identification import identify_fault
+    from genthermal.schedule.monitor import DetectionSettings
     from genthermal.synth import synthesize
 
     model = build_model()
@@ -136,7 +137,8 @@ def test_identification_fits_the_convection_exponent_of_a_blockage_that_holds_co
     from genthermal.machines import build_model
     from genthermal.mission import load_mission
     from genthermal.resources import SCENARIO_DIR
-    from genthermal.schedule.monitor import DetectionSettings, identify_fault
+    from genthermal.schedule.fault_identification import identify_fault
+    from genthermal.schedule.monitor import DetectionSettings
     from genthermal.synth import synthesize
 
     model = build_model()
@@ -153,7 +155,7 @@ def test_identification_fits_the_convection_exponent_of_a_blockage_that_holds_co
 
 
 def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_effect():
-    from genthermal.schedule.monitor import FAULT_EFFECTS, flight_catalogue, registered_effect_name
+    from genthermal.schedule.fault_identification import FAULT_EFFECTS, flight_catalogue, registered_effect_name
 
     catalogue = flight_catalogue()
     variants = [name for name in catalogue if name not in FAULT_EFFECTS]
@@ -165,7 +167,7 @@ def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_e
 
 
 def test_a_refinement_within_the_tolerance_confirms_the_belief():
-    from genthermal.schedule.monitor import confirms
+    from genthermal.schedule.fault_identification import confirms
 
     believed = (("coolant_flow_reduction", (("k_flow", 0.197),)),)
     assert confirms((("coolant_flow_reduction", (("k_flow", 0.174),)),), believed, 0.25)

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import ManagerSettings, plan_mission, plan_with
+from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.open_loop import plan_mission
+from genthermal.schedule.replanning import plan_with
 from genthermal.schedule.optimal import lowest_reachable_peak
 from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
 from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict

@@ -8,7 +8,8 @@ import pytest
 from genthermal.cli import main
 from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
-from genthermal.schedule.closed_loop import ManagerSettings, plan_with
+from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.replanning import plan_with
 from genthermal.schedule.flown import FlownPlanning
 from genthermal.schedule.optimal import OptimalSettings, optimal_plan
 from genthermal.schedule.optimal_nlp import flown_optimal_plan

@@ -108,7 +108,7 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
 
 
 def test_cpu_limit_must_be_positive():
-    from genthermal.schedule.closed_loop import ManagerSettings
+    from genthermal.schedule.manager_settings import ManagerSettings
 
     with pytest.raises(ValueError, match="cpu_limit_s"):
         ManagerSettings(cpu_limit_s=0.0)

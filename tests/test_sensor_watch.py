@@ -10,7 +10,8 @@ import yaml
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
 from genthermal.resources import SCENARIO_DIR
-from genthermal.schedule.closed_loop import ManagerSettings, fly
+from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.schedule.sensor_injection import SensorFaultInjector, parse_sensor_faults

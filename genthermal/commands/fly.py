@@ -10,8 +10,8 @@ the filter's nonlinear model with a back-off from the filter's covariance instea
 
 from __future__ import annotations
 
-from ..schedule.closed_loop import ManagerSettings
-from ..schedule.monitor import FLIGHT_FILTERS
+from ..schedule.manager_settings import ManagerSettings
+from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.report import flight_summary
 from .plan import add_schedule_arguments, settings_from_args, write_outputs
 

@@ -15,9 +15,9 @@ from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
-from ..schedule.closed_loop import (DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS, SCHEDULERS, ManagerSettings,
-                                     plan_mission)
-from ..schedule.monitor import FLIGHT_FILTERS
+from ..schedule.manager_settings import DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS, SCHEDULERS, ManagerSettings
+from ..schedule.open_loop import plan_mission
+from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
 from ..schedule.shed import INFEASIBLE_RESPONSES
 from ..schedule.report import flight_summary, plot_flight, summary_text

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..outputs import finite_document, report_json
-from ..schedule.closed_loop import PLANNER_MODELS, SCHEDULERS
+from ..schedule.manager_settings import PLANNER_MODELS, SCHEDULERS
 from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S
 
 

@@ -62,7 +62,7 @@ Provenance: measured with ``benchmarks/bench_prediction.py`` on two plants (para
 15-30 % in opposite directions, each with a different effect the model lacks), a model calibrated
 on one healthy record of each and scored on three others (winding RMS at 15/30/60 min). With the
 earlier fast walks (8 and 15 W per hour on constant and load-scaled flows, no coolant states, no
-change test; kept for the flight filter, ``schedule.monitor.FLIGHT_EKF_SETTINGS``) the filter was
+change test; kept for the flight filter, ``schedule.state_estimator.FLIGHT_EKF_SETTINGS``) the filter was
 worse than the open loop at 30-60 min on both healthy rig records (varying load 0.68/0.55 K
 against 0.48/0.49 K). Slowing the walks alone (1-2 W per hour) fixed that (0.46/0.43 K) but lost
 the blockage (30 min: 4.1 K, open loop 13.5 K); coolant-scaled flows with a fast walk (30 W per

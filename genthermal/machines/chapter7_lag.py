@@ -57,7 +57,7 @@ def manager_prediction_lag(model: ThermalModel, inlet_rise_C: float, window_s: t
         ``plant_peak_C``, ``predicted_peak_C`` (highest over the cycles), ``lag_K`` (plant − predicted),
         ``cycle_s`` (the cycle of the highest prediction, s).
     """
-    from ..schedule.closed_loop import ManagerSettings
+    from ..schedule.manager_settings import ManagerSettings
     from ..schedule.plan import (PlanningProblem, Schedule, build_timeline, mission_segments, predict,
                                  remaining_after, robust_outputs)
     from ..schedule.power_system import Fault, PowerSystem

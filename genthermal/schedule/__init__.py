@@ -10,7 +10,13 @@
 * :mod:`.report` — summary keys, plots and the demo.
 """
 
-from .closed_loop import SCHEDULERS, ManagerSettings, fly, plan_mission, plan_with
+from .closed_loop import fly
+
+from .manager_settings import SCHEDULERS, ManagerSettings
+
+from .open_loop import plan_mission
+
+from .replanning import plan_with
 from .heuristic import HeuristicSettings, heuristic_plan
 from .milp import MilpSettings, milp_plan
 from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan

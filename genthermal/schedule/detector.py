@@ -111,7 +111,7 @@ def extra_heat_flow(filter_, z, P, load_factor: float):
                          "disturbance states")
     if set(filter_.bases) - {"constant", "load"} or filter_.inlet_offset:
         raise InputError("filter", filter_.disturbance_names, "fault detection works on constant and load-scaled "
-                         "heat flows only (schedule.monitor.FLIGHT_EKF_SETTINGS); this filter has state-dependent "
+                         "heat flows only (schedule.state_estimator.FLIGHT_EKF_SETTINGS); this filter has state-dependent "
                          "ones")
     nx, n_nodes = filter_.model.n_states, len(filter_.disturbance_nodes)
     q, variance = np.empty(n_nodes), np.empty(n_nodes)

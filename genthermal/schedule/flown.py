@@ -118,7 +118,7 @@ class FlownPlanning:
         for g, ekf in enumerate(self.filters):
             currents = np.concatenate([timeline.currents_A[g], np.full(n_padded - n, timeline.currents_A[g, -1])])
             U = problem.inputs(g, currents).T
-            run, nz = covariance_steps(ekf), len(ekf.state_names)
+            run = covariance_steps(ekf)
             z, Pa, Pw = self.z0[g], self.P0[g], np.zeros_like(self.P0[g])
             parts = []
             for start in range(0, n_padded, chunk):

@@ -105,8 +105,8 @@ def hindsight_problem(system, cycle_s: float = 300.0, dt_s: float = 10.0, rest_b
     max_rest_s : float
         Longest rest before one interval, s.
     """
-    from .closed_loop import DEFAULT_REST_BUDGET_FRACTION
-    from .monitor import FLIGHT_EKF_SETTINGS
+    from .manager_settings import DEFAULT_REST_BUDGET_FRACTION
+    from .state_estimator import FLIGHT_EKF_SETTINGS
 
     if not system.faults:
         raise InputError("faults", [], "a hindsight plan needs a faulty flight")

@@ -1,18 +1,6 @@
-r"""What the load manager knows about each generator: a state filter, a fault detector on its
-innovations, and identification of the fault from the in-flight record.
-
-**Filter.** :class:`StateEstimator` runs a filter (``FLIGHT_FILTERS``) on the model of what the
-manager believes: the flown (planning) model with the effects identified so far. The default
-``ekf`` is the extended Kalman filter of :mod:`genthermal.estimation.ekf` on that nonlinear model,
-with disturbance heat flows; ``kf`` is the thesis linear filter on its design model. The affine
-planner plans on the design model: :func:`planner_state` hands it the filter's node temperatures
-and :func:`planning_generator` the extended Kalman filter's disturbance heat flows (constant and
-load-scaled), held over the whole plan as the filter's own forecasts hold them, so that every
-prediction of every scheduler is offset-free for every generator, healthy ones included: a
-model whose cooling is 10 % short no longer lets the planner load a healthy generator past
-θmax (``tests/test_closed_loop_shed.py``, the plant hot at rest). The nonlinear planner
-(``ManagerSettings.planner_model``) plans on the filter's own model, state, disturbances and
-covariance (:mod:`genthermal.schedule.flown`).
+r"""Fault detection in flight: the tests on each generator's filter, the common model-error test and
+recalibration, and the hand-over to identification (:mod:`genthermal.schedule.fault_identification`) on
+an alarm. The filters: :mod:`genthermal.schedule.state_estimator`.
 
 **Detection.** Two one-sided tests raise fault alarms, each comparing a generator with the
 generators believed healthy; an alarm of either is an alarm. The *innovation test*
@@ -52,93 +40,21 @@ without the disturbance states in the plan; and in-flight recalibration is poorl
 on blockage_large (optimal scheduler) four fits on the healthy generator's record gave
 ``h_top_air`` 125/102/56/28 W/(m² K) (plant 15.5), ``m_dot_fan`` 0.003-0.007 kg/s (plant 0.02)
 and ``R0`` 1.00-1.13 Ω (plant 1.26): compensating errors that predict the record and little else.
-
-**Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
-generator's record, then the alarmed generator's record since the mission start (inputs and the
-noisy sensors, resampled to ``identify_dt_s``) is handed to :func:`genthermal.diagnose.diagnose`
-with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
-by ΔBIC, and accepted only when significant by diagnose's four tests. The blockage competes
-twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
-(turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
-that leaves the internal convection as it was (blockage_large: k_flow 0.2, n_flow 0, +31 K
-inlet) was sized k_flow 0.80-0.84. The manager then plans and
-filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`), and
-every filter whose model changed restarts its disturbance states at zero (:meth:`StateEstimator.use`:
-the new model has taken in what they carried). An alarm that no effect explains is
-recorded and the detector restarts; a generator is identified at most ``max_identifications``
-times per flight, at least ``identify_spacing_s`` apart.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 import pandas as pd
 
 from ..errors import InputError
-from ..estimation.ekf import ExtendedKalmanFilter
-from ..estimation.kalman import KalmanFilter
 from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
+from .fault_identification import FAULT_EFFECTS, confirms, identify_fault
 from .innovation_detector import InnovationCusum, InnovationCusumSettings
-
-#: Noise settings of the flight EKF: constant and load-scaled heat flows only, as random walks
-#: of 8 and 15 W per hour, no coolant-scaled states, no change detection. The fault detector's
-#: drifts and thresholds (:class:`~genthermal.schedule.detector.DetectorSettings`) were measured
-#: on this filter (``benchmarks/bench_detection.py``), and its CUSUM is itself the flight's change
-#: detection, so the flight keeps it; ``genthermal estimate`` uses the slower defaults of
-#: :mod:`genthermal.estimation.ekf` with its own change test.
-FLIGHT_EKF_SETTINGS = {"disturbance_drift_W": 8.0, "load_scaled_drift_W": 15.0, "coolant_drift_W": 0.0,
-                       "inlet_drift_K": 0.0, "change_threshold": None}
-#: Filters the closed loop can use: name → how to build one from ``(design generator, flown
-#: model, step s)``: ``ekf`` on the flown nonlinear model, ``kf`` on the design model.
-FLIGHT_FILTERS = {"ekf": lambda generator, flown_model, dt_s: ExtendedKalmanFilter(flown_model, dt_s,
-                                                                                   **FLIGHT_EKF_SETTINGS),
-                  "kf": lambda generator, flown_model, dt_s: KalmanFilter(generator.model, dt_s)}
-#: Catalogue effects the manager watches for (heating faults).
-FAULT_EFFECTS = ("coolant_flow_reduction", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
-
-
-#: Suffix of a catalogue variant whose shape parameters are fitted (:func:`flight_catalogue`).
-FREE_SHAPE_SUFFIX = "+shape"
-
-
-def flight_catalogue(effects=FAULT_EFFECTS) -> dict:
-    """The candidate effects of the in-flight identification: the registered catalogue's
-    ``effects`` and, for each one with shape parameters, a variant named
-    ``name + FREE_SHAPE_SUFFIX`` that fits them too (the blockage's convection exponent
-    ``n_flow``, module docstring). Both compete by ΔBIC, so the extra parameter is kept only when
-    the record asks for it: on the detection benchmark's blockages of the default exponent the
-    free variant alone sized one k_flow 0.37 as 0.66 (n_flow 1.5) seven minutes after the onset.
-    A variant's values name the registered effect's parameters (:func:`registered_effect_name`).
-
-    Parameters
-    ----------
-    effects : sequence of str
-        Registered effect names.
-
-    Returns
-    -------
-    dict
-        Candidate name → :class:`~genthermal.effects.Effect`.
-    """
-    from ..effects import get_effect
-
-    catalogue = {}
-    for name in effects:
-        effect = get_effect(name)
-        catalogue[name] = effect
-        if effect.shape_parameters:
-            catalogue[name + FREE_SHAPE_SUFFIX] = dataclasses.replace(
-                effect, name=name + FREE_SHAPE_SUFFIX, parameters=effect.all_parameters, shape_parameters=())
-    return catalogue
-
-
-def registered_effect_name(candidate: str) -> str:
-    """The registered effect of a :func:`flight_catalogue` candidate (its variant suffix dropped)."""
-    return candidate[:-len(FREE_SHAPE_SUFFIX)] if candidate.endswith(FREE_SHAPE_SUFFIX) else candidate
+from .state_estimator import believed_model
 
 
 @dataclasses.dataclass(frozen=True)
@@ -226,168 +142,6 @@ class DetectionSettings:
     equivalent_delta_bic: float = 2.0
 
 
-def planner_state(filter_state, filter_state_names, design_model) -> np.ndarray:
-    """The state the planner needs from a filter's state: the design model's node temperatures.
-
-    The extended Kalman filter's state is the flown model's nodes (°C) followed by its disturbance
-    heat flows (W); the planner's design model has the same nodes. Each design-model node takes the
-    filter's estimate of the node of the same name; the disturbances are handed over separately,
-    as forcing of the design model (:func:`planning_generator`).
-
-    Parameters
-    ----------
-    filter_state : array_like
-        The filter's state, in ``filter_state_names`` order.
-    filter_state_names : sequence of str
-    design_model : ThermalModel
-        The model the planner predicts with.
-
-    Returns
-    -------
-    numpy.ndarray
-        Node temperatures, °C, in ``design_model.state_names`` order.
-    """
-    index = {name: i for i, name in enumerate(filter_state_names)}
-    missing = [name for name in design_model.state_names if name not in index]
-    if missing:
-        raise InputError("design_model", design_model.name,
-                         f"has nodes the filter does not estimate: {', '.join(missing)}")
-    state = np.asarray(filter_state, dtype=float)
-    return np.array([state[index[name]] for name in design_model.state_names])
-
-
-def planning_generator(generator, filter_, filter_state):
-    """The design generator the planner predicts with: ``generator`` with the filter's estimated
-    disturbance heat flows (:meth:`AffineGenerator.with_disturbances
-    <genthermal.schedule.power_system.AffineGenerator.with_disturbances>`).
-
-    Each disturbance node's constant heat flow :math:`d_j` (W) and load-scaled loss :math:`m_j`
-    (W at rated current) of the extended Kalman filter (:mod:`genthermal.estimation.ekf`) go to
-    the design-model node of the same name, so the plan carries the model error the filter has
-    learnt into the future (held constant, as :meth:`ExtendedKalmanFilter.forecast` does). A
-    filter without disturbance states (the linear ``kf``) gives ``generator`` unchanged.
-
-    Parameters
-    ----------
-    generator : AffineGenerator
-        Design model of the generator as the manager believes it.
-    filter_ : RecursiveFilter
-        The generator's filter.
-    filter_state : array_like
-        The filter's state (nodes °C, then disturbances W).
-
-    Returns
-    -------
-    AffineGenerator
-    """
-    if not isinstance(filter_, ExtendedKalmanFilter):
-        return generator
-    model = generator.model
-    state = np.asarray(filter_state, dtype=float)
-    nx, n_nodes = filter_.model.n_states, len(filter_.disturbance_nodes)
-    heat, load_heat = np.zeros(model.n_states), np.zeros(model.n_states)
-    for j, node in enumerate(filter_.disturbance_nodes):
-        if node not in model.state_names:
-            raise InputError("design_model", model.name, f"has no node {node}, where the filter estimates a "
-                             "disturbance heat flow")
-        i = model.state_names.index(node)
-        heat[i] = state[nx + j]
-        if filter_.load_scaled:
-            load_heat[i] = state[nx + n_nodes + j]
-    return generator.with_disturbances(heat, load_heat, filter_.rated_current_A)
-
-
-class StateEstimator:
-    """The filter of one generator on the model the manager believes in.
-
-    Parameters
-    ----------
-    generator : AffineGenerator
-        Design model to start with (what the planner predicts with).
-    flown_model : callable
-        ``flown_model()`` returns the nonlinear model that ``generator`` was linearised from (called
-        only when a filter for ``generator`` is first built).
-    x0 : array_like
-        Initial node temperatures, °C (disturbances start at zero).
-    dt_s : float
-        Filter step, s.
-    filters : dict
-        Filters by design generator, shared between the generators of one flight.
-    filter_name : str
-        Key of :data:`FLIGHT_FILTERS`.
-    """
-
-    def __init__(self, generator, flown_model, x0, dt_s: float, filters: dict, filter_name: str = "ekf"):
-        if filter_name not in FLIGHT_FILTERS:
-            raise InputError("filter", filter_name, f"must be one of {', '.join(FLIGHT_FILTERS)}")
-        self.dt_s, self._filters, self._make = dt_s, filters, FLIGHT_FILTERS[filter_name]
-        self.filter, self.z, self.P = None, np.array(x0, dtype=float), None
-        self._names = None
-        self.innovation, self.innovation_std = np.full(2, np.nan), np.full(2, np.nan)
-        self.use(generator, flown_model)
-
-    @property
-    def x(self) -> np.ndarray:
-        """Node temperatures of the current design model, °C (:func:`planner_state`)."""
-        return planner_state(self.z, self.filter.state_names, self.generator.model)
-
-    @property
-    def planning_generator(self):
-        """The design model with the filter's disturbance heat flows (:func:`planning_generator`)."""
-        return planning_generator(self.generator, self.filter, self.z)
-
-    def use(self, generator, flown_model) -> None:
-        """Continue on ``generator``'s model (``flown_model()`` builds the nonlinear one if needed).
-
-        Node temperatures carry over by name. While the filter's state is the same, the nodes'
-        covariance carries over too; otherwise the covariance restarts from the new filter's ``P0``.
-        The disturbance states (extended Kalman filter) restart at zero with their ``P0`` block
-        whenever the model changes: they carried the error of the old model, which a recalibrated
-        or newly identified model has taken in. Carried over, they counted that error twice: on
-        blockage_large with the engineer's heuristic, a recalibration on the healthy generator's
-        record at 185 min left its filter predicting it 4.2 K too hot after one cycle at 7 A; the
-        sensor watch took the -4.35 K innovation for a stuck winding sensor and masked it, and with
-        offset-free planning the manager then switched the healthy generator off.
-        """
-        if id(generator) not in self._filters:
-            self._filters[id(generator)] = self._make(generator, flown_model(), self.dt_s)
-        self.generator, new = generator, self._filters[id(generator)]
-        if self._names != new.state_names:
-            nodes = dict(zip(self._names or generator.model.state_names, self.z))
-            self.z = np.array([nodes.get(name, 0.0) for name in new.state_names])
-            self.P, self._names = new.P0, list(new.state_names)
-        elif new is not self.filter and isinstance(new, ExtendedKalmanFilter):
-            nx = new.model.n_states
-            self.z = np.concatenate([self.z[:nx], np.zeros(len(self.z) - nx)])
-            P = np.array(new.P0, dtype=float)
-            P[:nx, :nx] = self.P[:nx, :nx]
-            self.P = P
-        self.filter = new
-
-    def update(self, y) -> None:
-        """Measurement update with the measured winding and iron temperatures ``y`` (°C); keeps the
-        innovation and its predicted standard deviation (K)."""
-        H = self.filter.H if isinstance(self.filter, ExtendedKalmanFilter) else self.filter.C
-        self.innovation_std = np.sqrt(np.diag(H @ self.P @ H.T + self.filter.R))
-        step = self.filter.update(self.z, self.P, y)
-        self.z, self.P, self.innovation = step.x, step.P, step.innovation
-
-    def predict(self, currents_A, inlets_C, ambient_C) -> None:
-        """Time updates over the applied phase currents and the measured inlet and ambient
-        temperatures (°C; the ambient one per step or one for all), one per step."""
-        ambients = np.broadcast_to(np.asarray(ambient_C, dtype=float), np.shape(currents_A))
-        for current, inlet, ambient in zip(currents_A, inlets_C, ambients):
-            self.z, self.P = self.filter.predict(self.z, self.P, self.generator.input(current, inlet, float(ambient)))
-
-
-def believed_model(base, effects):
-    """``base`` (a nonlinear model) with ``effects`` (``(name, ((parameter, value), ...))`` pairs)
-    applied in order."""
-    for name, values in effects:
-        base = base.with_effect(name, **dict(values))
-    return base
-
-
 class Cusum:
     """CUSUM with drift :math:`\nu` and threshold :math:`h`; one- or two-sided."""
 
@@ -405,60 +159,6 @@ class Cusum:
             self.high = self.low = 0.0
             return True
         return False
-
-
-@dataclasses.dataclass
-class Identification:
-    """An effect identified in flight.
-
-    Attributes
-    ----------
-    generator : int
-    detected_at_s : float
-        Time of the alarm, s.
-    effect : str or None
-        Identified effect, None when nothing significant explains the record.
-    values : dict
-        Fitted parameters of the effect.
-    onset_s : float or None
-        Fitted onset, s since the mission start.
-    delta_bic : float or None
-        ΔBIC of the effect (confidence: below -10 is very strong evidence).
-    rmse_before_K, rmse_after_K : float or None
-        Fit of the record without and with the effect, K.
-    runner_up : str or None
-        Second-ranked effect and its ΔBIC gap, for ambiguity.
-    equivalent : list of str
-        Other effects that explain the record as well (within ``equivalent_delta_bic``).
-    solve_s : float
-        Wall-clock time of the identification, s.
-    """
-
-    generator: int
-    detected_at_s: float
-    effect: str | None
-    values: dict
-    onset_s: float | None
-    delta_bic: float | None
-    rmse_before_K: float | None
-    rmse_after_K: float | None
-    runner_up: str | None
-    solve_s: float
-    equivalent: list = dataclasses.field(default_factory=list)
-
-    @property
-    def effects(self) -> tuple:
-        """The belief as ``((effect, ((name, value), ...)),)`` (empty when none was identified)."""
-        return ((self.effect, tuple(self.values.items())),) if self.effect else ()
-
-    def to_dict(self, names) -> dict:
-        """JSON entry: generator name, effect, parameters, onset and confidence."""
-        return {"generator": names[self.generator], "detected_at_s": self.detected_at_s, "effect": self.effect,
-                "parameters": self.values, "onset_s": self.onset_s,
-                "confidence": {"delta_bic": self.delta_bic, "rmse_before_K": self.rmse_before_K,
-                               "rmse_after_K": self.rmse_after_K, "runner_up": self.runner_up,
-                               "equivalent": list(self.equivalent)},
-                "solve_s": self.solve_s}
 
 
 def record_frame(interface, time_s, currents_A, excitation_A, inlet_C, ambient_C,
@@ -696,25 +396,6 @@ class FaultMonitor:
                 self.innovation_test.restart(g)
 
 
-def confirms(new, believed, tolerance: float) -> bool:
-    """True when the effects ``new`` (``((name, ((parameter, value), ...)),)``, registered names)
-    are ``believed`` with every parameter within ``tolerance`` times the larger of the believed
-    value and the parameter's typical value (``DetectionSettings.confirm_tolerance``)."""
-    from ..effects import get_effect
-
-    if len(new) != len(believed) or not new:
-        return False
-    for (name, values), (old_name, old_values) in zip(new, believed):
-        values, old_values = dict(values), dict(old_values)
-        if name != old_name or set(values) != set(old_values):
-            return False
-        typical = {p.name: abs(p.typical or 0.0) for p in get_effect(name).all_parameters}
-        if any(abs(values[k] - old_values[k]) > tolerance * max(abs(old_values[k]), typical.get(k, 0.0))
-               for k in values):
-            return False
-    return True
-
-
 def detector_node_roles(model) -> list:
     """Per sensor node of ``model`` (the extended Kalman filter's disturbance nodes), ``"winding"``
     when it is the machine's slot-winding node and ``"iron"`` when it is one of its iron nodes
@@ -731,47 +412,3 @@ def detector_node_roles(model) -> list:
                              f"nor the iron ({', '.join(iron)}): the fault detector has no drift for it")
         roles.append("winding" if node == winding else "iron")
     return roles
-
-
-def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: float,
-                   settings: DetectionSettings) -> Identification:
-    """Identify the effect behind an alarm from the record (module docstring): the best-ranked
-    significant effect of diagnose's search whose onset is at most ``max_onset_lead_s`` before
-    the alarm and that makes the machine run hotter than the model, with the effects equivalent
-    to it. An effect fitted on the cooling side of its neutral value (e.g. a "blockage" with
-    ``k_flow`` > 1, more coolant than designed) is the model's error, not a fault: believing it
-    made the planner load a healthy generator that had taken over shed load 1.7 K past θmax
-    (``tests/test_closed_loop_shed.py``). Sensor faults are the sensor watch's
-    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen."""
-    from ..diagnose import diagnose
-
-    started = time.perf_counter()
-    catalogue = flight_catalogue(settings.fault_effects)
-    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(catalogue),
-                         pairs=False, design_experiment=False,  # one fault at a time, no rig test in flight
-                         sensor_faults=False, catalogue=catalogue)
-    first = diagnosis.iterations[0]
-    ranked = first.ranked
-    earliest = min(detected_at_s - settings.max_onset_lead_s, settings.late_onset_s)
-
-    def heats(candidate) -> bool:
-        after = slice(candidate.onset_index, None)
-        return bool(np.nanmean(candidate.predicted[:, after] - first.predicted_before[:, after]) > 0.0)
-
-    admissible = [c for c in ranked if c.onset_s >= earliest and heats(c)]
-    best = admissible[0] if admissible and admissible[0].significant else None
-    effect = None if best is None else registered_effect_name(best.effect)
-    # the other explanations: other effects (a variant of the same effect is the same explanation)
-    others = [c for c in admissible if registered_effect_name(c.effect) != effect]
-    runner_up = (f"{registered_effect_name(others[0].effect)} "
-                 f"(ΔBIC +{others[0].delta_bic - admissible[0].delta_bic:.0f})" if best is not None and others else None)
-    elapsed = time.perf_counter() - started
-    if best is None:
-        return Identification(generator, detected_at_s, None, {}, None,
-                              float(admissible[0].delta_bic) if admissible else None,
-                              diagnosis.iterations[0].rmse_before, None, runner_up, elapsed)
-    equivalent = list(dict.fromkeys(registered_effect_name(c.effect) for c in others
-                                    if c.delta_bic - best.delta_bic <= settings.equivalent_delta_bic))
-    return Identification(generator, detected_at_s, effect, dict(best.values), float(best.onset_s),
-                          float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up,
-                          elapsed, equivalent)

@@ -68,8 +68,8 @@ DEFAULT_PLANT_MISMATCH = {"h_end_air": 0.9, "R0": 1.05}
 FAULT_KINDS = ("coolant_blockage", "inlet_rise", "effect")
 def _filter_name(config: Mapping) -> str | None:
     """``generators.filter`` of a scenario, None when it names none; InputError for a name that is
-    not a key of :data:`genthermal.schedule.monitor.FLIGHT_FILTERS`."""
-    from .monitor import FLIGHT_FILTERS  # monitor imports this module
+    not a key of :data:`genthermal.schedule.state_estimator.FLIGHT_FILTERS`."""
+    from .state_estimator import FLIGHT_FILTERS# monitor imports this module
 
     if "filter" not in config:
         return None
@@ -220,7 +220,7 @@ class AffineGenerator:
     constant input exactly, :math:`x(h) = x_{ss} + e^{hL}(x(0) - x_{ss})`.
 
     :meth:`with_disturbances` adds the heat flows a filter estimates the model lacks (offset-free
-    planning, :func:`genthermal.schedule.monitor.planning_generator`).
+    planning, :func:`genthermal.schedule.state_estimator.planning_generator`).
 
     **Rest current and the copper-loss floor.** The matrices are those of the design model's
     *affine branch*: its copper loss per phase :math:`\max(aI + b, 0)` (thesis eq. 5.3,
@@ -404,17 +404,17 @@ class PowerSystem:
         model with ``plant_mismatch`` applied.
     margin_K : float, optional
         The scenario's back-off margin of the load manager below ``limit_C``, K; None (default):
-        the manager's own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.margin_K`).
+        the manager's own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.margin_K`).
     filter : str, optional
         The scenario's filter in the loop (``generators.filter``: ``"ekf"`` or ``"kf"``, e.g. the
         thesis's linear filter in the thesis-reproduction scenarios); None (default): the manager's
-        own (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.filter`).
+        own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.filter`).
     when_infeasible : str, optional
         The scenario's response when even the lowest reachable peak is above ``limit_C``
         (``generators.when_infeasible``, one of :data:`~genthermal.schedule.shed.INFEASIBLE_RESPONSES`:
         ``shed`` or ``best_effort``, e.g. the thesis heuristic's best effort in the
         thesis-reproduction scenarios); None (default): the manager's own
-        (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.when_infeasible`).
+        (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.when_infeasible`).
     """
 
     mission: Mission

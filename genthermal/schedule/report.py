@@ -45,7 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from ..plots import finish_figure, plt  # the Agg backend is chosen there
-from .closed_loop import FlightResult, ManagerSettings
+from .flight_result import FlightResult
+from .manager_settings import ManagerSettings
 from .power_system import PowerSystem
 from .shed import not_served
 

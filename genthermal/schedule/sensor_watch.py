@@ -76,7 +76,8 @@ import math
 import numpy as np
 
 from ..sensor_faults import SensorFault
-from .monitor import Cusum, believed_model, detector_node_roles
+from .monitor import Cusum, detector_node_roles
+from .state_estimator import believed_model
 from .sensor_patterns import UnconfirmedExcess, frozen_since, opposite_flows
 
 #: The ``action`` of a claimed bias (module docstring, "Acting on a claim").
@@ -453,7 +454,7 @@ class SensorWatch:
 
     def trusts_heat_flows(self, g: int, t_s: float) -> bool:
         """Whether the planner may take generator ``g``'s estimated disturbance heat flows at
-        ``t_s`` (offset-free planning, :func:`~genthermal.schedule.monitor.planning_generator`).
+        ``t_s`` (offset-free planning, :func:`~genthermal.schedule.state_estimator.planning_generator`).
 
         Not while one of its sensors is claimed faulty (the filter learnt them partly from the
         faulty samples, and with the sensor masked they are no longer observed), unless that is a

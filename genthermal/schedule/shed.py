@@ -13,7 +13,7 @@ back in flight):
   when it needs none, the room it has for more (current limit and thermal room, as the
   engineer's heuristic computes it, :func:`~genthermal.schedule.heuristic.receiver_room`);
 * a generator takes on others' load only up to the planning limit minus ``receiver_margin_K``
-  (the manager's margin once more, :class:`~genthermal.schedule.closed_loop.ManagerSettings`):
+  (the manager's margin once more, :class:`~genthermal.schedule.manager_settings.ManagerSettings`):
   load moved onto it drives it where its model has not been checked in this flight;
 * and only as far as the heat it takes on does not make it exceed that limit later, flying its
   own nominal load, where it would not without it

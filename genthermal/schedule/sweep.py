@@ -13,7 +13,7 @@ other schedulers' records are that flight's, marked ``same_flight_as`` (most cas
 a fault the manager finds in time or a plant that stays cool needs no re-plan), which saves
 flying it again. A flight that raises is recorded with
 ``status`` ``error`` and the error; one that runs past ``flight_cpu_limit_s`` of processor time
-with ``timeout`` (:class:`~genthermal.schedule.closed_loop.FlightTimeout`, checked every
+with ``timeout`` (:class:`~genthermal.schedule.flight_result.FlightTimeout`, checked every
 management cycle; processor time, so that a machine busy with other work does not turn slow
 flights into timeouts); one
 still running when the whole sweep passes ``timeout_s`` with ``unfinished``: none is lost.
@@ -117,7 +117,7 @@ def expected_cost(document: dict) -> float:
 
 def planner_model_of(scheduler: str, optimal_planner_model: str = "affine") -> str:
     """The model ``scheduler`` plans on in a sweep: ``optimal_planner_model`` for the optimal
-    scheduler (one of :data:`~genthermal.schedule.closed_loop.PLANNER_MODELS`), the design model
+    scheduler (one of :data:`~genthermal.schedule.manager_settings.PLANNER_MODELS`), the design model
     (``affine``) for the baselines, which are defined on it."""
     return optimal_planner_model if scheduler == "optimal" else "affine"
 
@@ -180,7 +180,7 @@ def hindsight_record(document: dict) -> dict:
 def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S,
                planner_model: str = "affine") -> dict:
     """Fly case ``document`` with ``scheduler`` planning on ``planner_model``
-    (:attr:`~genthermal.schedule.closed_loop.ManagerSettings.planner_model`); never raises.
+    (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.planner_model`); never raises.
 
     Returns
     -------
@@ -190,7 +190,9 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
         ``summary`` (:func:`~genthermal.schedule.report.flight_summary` without its warnings) or
         ``error`` (what went wrong and, for an error, the last lines of its traceback).
     """
-    from .closed_loop import FlightTimeout, ManagerSettings, fly
+    from .closed_loop import fly
+    from .flight_result import FlightTimeout
+    from .manager_settings import ManagerSettings
     from .power_system import PowerSystem
     from .report import flight_summary
 
@@ -270,7 +272,7 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     list of dict
         :func:`case_records`, in the order of ``documents``.
     """
-    from .closed_loop import PLANNER_MODELS
+    from .manager_settings import PLANNER_MODELS
 
     if optimal_planner_model not in PLANNER_MODELS:
         raise InputError("optimal_planner_model", optimal_planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")

@@ -1,0 +1,279 @@
+r"""Re-planning in the load management system: one scheduler run, and what the manager does when it fails.
+
+When no schedule keeps the prediction within the limit, the lowest reachable peak is found
+(min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
+the generator and the action. When that peak is above θmax itself, rest cannot help, and what the
+manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario's
+``generators.when_infeasible`` or ``ManagerSettings.when_infeasible``):
+
+* ``shed`` (default): the manager **sheds** load (:mod:`genthermal.schedule.shed`): each generator
+  carries at most what keeps it within the planning limit, the others take what their limits
+  allow, the rest is not served; a generator too hot even when carrying nothing is switched off
+  for the rest of the mission;
+* ``best_effort``: what the thesis heuristic does, which has no load shedding (thesis 7.2, Fig.
+  7.2; its large blockage breaches 110.7 and 111 °C, 7.3.3): the scheduler's own plan is flown,
+  all load served, knowing it breaches θmax by its predicted peak (the heuristic's, for a segment
+  no rest makes feasible: the longest rest left and the largest displacement the receivers can
+  take within θmax, so a healthy receiver is not planned past it; the optimal scheduler's: the
+  heuristic's, :func:`~genthermal.schedule.optimal.optimal_plan`).
+
+Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
+
+The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
+default :data:`~genthermal.schedule.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
+is left of it, so a flight ends within its mission time plus the budget, after at most
+``(mission + budget) / cycle_s + 1`` management cycles, whatever the plant does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import InputError
+from .engineer import engineer_plan
+from .flown import FlownPlanning
+from .heuristic import heuristic_plan
+from .manager_settings import ManagerSettings, planning_margin_K
+from .milp import milp_plan
+from .optimal import lowest_reachable_peak, optimal_plan
+from .optimal_nlp import flown_optimal_plan
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments, split_segments
+from .power_system import PowerSystem
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
+
+
+def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
+              previous=None, switched_off=None, when_infeasible: str | None = None,
+              shedding: bool = False) -> PlanResult:
+    """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
+
+    Parameters
+    ----------
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
+    problem : PlanningProblem
+        Its ``limit_C`` is the planning limit (θmax minus the margin); its ``rest_budget_s`` bounds
+        the total rest of the plan (rests beyond it are cut, earliest kept).
+    settings : ManagerSettings
+    names : sequence of str
+        Generator names, for the messages.
+    limit_C : float
+        θmax, °C.
+    previous : Schedule, optional
+        Warm start of the optimal scheduler.
+    switched_off : array-like of bool, optional
+        (n_generators,) generators already switched off: the plan is :func:`~.shed.shed_plan`.
+    when_infeasible : str, optional
+        One of :data:`INFEASIBLE_RESPONSES`, what to do when the lowest reachable peak is above
+        θmax; None (default): ``settings.when_infeasible``.
+    shedding : bool
+        The manager sheds load now (its last plan did). It goes back to plans without shedding
+        only once one keeps the planning limit: while the lowest reachable peak is above it, it
+        keeps shedding rather than fly a schedule that uses up the margin (hysteresis). Measured
+        on the robustness grid's case 15 (a k_flow 0.23 blockage on gen2 of 3): the lowest-peak
+        schedules flown after the shedding, 0.2-0.6 K into the margin, moved gen2's landing load onto
+        the healthy generators, which the plant's 25 % weaker cooling took to 110.5 °C (20 s
+        above θmax).
+
+    Returns
+    -------
+    PlanResult
+        ``feasible`` is True only when the plan's own prediction, with its back-off (the margin and
+        the rise back-off), stays within the planning limit. Otherwise ``details`` hold the lowest
+        reachable peak (``lowest_peak_C``, its generator and action), the peak of the plan flown
+        (``planned_peak_C``) and what the manager does about it (``response``); when that peak is
+        above θmax and ``when_infeasible`` is ``shed``, the plan sheds load (``method`` ``shed``;
+        ``shedding``: the generators whose load is shed, ``switched_off``: the generators off); with
+        ``best_effort`` it is the scheduler's own plan, all load served (``best_effort`` True in
+        ``details``).
+    """
+    response_mode = settings.when_infeasible if when_infeasible is None else when_infeasible
+    if response_mode not in INFEASIBLE_RESPONSES:
+        raise InputError("when_infeasible", response_mode, f"must be one of {', '.join(INFEASIBLE_RESPONSES)}")
+    if switched_off is not None and np.any(switched_off):
+        off = np.array(switched_off, dtype=bool)
+        return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
+
+    def run(p, initial=previous):
+        if scheduler == "heuristic":
+            return heuristic_plan(p, settings.heuristic)
+        if scheduler == "engineer":
+            return engineer_plan(p, settings.engineer)
+        if scheduler == "optimal":
+            return optimal_plan(p, settings.optimal, initial)
+        return milp_plan(p, settings.milp)
+    result = _within_budget(problem, run(problem))
+    if result.feasible:
+        return result
+    lowest = _within_budget(problem, lowest_reachable_peak(problem, settings.optimal))
+    segment = problem.segments[lowest.peak_segment]
+    where = (f"the lowest reachable peak is {lowest.peak_C:.1f} °C, on {names[lowest.peak_generator]} during "
+             f"action {segment.action_index + 1} ({segment.label})")
+    found = dict(lowest_peak_C=lowest.peak_C, lowest_peak_generator=names[lowest.peak_generator],
+                 lowest_peak_action=segment.action_index + 1)
+    keep_shedding = shedding and lowest.peak_C > problem.limit_C + LIMIT_TOLERANCE_K
+    if (lowest.peak_C > limit_C or keep_shedding) and response_mode == "shed":
+        nobody = np.zeros(problem.n_generators, dtype=bool)
+        if lowest.peak_C <= limit_C:
+            where += (f", within θmax {limit_C:g} °C: the manager, shedding, keeps shedding until a plan keeps "
+                      "the margin")
+        if problem.flown is not None:  # shed as little load as keeps θmax on the flown model
+            shed = _flown_shed(problem, settings, previous, names, limit_C, where)
+            if shed is not None:
+                shed.solve_s += result.solve_s + lowest.solve_s
+                shed.details.update(found)
+                return shed
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K,
+                     within_margin=lowest.peak_C <= limit_C)
+        shed.solve_s += result.solve_s + lowest.solve_s
+        shed.details.update(found)
+        return shed
+    if lowest.peak_C > limit_C:  # best effort: the scheduler's own plan, all load served
+        best = _best_effort(problem, result, names, limit_C, where, found)
+        best.solve_s += lowest.solve_s
+        return best
+    within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
+    relaxed = _within_budget(problem, run(within_lowest, lowest.schedule))  # the min-max schedule is feasible there
+    if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
+        relaxed = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(relaxed.warnings))
+    response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
+                f"{relaxed.schedule.displaced_Ah(problem.segments):.2f} A·h to the other generators")
+    if relaxed.peak_C > limit_C:
+        message = f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}"
+    else:
+        message = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C; "
+                   f"{where}, within θmax {limit_C:g} °C; {response}")
+    relaxed.feasible = False
+    relaxed.solve_s += result.solve_s + lowest.solve_s
+    relaxed.warnings.append(message)
+    relaxed.details.update(found, planned_peak_C=relaxed.peak_C, response=response)
+    return relaxed
+
+
+def _best_effort(problem: PlanningProblem, result: PlanResult, names, limit_C: float, where: str,
+                 found: dict) -> PlanResult:
+    """The scheduler's own plan ``result`` flown although it breaches θmax (``when_infeasible``
+    ``best_effort``): every load served, the breach predicted and reported; ``details`` carry
+    ``best_effort`` True and the plan's predicted peak."""
+    rested = result.schedule.added_rest_s / 60.0
+    moved_Ah = result.schedule.displaced_Ah(problem.segments)
+    response = (f"best effort, no load shed: rest {rested:.1f} min, move {moved_Ah:.2f} "
+                f"A·h to the other generators; predicted peak {result.peak_C:.1f} °C on {names[result.peak_generator]}, "
+                f"{result.peak_C - limit_C:.1f} K above θmax {limit_C:g} °C")
+    result.feasible = False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(found, planned_peak_C=result.peak_C, response=response, best_effort=True)
+    return result
+
+
+def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
+                where: str) -> PlanResult | None:
+    """The optimal scheduler on the flown model with load allowed to go unserved
+    (:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``); None when even that
+    does not keep its prediction within θmax (the caller switches generators off)."""
+    result = flown_optimal_plan(problem, settings.optimal.nonlinear, previous, shed=True)
+    if not result.feasible:  # its own prediction, with its back-off, above θmax
+        return None
+    result = _within_budget(problem, result)
+    not_served = result.schedule.displaced_A.sum(axis=0)
+    short = not_served > NOT_SERVED_TOLERANCE_A
+    shedding = [names[g] for g in range(problem.n_generators)
+                if np.any((result.schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A) & short)]
+    durations = np.array([s.duration_s for s in problem.segments])
+    not_served_Ah = float(np.sum(np.clip(not_served, 0.0, None) * durations) / 3600.0)
+    response = (f"shed load of {', '.join(shedding) or 'nobody'}: {not_served_Ah:.2f} A·h not served, the least "
+                f"that keeps every generator within θmax {limit_C:g} °C on the flown model with its back-off, after rest "
+                f"{result.schedule.added_rest_s / 60:.1f} min and displacement")
+    result.method, result.feasible = "shed", False
+    result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
+    result.details.update(response=response, planned_peak_C=result.peak_C, shedding=shedding, switched_off=[])
+    return result
+
+
+def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:
+    """``result`` with its rests cut to ``problem.rest_budget_s`` and the rest before the first
+    segment to ``max_rest_s`` minus the rest already taken before it; re-evaluated when cut."""
+    schedule = result.schedule.within_rest_budget(problem.rest_budget_s, first_rest_max_s(problem))
+    if np.allclose(schedule.rest_before_s, result.schedule.rest_before_s, rtol=0.0, atol=1e-6):
+        return result
+    cut = evaluate(problem, schedule, result.method, result.solve_s, result.warnings)
+    cut.feasible = cut.feasible and result.feasible
+    cut.details = dict(result.details, rest_cut_to_budget_s=problem.rest_budget_s)
+    cut.warnings.append(f"rests cut to the {problem.rest_budget_s / 60:.1f} min left of the flight's rest budget "
+                        f"and {problem.max_rest_s / 60:g} min before one action")
+    return cut
+
+
+def first_rest_max_s(problem: PlanningProblem) -> float:
+    """Rest still allowed before the first segment, s."""
+    return max(problem.max_rest_s - problem.rest_taken_s, 0.0)
+
+
+def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
+          where: str, receiver_margin_K: float, within_margin: bool = False) -> PlanResult:
+    """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
+    breaches θmax on a generator still on, switch that one off too; the
+    :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
+    ``feasible``. ``within_margin``: θmax can be kept but the planning limit cannot (the messages
+    say so)."""
+    off = off.copy()
+    result = shed_plan(problem, off, receiver_margin_K)
+    # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
+    # θmax, and a strict comparison switched the healthy receiver off for a 3e-14 K excess
+    while result.peak_C > limit_C + LIMIT_TOLERANCE_K and not off[result.peak_generator]:
+        off[result.peak_generator] = True
+        result = shed_plan(problem, off, receiver_margin_K)
+    newly = [names[g] for g in np.flatnonzero(off & ~already)]
+    shedding = [names[g] for g in result.details["shedding"]]
+    if where:
+        bound = f"the planning limit {problem.limit_C:.1f} °C" if within_margin else f"θmax {limit_C:g} °C"
+        response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
+                    f"displacement keeps it within {bound}; each generator carries at most what keeps "
+                    "it within the planning limit, the others take what their limits allow, the rest is not served"
+                    + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
+        headline = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C"
+                    if within_margin else f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C")
+        result.warnings.append(f"{headline}; {where}; {response}")
+        result.details.update(response=response)
+    elif newly:
+        response = f"switch off {', '.join(newly)} (too hot even carrying nothing)"
+        result.warnings.append(f"shed: {response}")
+        result.details.update(response=response)
+    result.feasible = False
+    result.details.update(planned_peak_C=result.peak_C, shedding=shedding,
+                          switched_off=[names[g] for g in np.flatnonzero(off)])
+    return result
+
+
+def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
+             rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
+             inputs_C: dict | None = None, unexplained_rise_K=None) -> PlanningProblem:
+    """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
+    ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
+    nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance.
+    ``inputs_C`` (input name → (n_gen, 1) readings at ``t_s``, °C): the measured inlet of each
+    generator and the median measured ambient, held over the plan (default the mission's);
+    ``unexplained_rise_K`` (n_generators, n_outputs), K: the last cycle's rise the filters did not
+    explain (``PlanningProblem.unexplained_rise_K``)."""
+    generator = system.planning_model.spec.interface.generator
+    inputs_C = inputs_C or {}
+    inlet = np.array([float(inputs_C[generator.coolant_input][g, 0]) if generator.coolant_input in inputs_C
+                      else float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+    ambient = float(np.median(inputs_C[generator.ambient_input][:, 0])) if generator.ambient_input in inputs_C \
+        else system.mission.T_ambient_C
+    budget = max(float(rest_budget_s), 0.0)
+    limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
+        (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
+    return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
+                           ambient, system.rest_current_A, system.current_limit_A,
+                           limit, min(settings.max_rest_s, budget), settings.dt_s,
+                           rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown,
+                           None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
+
+
+def flight_segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
+    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle."""
+    segments = mission_segments(system.mission)
+    return split_segments(segments, settings.cycle_s) if settings.nonlinear else segments
+
