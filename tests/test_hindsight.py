@@ -49,3 +49,10 @@ def test_hindsight_needs_a_fault(tmp_path):
     healthy = SHORT.split("faults:")[0] + "actions:" + SHORT.split("actions:")[1]
     with pytest.raises(InputError, match="faults"):
         hindsight_problem(_system(tmp_path, healthy))
+
+
+def test_hindsight_margin_lowers_the_limit_and_is_checked(tmp_path):
+    system = _system(tmp_path, SHORT)
+    assert hindsight_problem(system, margin_K=2.5).limit_C == system.limit_C - 2.5
+    with pytest.raises(InputError, match="margin_K"):
+        hindsight_problem(system, margin_K=-1.0)

@@ -89,7 +89,7 @@ def _true_state_at(system, t_s: float, dt_s: float) -> np.ndarray:
 
 
 def hindsight_problem(system, cycle_s: float = 300.0, dt_s: float = 10.0, rest_budget_s: float | None = None,
-                      max_rest_s: float = 3600.0) -> PlanningProblem:
+                      max_rest_s: float = 3600.0, margin_K: float = 0.0) -> PlanningProblem:
     """The planning problem of :func:`hindsight_plan` (module docstring) at the first fault's onset.
 
     Parameters
@@ -104,12 +104,17 @@ def hindsight_problem(system, cycle_s: float = 300.0, dt_s: float = 10.0, rest_b
         Rest the flight may add, s; default the closed loop's (a quarter of the mission).
     max_rest_s : float
         Longest rest before one interval, s.
+    margin_K : float
+        Plan to θmax minus this, K (default 0: with everything known no margin is needed; the
+        affine closed loop's 2.5 K shows what its margin costs).
     """
     from .manager_settings import DEFAULT_REST_BUDGET_FRACTION
     from .state_estimator import FLIGHT_EKF_SETTINGS
 
     if not system.faults:
         raise InputError("faults", [], "a hindsight plan needs a faulty flight")
+    if not (np.isfinite(margin_K) and margin_K >= 0):
+        raise InputError("margin_K", margin_K, "must be a number of kelvin >= 0")
     onset = min(f.onset_s for f in system.faults)
     onset = float(np.ceil(onset / dt_s - 1e-9) * dt_s)
     budget = DEFAULT_REST_BUDGET_FRACTION * system.mission.duration_s if rest_budget_s is None else float(rest_budget_s)
@@ -131,7 +136,7 @@ def hindsight_problem(system, cycle_s: float = 300.0, dt_s: float = 10.0, rest_b
                           for name in generators[g].model.state_names] for g in range(system.n_generators)])
     return PlanningProblem(split_segments(remaining, cycle_s), generators, x_design, inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
-                           system.limit_C, min(max_rest_s, budget), dt_s, 0.0, cycle_s, budget, 0.0, flown)
+                           system.limit_C - margin_K, min(max_rest_s, budget), dt_s, 0.0, cycle_s, budget, 0.0, flown)
 
 
 def hindsight_schedule(problem: PlanningProblem, settings: NonlinearSettings = NonlinearSettings()):
