@@ -6,7 +6,7 @@ Usage::
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json --merge refly.json
 
 ``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
-seed) in place of the same cases of the whole grid, recomputes every summary key with
+seed) that every scheduler flew to the end in place of the same cases of the whole grid, recomputes every summary key with
 :func:`genthermal.schedule.sweep.summarise`, records the re-fly under ``provenance.merged`` and
 writes the whole grid's JSON back before reporting on it.
 
@@ -116,7 +116,8 @@ def merge_cases(report: dict, partial: dict) -> dict:
     unknown = [c["name"] for c in partial["cases"] if c["name"] not in names]
     if unknown:
         raise ValueError(f"cases {unknown} of the re-fly are not in the grid (same --cases and --seed?)")
-    new = {c["name"]: c for c in partial["cases"]}
+    new = {c["name"]: c for c in partial["cases"]  # a case the re-fly did not finish keeps the grid's record
+           if all(run.get("status", "ok") == "ok" for run in c["runs"].values())}
     cases = [new.get(name, case) for name, case in zip(names, report["cases"])]
     provenance = dict(report.get("provenance") or {})
     provenance["merged"] = list(provenance.get("merged") or []) + [
