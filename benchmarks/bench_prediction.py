@@ -17,7 +17,10 @@ Their records carry sensor noise of thesis eq. 6.10 and 1 % current noise
 1. The built-in model is calibrated (:func:`genthermal.diagnose.calibrate`, the baseline parameters
    of ``diagnose``) on ONE healthy record of the plant: the thesis Fig. 7.7 mission (27-100 %
    load), and separately the ground-running mission ``scenarios/data/low_load_calibration.yaml``
-   (27.3 % / 55 % only: a calibration fitted over a different load range than the test).
+   (27.3 % / 55 % only: a calibration fitted over a different load range than the test). As
+   ``genthermal calibrate --out`` does, the calibrated model carries the disturbance prior learnt
+   on that same record (:func:`genthermal.estimation.disturbance_prior.learn_disturbance_prior`),
+   where the EKF on it starts; the open loop is the calibrated model without it.
 2. Filters and predictions are scored on DIFFERENT records of the same plant (:data:`RECORDS`):
    the varying-load test (27 % <-> 100 % every 30 min) and the thesis Fig. 3.2 flight with the
    Fig. 7.7 calibration, the thesis large-blockage flight (coolant flow 20 % and inlet +31 K from
@@ -38,9 +41,11 @@ Reported per record and method: winding and iron prediction RMS and max at 15/30
 every 10 min), the open-loop error at the same samples, their ratio, one-step RMS, and the issue's
 targets; per record a ``reference`` (:mod:`prediction_references`): the calibrated model from the
 plant's TRUE state, the same with the disturbances the filter held at the end of the record
-(hindsight: what is left once the model error is learnt), the noise floor, and the filter's RMS
+(hindsight: what is left once the model error is learnt), the calibrated model open loop with
+its disturbance prior held (what the prior alone gives), the noise floor, and the filter's RMS
 over the starts before and after it could know the model error (31 min; on a fault the first
-change alarm); per healthy record ``half_open_loop``: ``met``, ``missed`` or ``below the noise
+change alarm; there also the RMS the starts before the alarm give alone, a floor no filter that
+cannot know the onset beats); per healthy record ``half_open_loop``: ``met``, ``missed`` or ``below the noise
 floor`` (half the open loop at or under the noise floor: no prediction can score that). Per plant
 and record, ``summary`` gives the mean and worst over the noise draws.
 """
@@ -58,6 +63,7 @@ from genthermal.commands.synth import apply_scenario_faults
 from genthermal.design import linear_design_model
 from genthermal.diagnose.calibrate import calibrate
 from genthermal.diagnose.discover import DEFAULT_BASELINE_PARAMETERS
+from genthermal.estimation.disturbance_prior import learn_disturbance_prior
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.estimation.prediction import on_grid, prediction_study
@@ -156,7 +162,7 @@ def plant_study(plant_file: Path, seed_offset: int = 0, all_methods: bool = True
     for key, (scenario, seed) in CALIBRATIONS.items():
         healthy = record(plant, scenario, seed=seed + seed_offset)
         fit = calibrate(built_in, healthy, list(DEFAULT_BASELINE_PARAMETERS))
-        calibrated[key] = fit.model
+        calibrated[key] = fit.model.with_disturbance_prior(learn_disturbance_prior(fit.model, healthy, DT_S))
         results["calibration"][key] = {
             "record": healthy.source, "fitted": {n: round(v, 4) for n, v in zip(fit.names, fit.values)},
             "rmse_after_K": round(fit.after["rmse_all_sensors"], 3)}
@@ -209,6 +215,15 @@ def seed_summary(studies: list[dict]) -> dict:
             hindsight = np.array([[s["reference"]["hindsight_rmse_by_horizon"][h]["T_winding"] for h in HORIZONS]
                                   for s in sections])
             entry["hindsight_mean"] = _triple(hindsight.mean(0))
+        if all("prior_open_loop_rmse_by_horizon" in s["reference"] for s in sections):
+            entry["prior_open_loop_mean"] = _triple(np.mean(
+                [[s["reference"]["prior_open_loop_rmse_by_horizon"][h]["T_winding"] for h in HORIZONS]
+                 for s in sections], axis=0))
+        if all("floor_from_starts_before_alarm_by_horizon" in s["reference"] for s in sections):
+            floor = np.array([[s["reference"]["floor_from_starts_before_alarm_by_horizon"][h]["T_winding"]
+                               for h in HORIZONS] for s in sections])
+            entry["floor_from_starts_before_alarm_mean"] = _triple(floor.mean(0))
+            entry["floor_from_starts_before_alarm_worst"] = _triple(floor.max(0))
         splits = [s["reference"]["split"] for s in sections]
         for which in ("before", "from"):
             rows = [[split[which][h]["T_winding"] for h in HORIZONS] for split in splits if split[which]["15"]]
@@ -221,7 +236,8 @@ def seed_summary(studies: list[dict]) -> dict:
 
 def winding_table(results: dict) -> list[str]:
     """One line per plant and record, over the seeds: calibrated EKF winding RMS mean (worst), ratio
-    to the open loop mean (worst), open loop, noise floor and half-open-loop verdicts."""
+    to the open loop mean (worst), open loop, open loop with the disturbance prior, noise floor and
+    half-open-loop verdicts."""
     lines = []
     for plant, summary in results["summary"].items():
         for name, entry in summary.items():
@@ -229,7 +245,8 @@ def winding_table(results: dict) -> list[str]:
                                  for h, v in entry.get("half_open_loop", {}).items())
             lines.append(f"{plant:12s} {name:36s} EKF {entry['ekf_rmse_mean']} (worst {entry['ekf_rmse_worst']}), "
                          f"ratio {entry['ratio_mean']} (worst {entry['ratio_worst']}), "
-                         f"open loop {entry['open_loop_mean']}, noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
+                         f"open loop {entry['open_loop_mean']}, with the prior {entry.get('prior_open_loop_mean', '-')}, "
+                         f"noise floor {entry['noise_floor_K']:.3f}; {verdicts}")
     return lines
 
 

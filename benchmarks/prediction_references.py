@@ -12,10 +12,17 @@ horizons of one :class:`~genthermal.estimation.prediction.PredictionStudy`:
   filter's structure scores once it has learnt the model error, so the gap to the filter's own
   figure is the cost of learning it during the record, and what is left the model error its
   disturbance bases cannot carry;
+* ``prior_open_loop_rmse_by_horizon`` (a model with a disturbance prior, written by
+  ``calibrate``): the calibrated model with the disturbances its calibration left
+  (:mod:`genthermal.estimation.disturbance_prior`) held, run open loop from the first sample:
+  how much of the filter's figure the prior gives without any update on this record;
 * ``noise_floor_K``: RMS of measured - true; a perfect prediction scores this much;
 * ``split``: the filter's RMS over the starts before and from a split time: for a healthy
   record :data:`LEARNING_SPLIT_MIN` (the filter has then seen a load change on the varying-load
   test), for a fault the first change alarm (earlier starts cannot know the fault);
+* ``floor_from_starts_before_alarm_by_horizon`` (a fault): the filter's RMS over ALL starts with
+  the errors of the starts from the first change alarm on set to zero: what the starts that
+  cannot know of the fault score alone, however well the filter does after the alarm;
 * ``half_open_loop``: per target horizon, ``met``, ``missed``, or ``below the noise floor`` when
   half the open-loop error is at or under ``noise_floor_K`` (no prediction can score that).
 """
@@ -102,6 +109,12 @@ def references(calibrated, truth_states: np.ndarray, truth_outputs: np.ndarray, 
         result["hindsight_rmse_by_horizon"] = forecast_rmse(filter_, truth_states,
                                                             study.filter_result.disturbances[-1],
                                                             U, Y, starts, horizons, dt_s, names)
+    if calibrated.disturbance_prior is not None:
+        prior_filter = ExtendedKalmanFilter(calibrated, dt_s)
+        prior_open_loop = prior_filter.forecast(prior_filter.initial_state(Y[0], U[:, 0]), U)
+        result["prior_open_loop_rmse_by_horizon"] = {
+            label: _rms(prior_open_loop[starts + int(round(float(label) * 60.0 / dt_s))]
+                        - Y[starts + int(round(float(label) * 60.0 / dt_s))], names) for label in horizons}
     result["noise_floor_K"] = _rms(Y - truth_outputs, names)
     alarms = study.filter_result.change_alarm_times_s
     time_s = study.filter_result.time_s
@@ -113,6 +126,11 @@ def references(calibrated, truth_states: np.ndarray, truth_outputs: np.ndarray, 
         split_text = ("starts in the first 31 min (the filter still learning the model error; on the varying-load "
                       "test it has seen no load change yet)") if not fault else "no change alarm: at 31 min"
     split_sample = int(np.ceil(split_min * 60.0 / dt_s))
+    if fault and alarms:
+        before = starts < split_sample
+        result["floor_from_starts_before_alarm_by_horizon"] = {
+            label: _rms(np.where(before[:, None], errors, 0.0), names)
+            for label, errors in study.horizon_errors["prediction"].items()}
     result["split"] = {"at_min": round(split_min, 1), "why": split_text,
                        "starts_before": int(np.sum(starts < split_sample)),
                        **split_rmse(study, split_sample)}

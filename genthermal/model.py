@@ -284,6 +284,10 @@ class ThermalModel:
         self.parameter_names = list(parameters)
         self.output_names = list(spec.interface.output_names)
         self._discrete: dict = {}
+        #: What the last calibration left for a filter on this model to start from
+        #: (:class:`~genthermal.estimation.disturbance_prior.DisturbancePrior`), or None;
+        #: set by :meth:`with_disturbance_prior`, dropped by every change of parameters or network.
+        self.disturbance_prior = None
         # the symbolic model depends on network and parameter order only, not on the values:
         # a model that differs from another only in parameter values shares its CasADi functions,
         # and so does one on an equal network built again (StructureCache)
@@ -580,8 +584,18 @@ class ThermalModel:
             if not (np.isfinite(onset) and onset >= 0):
                 raise InputError(f"onsets.{effect}", onset, "must be a time in s >= 0")
             checked.append((effect, onset))
-        return ThermalModel(self.network, self.parameters, dataclasses.replace(self.spec, onsets=tuple(checked)),
-                            _share_from=self)
+        model = ThermalModel(self.network, self.parameters, dataclasses.replace(self.spec, onsets=tuple(checked)),
+                             _share_from=self)
+        model.disturbance_prior = self.disturbance_prior  # onsets change when effects start, not what is lacking
+        return model
+
+    def with_disturbance_prior(self, prior) -> "ThermalModel":
+        """Return the same model carrying ``prior``, the disturbance heat flows a calibration left
+        (:class:`~genthermal.estimation.disturbance_prior.DisturbancePrior`, or None to remove it):
+        an extended Kalman filter on the model starts from it. Model files keep it."""
+        model = ThermalModel(self.network, self.parameters, self.spec, _share_from=self)
+        model.disturbance_prior = prior
+        return model
 
     def with_network(self, network: Network, parameters: ParameterSet | None = None,
                      **spec_changes) -> "ThermalModel":

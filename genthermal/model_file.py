@@ -12,6 +12,11 @@
         provenance: fitted        # optional (default fitted), with source
         source: "diagnosis on flight_12.csv"
         onset_s: 3960             # optional: the effect starts 3960 s after a record's first sample
+    disturbance_prior:            # optional, written by calibrate: where an EKF on this model starts
+      source: "extended Kalman filter over rig_2024.csv (3.00 h) after calibration"
+      states: [q_stator_winding, q_stator_iron, ...]
+      mean: [-0.1, -5.1, ...]     # W (K for dT_inlet)
+      covariance: [[13.9, ...], ...]
 
 :func:`load_model` also takes a machine name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
 parameter set, ``genco_rf201a:chapter7``; a plug-in machine's name or the path of a ``.py`` machine
@@ -23,6 +28,10 @@ An effect with ``onset_s`` is loaded with its fitted values and the onset record
 (``spec.onsets``): :func:`genthermal.simulate.simulate` and ``compare`` hold it at its neutral
 values until the onset, so a model written by ``diagnose --out`` reproduces the diagnosis. Filters
 and generated code use the model with every effect active (the state after the last onset).
+
+``disturbance_prior`` (:mod:`genthermal.estimation.disturbance_prior`) is what the calibration
+left: the extended Kalman filter's disturbance states after the calibration record. A filter on the
+model starts from it. It belongs to the parameter values it was learnt with, so it is read last.
 """
 
 from __future__ import annotations
@@ -46,7 +55,7 @@ from .parameters import PROVENANCES
 VARIANTS = ("nonlinear", "linear")
 #: Shipped parameter sets: ``machine:name`` → model file inside the package.
 PARAMETER_SETS = ("chapter7",)
-_TOP_KEYS = ("machine", "variant", "parameters", "effects")
+_TOP_KEYS = ("machine", "variant", "parameters", "effects", "disturbance_prior")
 #: Parameters the linear design model adds; saved through the variant, not as values.
 _DESIGN_PARAMETERS = ("I2_slope", "I2_intercept", "theta_ref")
 _PARAMETER_KEYS = ("value", "provenance", "source")
@@ -155,7 +164,12 @@ def model_from_document(document, source: str = "<document>") -> ThermalModel:
                 model.with_onsets({entry["name"]: entry["onset_s"]})
             except InputError as exc:
                 raise InputError(f"effects[{i}].onset_s", exc.value, exc.reason) from None
-    return model.with_onsets(onsets) if onsets else model
+    model = model.with_onsets(onsets) if onsets else model
+    if document.get("disturbance_prior") is not None:
+        from .estimation.disturbance_prior import DisturbancePrior
+
+        model = model.with_disturbance_prior(DisturbancePrior.from_document(document["disturbance_prior"]))
+    return model
 
 
 def _number(value, field: str) -> float:
@@ -213,7 +227,10 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
         if onsets and effect in onsets:
             entry["onset_s"] = float(onsets[effect])
         effects.append(entry)
-    return {"machine": machine, "variant": model.spec.variant, "parameters": parameters, "effects": effects}
+    document = {"machine": machine, "variant": model.spec.variant, "parameters": parameters, "effects": effects}
+    if model.disturbance_prior is not None:
+        document["disturbance_prior"] = model.disturbance_prior.to_document()
+    return document
 
 
 def save_model(model: ThermalModel, path: str | os.PathLike, onsets: dict | None = None) -> Path:

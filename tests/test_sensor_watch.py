@@ -4,6 +4,7 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -218,6 +219,53 @@ def test_a_biased_inlet_sensor_is_substituted_and_changes_no_load(tmp_path, heal
     recorded = result.monitor.frame(1)
     assert np.allclose(recorded["T_inlet"], result.monitor.frame(0)["T_inlet"])  # substituted back to the onset
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_a_biased_ambient_sensor_is_named_by_its_step_and_changes_no_load(tmp_path, healthy_flight):
+    """gen1's ambient PT100 reads 5 K high from 60 min. The ambient moves the machine only through
+    the frame (0.05 K per K): the record check fitted gen1's own reading *better* (its model runs
+    cooler than the plant) and nothing was claimed. The units see one ambient: gen1's reading
+    stepped while gen2's did not move, so it is gen1's sensor, claimed at the first check."""
+    fault = {"generator": 1, "sensor": "T_ambient", "kind": "bias", "onset_min": 60, "value": 5.0}
+    result = fly(_system(tmp_path, [fault]), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    [claim] = watch["claimed"]
+    assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen1", "T_ambient", "bias")
+    assert claim["value"] == pytest.approx(5.0, abs=0.01) and claim["onset_s"] == pytest.approx(3600.0, abs=1.0)
+    assert claim["claimed_at_s"] <= 3600.0 + 300.0 and claim["evidence"] == "a step of the shared air's reading"
+    assert np.allclose(result.monitor.frame(0)["T_ambient"], result.monitor.frame(1)["T_ambient"])
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_a_steady_ambient_reading_is_never_claimed_for_a_step(tmp_path):
+    """The step test looks at one unit's reading against the others': with no step, nothing."""
+    from genthermal.schedule.input_watch import InputWatch, InputWatchSettings
+    from genthermal.schedule.sensor_watch import SensorWatch, SensorWatchSettings
+    from genthermal.schedule.monitor import DetectionSettings
+
+    system = _system(tmp_path, [])
+    watch = InputWatch(SensorWatch(system, SensorWatchSettings(), DetectionSettings()), InputWatchSettings(),
+                       ("T_inlet", "T_ambient"), 2)
+    assert watch.shared_air_input == "T_ambient"
+
+    class Record:
+        dt_s = 10.0
+
+        def __init__(self, rows):
+            self.rows = rows
+
+        def frame(self, g):
+            return pd.DataFrame({"time_s": 10.0 * np.arange(1, 61), "T_ambient": self.rows[g]})
+
+    steady = np.full(60, 20.0)
+    stepped = steady + 3.0 * (np.arange(60) >= 30)
+    watch._own_fits[(0, "T_ambient")] = watch._own_fits[(1, "T_ambient")] = 0.0
+    assert watch._stepped_alone(1, "T_ambient", Record([stepped, stepped])) is None  # both read the change
+    assert watch._stepped_alone(0, "T_ambient", Record([steady, stepped])) is None  # the other one stepped
+    found = watch._stepped_alone(1, "T_ambient", Record([steady, stepped]))
+    assert (found.fault.kind, found.fault.value, found.fault.onset_s) == ("bias", 3.0, 300.0)  # stamped at the end of its step
+    drifting = steady + 0.5 * np.arange(60) / 10  # 0.05 K per sample: no step
+    assert watch._stepped_alone(1, "T_ambient", Record([steady, drifting])) is None
 
 
 def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):

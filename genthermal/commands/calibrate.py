@@ -44,7 +44,20 @@ def run(args) -> int:
     for warning in result.warnings:
         print(f"  warning: {warning}")
     if args.out:
-        print(f"wrote {save_model(result.model, args.out)}")
+        model_out = result.model
+        if result.model.spec.variant == "nonlinear":
+            from ..estimation.disturbance_prior import learn_disturbance_prior
+
+            from ..measurements import load_measurements
+
+            record = load_measurements(args.data, rated_current_A=model.spec.rated_current_A,
+                                       interface=model.spec.interface)  # every sample, not the fitting blocks
+            with working("disturbance prior"):
+                prior = learn_disturbance_prior(result.model, record)
+            model_out = result.model.with_disturbance_prior(prior)
+            print(f"  disturbance prior (what an EKF on the calibrated model starts from, W; dT_inlet K): "
+                  + ", ".join(f"{n} {m:.1f}" for n, m in zip(prior.names, prior.mean)))
+        print(f"wrote {save_model(model_out, args.out)}")
     if args.json:
         report_json(args.json, summary)
     return 0

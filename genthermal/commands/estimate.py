@@ -119,7 +119,9 @@ def run(args) -> int:
               "samples": len(result.time_s),
               "samples_without_measurement": result.samples_without_measurement,
               "missing_counts": result.missing_counts, "steady_state_gain": bool(args.steady_state),
-              "R_K2": [kalman.R[i, i] for i in range(len(kalman.output_names))], **study.to_json()}
+              "R_K2": [kalman.R[i, i] for i in range(len(kalman.output_names))],
+              "disturbance_prior": (model.disturbance_prior.source if getattr(kalman, "prior_used", False)
+                                    else None), **study.to_json()}
     print_summary(report, result)
     if args.json:
         report_json(args.json, report)
@@ -141,6 +143,8 @@ def print_summary(report: dict, result) -> None:
     kind = "extended Kalman filter" if report["filter"] == "ekf" else "Kalman filter"
     print(f"{report['data']}: {report['samples']} samples every {report['dt_s']:g} s, {kind} on {report['model']} "
           f"({mode} gain), R = diag({', '.join(f'{r:.4g}' for r in report['R_K2'])}) K²")
+    if report.get("disturbance_prior"):
+        print(f"disturbance states start from the model file's prior: {report['disturbance_prior']}")
     print(f"samples without any measurement: {report['samples_without_measurement']}; missing per sensor: "
           + ", ".join(f"{k} {v}" for k, v in report["missing_counts"].items()))
     width = max(12, *(len(name) + 2 for name in names))  # columns fit the machine's sensor names

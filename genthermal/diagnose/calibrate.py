@@ -179,7 +179,9 @@ class CalibrationResult:
     Attributes
     ----------
     model : ThermalModel
-        The model with the fitted values (provenance ``fitted``, source naming the data).
+        The model with the fitted values (provenance ``fitted``, source naming the data), without
+        a disturbance prior (``genthermal calibrate --out`` adds one:
+        :func:`genthermal.estimation.disturbance_prior.learn_disturbance_prior`).
     names : list of str
     start, values : list of float
         Values before and after the fit (model units).

@@ -254,6 +254,7 @@ class Diagnosis:
             "unexplained": self.unexplained, "residual": self.residual,
             "experiment": self.experiment.to_dict() if self.experiment else None,
             "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
+            "sensor_error_limits_K": dict(self.sensor_screen.limits) if self.sensor_screen is not None else {},
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 

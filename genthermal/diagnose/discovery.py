@@ -314,5 +314,7 @@ class Discovery:
         if screen is not None and screen.found:
             iterations[0].explanation = (f"{screen.text(' + '.join(iterations[0].added_effects) or 'none')} "
                                          + iterations[0].explanation)
+        if screen is not None and screen.limit_text():
+            iterations[0].explanation += " " + screen.limit_text()
         return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
                          criterion=self.criterion.name, output_names=viewed.output_names, sensor_screen=screen)

@@ -17,9 +17,13 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
 3. on a record searched blind, when step 2 claimed nothing (a plant that differs from the model
    leaves a misfit of kelvins that swamps a 1-3 K fault on the whole-record comparison): the
    faults told by their onset (a reading that froze, a jump of a sensor with thermal inertia, an
-   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`), then
+   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`; an
+   ambient reading that left the inlet reading of the same air, the machine not contradicting it:
+   :mod:`~genthermal.diagnose.shared_air`), then
    the sensor and input faults fitted jointly with a calibration of the model against the
-   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`).
+   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`). When no
+   ambient fault is claimed, the smallest ambient error the outputs alone could tell from a frame
+   cooling change on this record is reported (:attr:`SensorScreen.limits`).
 
 Redundant sensors are screened on the model's own sensor schema before the record's sensor view
 is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
@@ -29,15 +33,17 @@ phase would otherwise take a faulty phase sensor for that phase's heat.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
 from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
 from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
-                                misfit_from_start, sensor_hypotheses)
+                                misfit_from_start, on_series_grid, sensor_hypotheses)
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
+from .shared_air import minimal_detectable_error, screen_ambient_against_inlet
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
                             screen_against_model, screen_noise, screen_redundant, sensor_columns)
 
@@ -106,6 +112,9 @@ class SensorScreen:
         Sensor faults claimed so far.
     alternative : SensorHypothesis or None
         The best single-sensor fault tried against the model, claimed or not.
+    limits : dict
+        Input sensor → the smallest error of it this record could tell from its physical
+        look-alike, K (the ambient against a frame cooling change), when none was claimed.
     """
 
     def __init__(self, data, series: MeasuredSeries, interface, prior=()):
@@ -117,6 +126,12 @@ class SensorScreen:
         self.found: list[SensorHypothesis] = list(prior)
         self.prior = tuple(prior)
         self.alternative: SensorHypothesis | None = None
+        #: Input → the smallest error of it the record could tell from its physical look-alike, K
+        #: (:meth:`_ambient_limit`).
+        self.limits: dict[str, float] = {}
+        #: Input → what its limit was measured against (:meth:`limit_text`).
+        self.limit_look_alikes: dict[str, str] = {}
+        self._frame_for, self._frame = None, None  # the search the calibrated frame is of, and the frame
         self.model_round_done = False
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
@@ -215,6 +230,13 @@ class SensorScreen:
         through_input = screen_input_jumps(inputs, measured - predicted, responses, search.series.dt_s,
                                            self.elapsed_s, noise)
         claimed += [through_input] if through_input is not None else []
+        interface = model.spec.interface
+        ambient = getattr(interface, "ambient_input", None)
+        if ambient in responses and coolant in responses and ambient not in {h.fault.sensor for h in claimed}:
+            left_inlet = screen_ambient_against_inlet(inputs, ambient, coolant, self.elapsed_s, search.series.dt_s,
+                                                      lambda: self._calibrated_frame(search, ranked, responses)[0],
+                                                      responses[ambient], noise)
+            claimed += [left_inlet] if left_inlet is not None else []
         if not claimed:
             calibrated = self._calibrated(search, ranked, noise, responses, exclude)
             claimed += [calibrated] if calibrated is not None else []
@@ -225,13 +247,10 @@ class SensorScreen:
         """The best sensor or input fault fitted jointly with a calibration of the model, if it
         beats the physical effects fitted the same way
         (:mod:`~genthermal.diagnose.calibrated_screen`)."""
-        from .discover import DEFAULT_BASELINE_PARAMETERS, passes_tests
+        from .discover import passes_tests
 
         model = search.viewed(search.model)
-        sensitivities = calibration_sensitivities(model, search.series.inputs, self.output_names,
-                                                  DEFAULT_BASELINE_PARAMETERS)
-        from_start = misfit_from_start(responses, ranked, search.coarse.time_s, search.series.time_s)
-        frame = CalibratedFrame(search.series.outputs - search.predicted_before, [*sensitivities, *from_start])
+        frame, sensitivities, from_start = self._calibrated_frame(search, ranked, responses)
         hypotheses = sensor_hypotheses(frame, self.readings, self.elapsed_s, self.output_names, self.columns,
                                        exclude)
         hypotheses += input_hypotheses(frame, responses, self.elapsed_s, search.series.dt_s, search.series.inputs)
@@ -240,10 +259,44 @@ class SensorScreen:
         best = min(hypotheses, key=lambda h: h.delta_bic)
         physical_bic, physical = best_physical(frame, ranked, search.coarse.time_s, search.series.time_s)
         best.alternative = f"calibrated: {physical or 'no physical effect'} ΔBIC {physical_bic:.0f}"
-        if passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
-                best.delta_bic < physical_bic - PREFERENCE_BIC:
-            return best
-        return None
+        claimed = passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
+            best.delta_bic < physical_bic - PREFERENCE_BIC
+        ambient = getattr(model.spec.interface, "ambient_input", None)
+        if ambient in responses and not (claimed and best.fault.sensor == ambient):
+            self.limits[ambient] = self._ambient_limit(frame, sensitivities, from_start, responses[ambient], ranked,
+                                                       search, noise)
+        return best if claimed else None
+
+    def _calibrated_frame(self, search, ranked, responses: dict):
+        """The record's residual with the calibration nuisance projected off, and its terms:
+        (CalibratedFrame, sensitivities, misfits from the start); computed once per search."""
+        from .discover import DEFAULT_BASELINE_PARAMETERS
+
+        if self._frame_for is not search:
+            model = search.viewed(search.model)
+            sensitivities = calibration_sensitivities(model, search.series.inputs, self.output_names,
+                                                      DEFAULT_BASELINE_PARAMETERS)
+            from_start = misfit_from_start(responses, ranked, search.coarse.time_s, search.series.time_s)
+            frame = CalibratedFrame(search.series.outputs - search.predicted_before, [*sensitivities, *from_start])
+            self._frame_for, self._frame = search, (frame, sensitivities, from_start)
+        return self._frame
+
+    def _ambient_limit(self, frame, sensitivities, from_start, step_response, ranked, search, noise) -> float:
+        """The smallest ambient bias from mid-record the calibrated comparison could tell from a
+        frame cooling change on this record, K (:func:`~genthermal.diagnose.shared_air.minimal_detectable_error`)."""
+        n = self.elapsed_s.size
+        onset = n // 2
+        look_alike = None
+        for candidate in ranked:
+            responses = getattr(candidate, "onset_responses", None)
+            if candidate.effect == "frame_cooling_change" and responses is not None and responses.onsets.size:
+                coarse_onset = int(np.argmin(np.abs(search.coarse.time_s[responses.onsets] - search.series.time_s[onset])))
+                look_alike = on_series_grid(responses.changes[coarse_onset], search.coarse.time_s, search.series.time_s)
+        residual = search.series.outputs - search.predicted_before
+        self.limit_look_alikes[search.viewed(search.model).spec.interface.ambient_input] = "a frame cooling change" if look_alike is not None else \
+            "the calibration misfit alone (no frame cooling change was fitted to compare with)"
+        return minimal_detectable_error(lambda extra: CalibratedFrame(residual, [*sensitivities, *from_start, *extra]),
+                                        step_response, look_alike, onset, noise, frame.n)
 
     def text(self, machine_verdict: str) -> str:
         """Plain language: ``"the T_iron sensor drifts by +1.40 K/h from 1.60 h; the machine is healthy"``."""
@@ -253,6 +306,17 @@ class SensorScreen:
         machine = ("the machine is healthy" if machine_verdict == "none"
                    else f"on the corrected record the machine shows {machine_verdict}")
         return f"Sensor fault: {faults}; {machine}."
+
+    def limit_text(self) -> str:
+        """Plain language for :attr:`limits`: ``"an ambient error below 4.2 K cannot be told from
+        frame cooling on this record"``."""
+        claimed = {h.fault.sensor for h in self.found}
+        against = {name: self.limit_look_alikes.get(name, "a frame cooling change") for name in self.limits}
+        parts = [f"an error of the {name} sensor below {value:.1f} K cannot be told from {against[name]} on "
+                 "this record" if math.isfinite(value) else
+                 f"no error of the {name} sensor can be told from {against[name]} on this record"
+                 for name, value in self.limits.items() if name not in claimed]
+        return ("Limit: " + "; ".join(parts) + ".") if parts else ""
 
     def to_list(self) -> list:
         """JSON list of the claimed sensor faults."""

@@ -71,11 +71,13 @@ class RecursiveFilter:
             P_filtered = step.P if detector is None else \
                 detector.step(step.innovation, self.C_full @ P @ self.C_full.T + self.R, step.P)
             z, P = self.predict(step.x, P_filtered, U[:, k])
+        final_covariance = None if steady_state else P_filtered
         nx = self.n_nodes
         return FilterResult(self.model, time_s, U, Z[:, :nx], Z_pred[:, :nx], Y, innovations, np.array(gains),
                             self.C, self.e, bool(steady_state), disturbances=Z[:, nx:],
                             disturbance_names=tuple(self.disturbance_names),
-                            change_alarm_times_s=tuple(float(time_s[k]) for k in (detector.alarms if detector else ())))
+                            change_alarm_times_s=tuple(float(time_s[k]) for k in (detector.alarms if detector else ())),
+                            final_covariance=final_covariance)
 
     def _record(self, inputs_df, sensors_df):
         time_s = inputs_df["time_s"].to_numpy(dtype=float) if "time_s" in inputs_df else None

@@ -49,6 +49,9 @@ class FilterResult:
     change_alarm_times_s : tuple of float
         Times (s) at which the innovation change test opened the disturbance covariance
         (:mod:`genthermal.estimation.change_detection`); empty without the test.
+    final_covariance : numpy.ndarray or None
+        Covariance of the whole filter state after the last update (nodes K², disturbances W²),
+        None for the steady-state gain.
     """
 
     model: ThermalModel
@@ -65,6 +68,7 @@ class FilterResult:
     disturbances: np.ndarray | None = None
     disturbance_names: tuple = ()
     change_alarm_times_s: tuple = ()
+    final_covariance: np.ndarray | None = None
 
     def filter_state(self, k: int) -> np.ndarray:
         """The filter's whole state after the update at sample ``k``: nodes (°C) then disturbances (W)."""

@@ -34,7 +34,8 @@ measurement :math:`h` later; its RMS and maximum over the starts are reported, n
 the open-loop model at the same target samples. The filter may be the linear
 :class:`~genthermal.estimation.kalman.KalmanFilter` or the
 :class:`~genthermal.estimation.ekf.ExtendedKalmanFilter`, whose predictions carry the estimated
-disturbance heat flows; its open-loop model is the same model without them.
+disturbance heat flows; its open-loop model is the same model without them (and without the
+prior a calibration left, :mod:`~genthermal.estimation.disturbance_prior`).
 """
 
 from __future__ import annotations
@@ -428,7 +429,9 @@ def prediction_study(model: ThermalModel, data, starts_min=THESIS_STARTS_MIN, dt
     inputs = data.frame[["time_s", *model.input_names]]
     result = kalman.run(inputs, data.sensors, steady_state=steady_state)
     U, Y = input_matrix(inputs, model), result.measured
-    open_loop = kalman.forecast(kalman.initial_state(Y[0], U[:, 0]), U)
+    open_start = np.asarray(kalman.initial_state(Y[0], U[:, 0]), dtype=float).copy()
+    open_start[kalman.n_nodes:] = 0.0  # the model as simulation runs it: no disturbance, no prior
+    open_loop = kalman.forecast(open_start, U)
     window = max(1, int(round(smoothing_min * 60.0 / dt_s)))
     predictions, indices, improved, censored = {}, {}, {}, {}
     for start in starts:

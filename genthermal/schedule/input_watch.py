@@ -15,6 +15,19 @@ over the cycle is compared with the median of the other units' (those whose sens
 a difference above :attr:`InputWatchSettings.disagreement_K` sends the unit's record to the check.
 With two units both differ: both are checked, and the model says which one is at fault.
 
+**A step of one unit's ambient.** The units see one ambient (the mission has one ambient
+temperature, every unit's filter is driven with it): a real change reaches every unit's sensor. A unit whose ambient reading stepped by more than
+:attr:`InputWatchSettings.disagreement_K` in one sample while every other unit's moved less than
+:attr:`InputWatchSettings.shared_step_K`, and has disagreed since, has the faulty sensor; it is
+claimed (a bias of the step's size from that sample) at the first check, unless its record fits its
+own reading markedly better than the others' (the check below: the machine followed it). This
+names the unit with two units too, where the median cannot. The record check alone did not: a
++5 K ambient bias moves the unit's sensors by about 0.25 K through the frame, and the model's own
+error (it runs cooler than the plant) made the faulty unit's record fit its own warmer reading
+better (+6 at 90 min) and the healthy unit's fit the faulty reading (-10): nothing was claimed in
+6 checks. The inlet has no such rule: a blockage that recirculates air raises one unit's inlet for
+real. A drift of one unit's ambient is left to the check.
+
 **Checking.** The redundancy decides: the unit's model (as the manager believes it) is run over the
 unit's record twice, driven once by the unit's own reading and once by the other units' median
 reading of that input, and the two misfits of the measured sensors are compared over the
@@ -75,15 +88,21 @@ class InputWatchSettings:
         The fault's onset is searched this long before the cycle that disagreed, s.
     enabled : bool
         False: input faults are injected but not looked for.
+    shared_step_K : float
+        An ambient reading that steps by more than ``disagreement_K`` in one sample is its sensor's
+        when every other unit's reading moved less than this in that sample, K (the units see one
+        ambient; 0.3 K, the class-B tolerance at 0 °C, IEC 60751: what two readings of one air
+        may differ by).
     """
 
     disagreement_K: float = 1.0
     max_checks: int = 6
     lookback_s: float = 1800.0
     enabled: bool = True
+    shared_step_K: float = 0.3
 
     def __post_init__(self):
-        for name in ("disagreement_K", "lookback_s"):
+        for name in ("disagreement_K", "lookback_s", "shared_step_K"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InputError(f"input_watch.{name}", value, "must be a finite number > 0")
@@ -120,6 +139,8 @@ class InputWatch:
         self._own_fits: dict[tuple[int, str], float] = {}
         #: Per generator, (time s, state names, disturbance states) after each cycle's update.
         self._flows: list[list] = [[] for _ in range(n_generators)]
+        #: The input every unit reads the same air of (the ambient: the mission has one).
+        self.shared_air_input = watch.system.planning_model.spec.interface.generator.ambient_input
 
     def substitute(self, sample_times_s, readings: dict) -> dict:
         """``readings`` (input name → (n_gen, n) °C at ``sample_times_s``) with every claimed sensor's
@@ -214,6 +235,17 @@ class InputWatch:
                     disagree.append(g)
             found = {g: self._fit(g, name, t_s, monitor) for g in disagree}
             found = {g: h for g, h in found.items() if h is not None}
+            if name == self.shared_air_input:
+                # a step of one unit's reading of the one ambient: its sensor, unless its record
+                # fits its own reading markedly better (the machine followed it)
+                alone = {g: self._stepped_alone(g, name, monitor) for g in disagree}
+                alone = {g: h for g, h in alone.items()
+                         if h is not None and self._own_fits[(g, name)] <= PREFERENCE_BIC}
+                if len(alone) == 1:
+                    [(g, hypothesis)] = alone.items()
+                    self._claim(g, name, hypothesis, t_s, estimators, monitor, "a step of the shared air's reading")
+                    new.append(g)
+                    continue
             if not found:
                 continue
 
@@ -284,7 +316,42 @@ class InputWatch:
                                   "delta_ic_with_shared_input": delta, "solve_s": time.perf_counter() - started})
         return found
 
-    def _claim(self, g: int, name: str, hypothesis, t_s: float, estimators, monitor) -> None:
+    def _stepped_alone(self, g: int, name: str, monitor):
+        """Generator ``g``'s reading of the shared-air input ``name`` stepped by more than
+        :attr:`InputWatchSettings.disagreement_K` in one sample within the look-back, while every
+        other unit's reading moved less than :attr:`InputWatchSettings.shared_step_K` in that sample,
+        and has disagreed with theirs since: the bias from that sample (onset since the mission
+        start), or None. A real change of the ambient reaches every unit's sensor."""
+        from ..diagnose.sensor_faults import SensorHypothesis
+
+        sources = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
+        if not sources:
+            return None
+        record = monitor.frame(g)
+        time_s, own = record["time_s"].to_numpy(float), record[name].to_numpy(float)
+        others = np.array([monitor.frame(h)[name].to_numpy(float) for h in sources])
+        if own.size < 2 or others.shape[1] != own.size:
+            return None
+        difference = own - np.median(others, axis=0)
+        moved = np.abs(np.diff(others, axis=1)).max(axis=0)
+        recent = time_s[1:] >= time_s[-1] - self.settings.lookback_s
+        steps = np.flatnonzero(recent & (np.abs(np.diff(own)) > self.settings.disagreement_K)
+                               & (moved < self.settings.shared_step_K)) + 1
+        for k in steps[::-1]:
+            if np.all(np.abs(difference[k:]) > self.settings.disagreement_K) and \
+                    abs(difference[k - 1]) <= self.settings.disagreement_K:
+                value = float(np.mean(difference[k:]) - difference[k - 1])
+                fault = SensorFault(name, "bias", value, float(time_s[k] - monitor.dt_s))
+                return SensorHypothesis(fault, int(k), float("nan"), float("nan"), self._own_fits[(g, name)], "input",
+                                        difference, alternative=f"its {name} reading stepped by {value:+.2f} K in one "
+                                        f"sample while the other units' moved {float(moved[k - 1]):.2f} K "
+                                        f"(the units see one ambient); its record fits its own reading by "
+                                        f"{self._own_fits[(g, name)]:+.1f} against the others'", columns=(name,),
+                                        output="")
+        return None
+
+    def _claim(self, g: int, name: str, hypothesis, t_s: float, estimators, monitor,
+               evidence: str = "input record check") -> None:
         """Claim generator ``g``'s sensor of input ``name``: substitute it, take the unit's heat
         flows back to before the onset plus the common change since, drop the effects identified
         since (module docstring)."""
@@ -311,7 +378,7 @@ class InputWatch:
             self.watch.unconfirmed.release(h, t_s, f"input sensor {name} of unit {g + 1} claimed")
         self.watch.claims.append({"generator": g, "claimed_at_s": t_s, "fault": fault,
                                   "delta_bic": hypothesis.delta_bic, "alternative": hypothesis.alternative,
-                                  "evidence": "input record check",
+                                  "evidence": evidence,
                                   "action": "substituted by the other units' reading" if self.n_generators > 1
                                   else "corrected by the fitted error"})
 

@@ -51,7 +51,9 @@ class FlownOpenLoop:
         beliefs = told_beliefs(self.system, t_s)[g]
         if beliefs not in self._filters:
             model = believed_model(self.system.planning_model, beliefs)
-            self._filters[beliefs] = ExtendedKalmanFilter(model, self.dt_s)
+            # zero disturbances and the default covariance, even on a model that carries a
+            # calibration's disturbance prior: this run has no measurements to start it from
+            self._filters[beliefs] = ExtendedKalmanFilter(model, self.dt_s, disturbance_prior=None)
         return self._filters[beliefs]
 
     def steps(self, z0, timeline, t0: float, n: int):
