@@ -154,6 +154,55 @@ def test_identification_fits_the_convection_exponent_of_a_blockage_that_holds_co
     assert "coolant_flow_reduction" not in identification.equivalent  # its own variant is no other explanation
 
 
+def test_the_blockage_interval_narrows_as_the_record_grows_and_the_manager_believes_its_severe_end():
+    """k_flow 0.25 (n_flow 0) from 60 min: identified 10, 20 and 60 min after the onset, each 95 %
+    interval holds the truth and narrows (measured 0.17-0.35, 0.23-0.29, 0.240-0.255); the manager
+    believes the low (more blocked) end of k_flow and the estimate of the shape n_flow."""
+    from genthermal.machines import build_model
+    from genthermal.mission import load_mission
+    from genthermal.resources import SCENARIO_DIR
+    from genthermal.schedule.fault_identification import identify_fault
+    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.synth import synthesize
+
+    model = build_model()
+    mission = load_mission(str(SCENARIO_DIR / "thesis_fig_7_7.yaml"))
+    changed = model.with_effect("coolant_flow_reduction", k_flow=0.25, n_flow=0.0)
+    full = synthesize(model, mission, dt_s=10.0, seed=1, switches=[(3600.0, changed)])
+    widths = []
+    for end_s in (4200.0, 4800.0, 7200.0):
+        identification = identify_fault(model, full[full["time_s"] <= end_s], 0, end_s, DetectionSettings())
+        interval = identification.intervals["k_flow"]
+        assert interval.low <= 0.25 <= interval.high and interval.low <= interval.estimate <= interval.high
+        assert not (interval.at_lower or interval.at_upper)
+        believed = identification.believed_values
+        assert believed["k_flow"] == interval.low and believed["n_flow"] == identification.values["n_flow"]
+        assert dict(identification.effects[0][1]) == believed
+        widths.append(interval.high - interval.low)
+    assert widths[0] > widths[1] > widths[2]
+
+
+def test_the_believed_value_of_a_loss_is_the_high_end_of_its_interval():
+    from genthermal.diagnose.interval import ParameterInterval
+    from genthermal.schedule.fault_identification import Identification
+
+    interval = ParameterInterval("R_short", 0.3, 0.2, 0.45, 0.95, 100.0, False, False)
+    found = Identification(0, 3600.0, "phase_short_circuit", {"R_short": 0.3}, 1800.0, -50.0, 1.0, 0.2, None, 1.0,
+                           intervals={"R_short": interval})
+    assert found.believed_values == {"R_short": 0.45}
+    entry = found.to_dict(["gen1"])
+    assert entry["parameters"] == {"R_short": 0.3} and entry["believed"] == {"R_short": 0.45}
+    assert entry["confidence"]["intervals"]["R_short"]["low"] == 0.2
+
+
+def test_the_interval_coverage_must_be_a_probability():
+    from genthermal.errors import InputError
+    from genthermal.schedule.monitor import DetectionSettings
+
+    with pytest.raises(InputError, match="interval_level"):
+        DetectionSettings(interval_level=1.0)
+
+
 def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_effect():
     from genthermal.schedule.fault_identification import FAULT_EFFECTS, flight_catalogue, registered_effect_name
 

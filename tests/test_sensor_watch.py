@@ -188,20 +188,23 @@ def test_a_drifting_iron_sensor_is_claimed_and_moves_no_load(tmp_path, healthy_f
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scheduler, largest_k_flow", [("heuristic", 0.4), ("engineer", 0.4), ("optimal", 0.5)])
-def test_a_machine_fault_is_not_taken_for_a_sensor_fault(scheduler, largest_k_flow):
+@pytest.mark.parametrize("scheduler", ["heuristic", "engineer", "optimal"])
+def test_a_machine_fault_is_not_taken_for_a_sensor_fault(scheduler):
     """blockage_large (k_flow 0.2, n_flow 0, onset 66 min, +31 K inlet): no sensor is claimed, and
-    the blockage is identified on gen1 in flight, sized within a factor of two of its flow (the
-    optimal scheduler: 2.5, known defect: it moves load off gen1 on the plan's disturbance heat
-    flows before any alarm, so its record sizes the blockage at 0.42, n_flow 0.33, after a first
-    0.64) with an onset within 15 min of the truth (the convection exponent fitted: with it held
-    at 0.8 the flow was sized 0.80-0.86, and with the engineer's heuristic nothing was identified)."""
+    the blockage is identified on gen1 in flight, sized within 0.03 of its flow with a 95 %
+    interval that holds it (measured: 0.201 by all three, in 0.184-0.220, 0.196-0.207 and
+    0.198-0.204) and the onset within 15 min of the truth. Before the record was put on the fit
+    grid with its inputs averaged (FaultMonitor.fit_record), the optimal flight sized it 0.64,
+    then 0.42: its 10-s rests at the cycle starts, sampled at the 60-s grid times, read as whole
+    minutes at rest; and with the convection exponent held at 0.8 the flow was sized 0.80-0.86."""
     result = fly(PowerSystem.from_mission(load_mission("blockage_large")), scheduler, ManagerSettings())
     summary = flight_summary(result)
     assert summary["sensor_faults"]["claimed"] == []
     blockages = [i for i in summary["identified"] if i["generator"] == "gen1" and i["effect"] == "coolant_flow_reduction"
-                 and 0.1 <= i["parameters"]["k_flow"] <= largest_k_flow and abs(i["onset_s"] - 66 * 60.0) <= 15 * 60.0]
+                 and abs(i["parameters"]["k_flow"] - 0.2) <= 0.03 and abs(i["onset_s"] - 66 * 60.0) <= 15 * 60.0
+                 and i["confidence"]["intervals"]["k_flow"]["low"] <= 0.2 <= i["confidence"]["intervals"]["k_flow"]["high"]]
     assert blockages, summary["identified"]
+    assert all(i["believed"]["k_flow"] <= i["parameters"]["k_flow"] for i in blockages)  # the severe end
     assert not [i for i in summary["identified"] if i["generator"] == "gen2" and i["effect"]]
 
 

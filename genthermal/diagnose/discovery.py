@@ -111,6 +111,13 @@ class Discovery:
         self.design_experiment, self.progress = bool(design_experiment), progress
         self._memo: dict = {}
 
+    @property
+    def memo(self) -> dict:
+        """Models and simulators built by this discovery's fits, by structure: an
+        :class:`~genthermal.diagnose.search.EffectSearch` given it as ``cache`` on the same model
+        reuses them."""
+        return self._memo
+
     def __repr__(self) -> str:
         return (f"Discovery(candidates={self.candidates!r}, criterion={self.criterion!r}, fitter={self.fitter!r}, "
                 f"iterate={self.iterate})")

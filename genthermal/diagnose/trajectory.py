@@ -206,9 +206,11 @@ class ParametricSimulator:
         other.inputs, other._last_run = inputs, None
         return other
 
-    def symbolic(self, theta, x0_coefficients, indicator):
-        """The outputs as a CasADi expression of (possibly symbolic) arguments."""
-        return self._trajectory(theta, x0_coefficients, indicator, ca.DM(self.inputs))
+    def symbolic(self, theta, x0_coefficients, indicator, inputs=None):
+        """The outputs as a CasADi expression of (possibly symbolic) arguments; ``inputs`` (shape
+        (n_inputs, N), possibly symbolic, e.g. load moved between generators) replaces the series
+        the simulator was built on."""
+        return self._trajectory(theta, x0_coefficients, indicator, ca.DM(self.inputs) if inputs is None else inputs)
 
     def indicator(self, onsets: Sequence[int] = ()) -> np.ndarray:
         """One-hot regime indicator for regimes that start at sample indices ``onsets``.

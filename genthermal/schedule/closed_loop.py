@@ -53,6 +53,7 @@ from .state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
 from .plan import Schedule, build_timeline, generator_inputs, predict, remaining_after
 from .power_system import PowerSystem
+from .record_grid import check_fit_step
 from .replanning import first_rest_max_s, flight_segments, plan_with, planning_problem
 from .sensor_injection import SensorFaultInjector, parse_sensor_faults
 from .sensor_watch import SensorWatch
@@ -171,6 +172,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
                                         system.planning_model.output_names, input_names)
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
+    check_fit_step("sensor_watch.identify_dt_s", settings.sensor_watch.identify_dt_s, dt)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
     inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators)
 

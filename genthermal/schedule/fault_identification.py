@@ -2,9 +2,11 @@ r"""Identification of a fault from the in-flight record, with diagnose's effect 
 
 **Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
 generator's record, then the alarmed generator's record since the mission start (inputs and the
-noisy sensors, resampled to ``identify_dt_s``) is handed to :func:`genthermal.diagnose.diagnose`
-with the candidate effects restricted to ``fault_effects``: each is fitted with its onset, ranked
-by ΔBIC, and accepted only when significant by diagnose's four tests. The blockage competes
+noisy sensors, on the grid of ``identify_dt_s`` with each row's inputs averaged over it:
+:meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`) is handed
+to diagnose's search (:class:`~genthermal.diagnose.discovery.Discovery`) with the candidate
+effects restricted to ``fault_effects``: each is fitted with its onset, ranked by ΔBIC, and
+accepted only when significant by diagnose's four tests. The blockage competes
 twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
 (turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
 that leaves the internal convection as it was (blockage_large: k_flow 0.2, n_flow 0, +31 K
@@ -14,6 +16,20 @@ every filter whose model changed restarts its disturbance states at zero (:meth:
 the new model has taken in what they carried). An alarm that no effect explains is
 recorded and the detector restarts; a generator is identified at most ``max_identifications``
 times per flight, at least ``identify_spacing_s`` apart.
+
+**Uncertainty.** Each parameter of the identified effect comes with an interval
+(``interval_level``, 95 %) from the curvature of its fit, its variance inflated for the residuals'
+serial correlation (:func:`genthermal.diagnose.interval.fitted_intervals`), and the manager
+believes the end of it farthest from the parameter's neutral value: the most severe fault the
+record allows (:attr:`Identification.believed_values`; shape parameters such as ``n_flow`` keep
+their estimate). A record that sizes a fault sharply changes little (blockage_large, optimal
+scheduler, 200 min: k_flow 0.201 in 0.198-0.204, believed 0.198); a short one widens it (a k_flow
+0.25 blockage 10, 20 and 60 min after its onset: 0.17-0.35, 0.23-0.29, 0.240-0.255,
+``tests/test_schedule_monitor.py``), and the manager then plans on the more blocked end. The
+interval is conditional on the model fitted: it does not cover a bias of the record or of the
+recalibrated model. On the optimal flight's record sampled at the grid times (before
+:meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`) k_flow 0.642
+came with 0.601-0.687 against the plant's 0.20; the fit grid, not the interval, put that right.
 """
 
 from __future__ import annotations
@@ -97,6 +113,9 @@ class Identification:
         Other effects that explain the record as well (within ``equivalent_delta_bic``).
     solve_s : float
         Wall-clock time of the identification, s.
+    intervals : dict
+        Parameter name → :class:`~genthermal.diagnose.interval.ParameterInterval` of each
+        parameter the identification fitted (a ``+shape`` variant's shape parameters included).
     """
 
     generator: int
@@ -110,19 +129,41 @@ class Identification:
     runner_up: str | None
     solve_s: float
     equivalent: list = dataclasses.field(default_factory=list)
+    intervals: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def believed_values(self) -> dict:
+        """The values the manager believes (module docstring, "Uncertainty"): each switching
+        parameter of the registered effect at the end of its interval farthest from its neutral
+        value, the shape parameters (``n_flow``, fitted by the ``+shape`` variant: lower is not
+        milder or more severe by itself) at their estimate."""
+        from ..effects import get_effect
+
+        if not self.effect:
+            return {}
+        believed = dict(self.values)
+        for parameter in get_effect(self.effect).parameters:  # the registered effect's: not its shape
+            interval = self.intervals.get(parameter.name)
+            if interval is not None:
+                believed[parameter.name] = max((interval.low, interval.high),
+                                               key=lambda end: abs(end - parameter.neutral))
+        return believed
 
     @property
     def effects(self) -> tuple:
-        """The belief as ``((effect, ((name, value), ...)),)`` (empty when none was identified)."""
-        return ((self.effect, tuple(self.values.items())),) if self.effect else ()
+        """The belief as ``((effect, ((name, value), ...)),)`` at :attr:`believed_values` (empty when
+        none was identified)."""
+        return ((self.effect, tuple(self.believed_values.items())),) if self.effect else ()
 
     def to_dict(self, names) -> dict:
-        """JSON entry: generator name, effect, parameters, onset and confidence."""
+        """JSON entry: generator name, effect, parameters (estimates), the values believed, onset
+        and confidence (with each parameter's interval)."""
         return {"generator": names[self.generator], "detected_at_s": self.detected_at_s, "effect": self.effect,
-                "parameters": self.values, "onset_s": self.onset_s,
+                "parameters": self.values, "believed": self.believed_values, "onset_s": self.onset_s,
                 "confidence": {"delta_bic": self.delta_bic, "rmse_before_K": self.rmse_before_K,
                                "rmse_after_K": self.rmse_after_K, "runner_up": self.runner_up,
-                               "equivalent": list(self.equivalent)},
+                               "equivalent": list(self.equivalent),
+                               "intervals": {n: i.to_dict() for n, i in self.intervals.items()}},
                 "solve_s": self.solve_s}
 
 
@@ -154,14 +195,19 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
     ``k_flow`` > 1, more coolant than designed) is the model's error, not a fault: believing it
     made the planner load a healthy generator that had taken over shed load 1.7 K past θmax
     (``tests/test_closed_loop_shed.py``). Sensor faults are the sensor watch's
-    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen."""
-    from ..diagnose import diagnose
+    (:mod:`genthermal.schedule.sensor_watch`), so the search runs without its sensor screen. Each
+    parameter of the effect carries its interval (module docstring, "Uncertainty")."""
+    from ..diagnose.catalogue import Catalogue
+    from ..diagnose.discover import series_for
+    from ..diagnose.discovery import Discovery
+    from ..diagnose.fitter import OnsetFitter
 
     started = time.perf_counter()
     catalogue = flight_catalogue(settings.fault_effects)
-    diagnosis = diagnose(model, record, dt_s=settings.identify_dt_s, effects=list(catalogue),
-                         pairs=False, design_experiment=False,  # one fault at a time, no rig test in flight
-                         sensor_faults=False, catalogue=catalogue)
+    series = series_for(model, record, settings.identify_dt_s)
+    discovery = Discovery(Catalogue.of(catalogue), fitter=OnsetFitter(pairs=False),  # one fault at a time
+                          design_experiment=False, sensor_faults=False)  # no rig test in flight
+    diagnosis = discovery.fit(model, series)
     first = diagnosis.iterations[0]
     ranked = first.ranked
     earliest = min(detected_at_s - settings.max_onset_lead_s, settings.late_onset_s)
@@ -184,6 +230,19 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
                               diagnosis.iterations[0].rmse_before, None, runner_up, elapsed)
     equivalent = list(dict.fromkeys(registered_effect_name(c.effect) for c in others
                                     if c.delta_bic - best.delta_bic <= settings.equivalent_delta_bic))
+    intervals = parameter_intervals(model, series, catalogue, best, settings.interval_level, discovery.memo)
     return Identification(generator, detected_at_s, effect, dict(best.values), float(best.onset_s),
                           float(best.delta_bic), float(best.rmse_before), float(best.rmse_after), runner_up,
-                          elapsed, equivalent)
+                          time.perf_counter() - started, equivalent, intervals)
+
+
+def parameter_intervals(model, series, catalogue, candidate, level: float, memo: dict | None = None) -> dict:
+    """Interval of each parameter of ``candidate`` (a first-round candidate of the search of
+    ``model`` on ``series`` over ``catalogue``; module docstring, "Uncertainty"); ``memo``
+    the search's (:attr:`Discovery.memo <genthermal.diagnose.discovery.Discovery.memo>`), whose
+    simulators it reuses."""
+    from ..diagnose.interval import fitted_intervals
+    from ..diagnose.search import EffectSearch
+
+    search = EffectSearch(model, series, cache=memo, catalogue=catalogue).fit_found()
+    return fitted_intervals(search, candidate, level)

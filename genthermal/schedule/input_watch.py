@@ -270,9 +270,9 @@ class InputWatch:
         self._checks[(g, name)] = self._checks.get((g, name), 0) + 1
         dt_s = self.watch.settings.identify_dt_s
         model = monitor.flown_model(g)
-        record = monitor.frame(g)
+        record = monitor.fit_record(g, dt_s)
         sources = [h for h in range(self.n_generators) if h != g and (h, name) not in self.claimed]
-        shared = np.median([monitor.frame(h)[name].to_numpy(float) for h in sources], axis=0)
+        shared = np.median([monitor.fit_record(h, dt_s)[name].to_numpy(float) for h in sources], axis=0)
         substituted = record.copy()
         substituted[name] = shared
         own, other = series_for(model, record, dt_s), series_for(model, substituted, dt_s)

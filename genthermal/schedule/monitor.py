@@ -36,10 +36,17 @@ through those states instead (offset-free planning, above), which is why no test
 part of the disturbances triggers more recalibrations. Measured: on the plant hot at rest of
 ``tests/test_closed_loop_shed.py`` (cooling 10 % short, resistance 5 % high, no recalibration
 before 60 min) the healthy generator peaks at 78.9 °C, within θmax 85 °C, where it reached 86.7 °C
-without the disturbance states in the plan; and in-flight recalibration is poorly conditioned:
-on blockage_large (optimal scheduler) four fits on the healthy generator's record gave
-``h_top_air`` 125/102/56/28 W/(m² K) (plant 15.5), ``m_dot_fan`` 0.003-0.007 kg/s (plant 0.02)
-and ``R0`` 1.00-1.13 Ω (plant 1.26): compensating errors that predict the record and little else.
+without the disturbance states in the plan.
+
+Recalibration and identification fit the record on the grid of ``identify_dt_s``, each row's
+inputs averaged over the interval it is held for (:meth:`FaultMonitor.fit_record`,
+:mod:`genthermal.schedule.record_grid`). Sampled at the grid times instead, the record aliased the
+schedulers' 10-s rests at the cycle starts: on blockage_large (optimal scheduler) four fits on the
+healthy generator's record gave ``h_top_air`` 125/102/56/28 W/(m² K) (plant 15.5), ``m_dot_fan``
+0.003-0.007 kg/s (plant 0.02) and ``R0`` 1.00-1.13 Ω (plant 1.26), compensating errors that took
+up the misfit, and the blockage sized against that fan flow came out as k_flow 0.64, then 0.42
+(plant 0.20). On the fit grid the same fit at 200 min gives ``h_top_air`` 15.6, ``m_dot_fan``
+0.0195 kg/s, ``R0`` 1.257 Ω and ``h_end_air`` 13.94 (plant 13.95), and the blockage k_flow 0.201.
 """
 
 from __future__ import annotations
@@ -54,6 +61,7 @@ from ..measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 from .fault_identification import FAULT_EFFECTS, confirms, identify_fault
 from .innovation_detector import InnovationCusum, InnovationCusumSettings
+from .record_grid import check_fit_step, on_fit_grid
 from .state_estimator import believed_model
 
 
@@ -86,7 +94,8 @@ class DetectionSettings:
     fault_effects : tuple of str
         Candidate effects of the identification.
     identify_dt_s : float
-        Sample period of the records handed to calibration and identification, s.
+        Sample period of the records handed to calibration and identification, s: a whole
+        multiple of the flight's step (:meth:`FaultMonitor.fit_record`).
     max_identifications : int
         Identifications (whatever their outcome) per generator and flight; later alarms are
         recorded only. 8: with the innovation test alarming from 9 min after blockage_large's
@@ -122,6 +131,10 @@ class DetectionSettings:
         (Kass & Raftery 1995: a BIC difference below 2 is not worth more than a bare mention);
         a shorted turn and an end-winding stray loss, both a loss ∝ I² in the winding, are
         typically within it.
+    interval_level : float
+        Coverage of the identified parameters' intervals; the manager believes the end of each
+        that is the most severe fault (:mod:`genthermal.schedule.fault_identification`,
+        "Uncertainty"). 0.95: the usual two-sided 95 %.
     """
 
     detector: DetectorSettings = DetectorSettings()
@@ -140,6 +153,12 @@ class DetectionSettings:
     late_onset_s: float = 3600.0
     confirm_tolerance: float = 0.25
     equivalent_delta_bic: float = 2.0
+    interval_level: float = 0.95
+
+    def __post_init__(self):
+        if not 0.0 < self.interval_level < 1.0:
+            raise InputError("detection.interval_level", self.interval_level,
+                             "the coverage of the identified parameters' intervals must lie strictly between 0 and 1")
 
 
 class Cusum:
@@ -217,6 +236,7 @@ class FaultMonitor:
     """
 
     def __init__(self, system, settings: DetectionSettings, dt_s: float):
+        check_fit_step("detection.identify_dt_s", settings.identify_dt_s, dt_s)
         self.system, self.settings, self.dt_s = system, settings, dt_s
         n = system.n_generators
         self.node_roles = detector_node_roles(system.planning_model)
@@ -278,6 +298,18 @@ class FaultMonitor:
         ambient = self._recorded_input(g, generator.ambient_input,
                                        np.full(time_s.shape, self.system.mission.T_ambient_C))
         return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)
+
+    def fit_record(self, g: int, dt_s: float | None = None) -> pd.DataFrame:
+        """Generator ``g``'s record so far on the grid of ``dt_s`` (default ``identify_dt_s``; a
+        whole multiple of the record's step), each row's inputs averaged over the steps it is held
+        for (currents as root mean square): what recalibration, identification and the sensor
+        watch's record checks fit (:func:`~genthermal.schedule.record_grid.on_fit_grid`, module
+        docstring)."""
+        interface = self.system.planning_model.spec.interface
+        generator = interface.generator
+        return on_fit_grid(self.frame(g), self.settings.identify_dt_s if dt_s is None else dt_s,
+                           [*generator.phase_inputs, generator.excitation_input],
+                           [column for sensor in interface.sensors for column in sensor.columns])
 
     def _recorded_input(self, g: int, name: str, true_values) -> np.ndarray:
         """Generator ``g``'s recorded reading of input ``name`` over the record, ``true_values``
@@ -370,7 +402,7 @@ class FaultMonitor:
             return
         g = min(candidates, key=lambda h: z[h])
         names = [n for n in self.settings.calibrate_parameters if n in self.system.planning_model.parameters]
-        result = calibrate(self.system.planning_model, self.frame(g), names, self.settings.identify_dt_s)
+        result = calibrate(self.system.planning_model, self.fit_record(g), names, self.settings.identify_dt_s)
         self.model = result.model
         self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
                                   "parameters": dict(zip(result.names, result.values))})
@@ -387,7 +419,7 @@ class FaultMonitor:
         others = [h for h in range(len(z)) if h != g and not self.beliefs[h]]
         if others:
             self._recalibrate(t_s, others, z)
-        found = identify_fault(self.model, self.frame(g), g, t_s, self.settings)
+        found = identify_fault(self.model, self.fit_record(g), g, t_s, self.settings)
         self.identifications.append(found)
         if found.effect and not confirms(found.effects, self.beliefs[g], self.settings.confirm_tolerance):
             self.beliefs[g] = found.effects

@@ -106,7 +106,9 @@ class SensorWatchSettings:
     max_checks : int
         Record checks per generator and flight (10: a held belief is checked every cycle).
     identify_dt_s : float
-        Sample period of the record handed to the check, s.
+        Sample period of the record handed to the check, s: a whole multiple of the flight's
+        step, the inputs averaged over each period
+        (:meth:`FaultMonitor.fit_record <genthermal.schedule.monitor.FaultMonitor.fit_record>`).
     lookback_s : float
         The fault's onset is searched this long before the alarm (a drift alarms late), s.
     min_calibration_s : float
@@ -551,7 +553,7 @@ class SensorWatch:
         from ..diagnose.sensor_screen import SensorScreen
 
         started = time.perf_counter()
-        record = monitor.frame(g)
+        record = monitor.fit_record(g, self.settings.identify_dt_s)
         model = monitor.flown_model(g) if base_model is None else believed_model(base_model, monitor.beliefs[g])
         alarm_s = t_s - (self.settings.check_delay_s if delay_s is None else delay_s)
         window_s = min(alarm_s, t_s if since_s is None else since_s) - self.settings.lookback_s

@@ -1,0 +1,221 @@
+r"""The thesis's managed large blockage as a continuous proxy of the chapter-7 calibration.
+
+Thesis 7.3.3 (Figs 7.13-7.15), the large blockage flown with the load manager: "Once the fault has
+occurred at 1.1 hours the next 3 K-conditions are accommodated using only load displacement.
+After this both generators are placed into rest mode for 10 mins to allow the execution of the
+final landing K-condition", with "two small breaches of 110.7 °C at 2 hours and 111 °C at 3 hours".
+
+Proxy
+-----
+Two copies of the plant fly the Fig 7.7 mission (thesis 7.3.2: "two copies of the simulation
+model"): gen1 with the large blockage from :data:`~genthermal.machines.chapter7.ONSET_S` (flow
+fraction ``k_flow``, exponent ``n_flow``, inlet rising by 31 K with the blockage's time constant),
+gen2 healthy. Both rest 10 min (minimum power mode, 27.3 % of rated) before landing. In each of
+the four K-conditions from the fault on (cruise, cruise/combat, cruise, landing) a constant current
+:math:`I_d(k)` moves from gen1 to gen2 (eqs. 7.3-7.4): decision variables of the fit, in
+:data:`DISPLACEMENT_BOUNDS_A`. The proxy's residuals are, per K-condition and generator, the
+smooth excess of the winding's peak over :data:`LIMIT_C` (:func:`smooth_excess`): zero when some
+displacement keeps both generators within θmax in all four conditions with only the 10-min rest,
+which is the thesis's outcome. The excess is measured on the plant (no manager lag): the thesis's
+own breaches (0.7 and 1 K) are what its manager's prediction errors cost on top.
+
+The healthy receiver is not held to the rated current here: the thesis bounds it by θmax alone
+(eqs. 7.2-7.4), and it displaces load in landing, whose first 5 min run at 100 % (7.3.3: "a short
+rest with some load displacement is required for landing"), which a receiver held to rated
+current could not take.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..coolant import inlet_rise
+from ..diagnose.trajectory import ParametricSimulator
+from ..errors import InputError
+from ..mission import load_mission
+from ..model import ThermalModel
+
+#: θmax of the thesis experiments, °C (7.3.1).
+LIMIT_C = 110.0
+#: Rest of both generators before landing, s (7.3.3: "rest mode for 10 mins").
+REST_BEFORE_LANDING_S = 600.0
+#: Minimum power mode: condition 1's continuous level, % of rated (thesis Table 7.1).
+REST_PERCENT = 27.3
+#: The four K-conditions after the fault on the Fig 7.7 mission (before the inserted rest), s.
+CONDITIONS = (("cruise", 66 * 60.0, 120 * 60.0), ("cruise_combat", 120 * 60.0, 180 * 60.0),
+              ("cruise_after", 180 * 60.0, 220 * 60.0), ("landing", 220 * 60.0, 240 * 60.0))
+#: Bounds of each displaced current, A: from none to the whole continuous cruise load of gen1.
+DISPLACEMENT_BOUNDS_A = (0.0, 4.0)
+#: Sharpness of the smooth excess, K: :math:`s \ln(1 + e^{x/s})` is within :math:`s \ln 2` = 0.07 K
+#: of :math:`\max(x, 0)`.
+EXCESS_SHARPNESS_K = 0.1
+
+
+def smooth_excess(value, limit: float):
+    """Smooth :math:`\\max(v - limit, 0)` (softplus at :data:`EXCESS_SHARPNESS_K`), K."""
+    s = EXCESS_SHARPNESS_K
+    x = (value - limit) / s
+    return s * ca.if_else(x > 30, x, ca.log1p(ca.exp(ca.fmin(x, 30))))
+
+
+def managed_timeline(dt_s: float) -> dict:
+    """The Fig 7.7 mission with the 10-min rest before landing, sampled every ``dt_s`` s.
+
+    Returns
+    -------
+    dict
+        ``time_s`` (n,), ``current_A`` (n,) the nominal phase current of both generators,
+        ``mission_time_s`` (n,) the mission clock (time without the inserted rest), ``masks``
+        (4, n): 1 where each K-condition runs, and ``rest`` (n,) bool.
+    """
+    if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0
+            and abs(300.0 / dt_s - round(300.0 / dt_s)) < 1e-9):
+        raise InputError("dt_s", dt_s, "must be a sample period in s that divides 300 s (the mission's 5-min levels)")
+    mission = load_mission("thesis_fig_7_7")
+    rest_start = CONDITIONS[-1][1]
+    end = mission.duration_s + REST_BEFORE_LANDING_S
+    time_s = np.arange(int(round(end / dt_s)) + 1) * dt_s
+    resting = (time_s >= rest_start - 1e-9) & (time_s < rest_start + REST_BEFORE_LANDING_S - 1e-9)
+    mission_time = np.where(time_s < rest_start + REST_BEFORE_LANDING_S - 1e-9, np.minimum(time_s, rest_start),
+                            time_s - REST_BEFORE_LANDING_S)
+    currents = mission.phase_currents(np.minimum(mission_time, mission.duration_s)).mean(axis=1)
+    currents = np.where(resting, REST_PERCENT / 100.0 * mission.rated_current_A, currents)
+    masks = np.array([(mission_time >= start - 1e-9) & (mission_time < end_ - 1e-9) & ~resting
+                      for _, start, end_ in CONDITIONS], dtype=float)
+    return {"time_s": time_s, "current_A": currents, "mission_time_s": mission_time, "masks": masks,
+            "rest": resting, "mission": mission}
+
+
+class ManagedBlockageProxy:
+    """The managed-blockage proxy (module docstring) as CasADi expressions.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The plant with the coolant-flow effect at full flow (:func:`~genthermal.machines.chapter7.blockable`).
+    names : sequence of str
+        Fitted plant parameters (as :class:`~genthermal.machines.chapter7.ProxySimulator`).
+    dt_s : float
+        Sample period, s.
+    k_flow : float or None
+        Flow fraction of the blockage when it is not among ``names``.
+    inlet_rise_C, inlet_rise_tau_s : float
+        Inlet rise of gen1 from the onset on, K, and its time constant, s.
+    onset_s : float
+        Fault onset, s.
+    """
+
+    def __init__(self, model: ThermalModel, names, dt_s: float, k_flow: float | None, inlet_rise_C: float,
+                 inlet_rise_tau_s: float, onset_s: float):
+        self.names = list(names)
+        line = managed_timeline(dt_s)
+        self.time_s, self.masks = line["time_s"], line["masks"]
+        generator = model.spec.interface.generator
+        mission = line["mission"]
+        self.ambient_C = mission.T_ambient_C
+        current = line["current_A"]
+        law = generator.exciter_law
+        exciter = law(current, mission.power_factor, mission.rated_current_A)
+        step = 1e-3  # A: the tangent of the AVR law about the nominal current (it is nearly linear there)
+        slope = (law(current + step, mission.power_factor, mission.rated_current_A) - exciter) / step
+        frame = np.zeros((len(model.input_names), self.time_s.size))
+        index = model.input_names.index
+        for name in generator.phase_inputs:
+            frame[index(name)] = current
+        frame[index(generator.excitation_input)] = exciter
+        frame[index(generator.coolant_input)] = mission.T_inlet_C
+        frame[index(generator.ambient_input)] = mission.T_ambient_C
+        blocked = frame.copy()
+        # the inlet of gen1 rises from the onset on in flight time (the inserted rest included)
+        blocked[index(generator.coolant_input)] += inlet_rise(self.time_s, onset_s, inlet_rise_C, inlet_rise_tau_s)
+        # inputs per ampere moved off gen1: -1 A on each phase, the AVR law's tangent on the exciter
+        per_amp = np.zeros_like(frame)
+        for name in generator.phase_inputs:
+            per_amp[index(name)] = 1.0
+        per_amp[index(generator.excitation_input)] = slope
+        self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
+        moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
+        self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
+        after = int(np.argmax(self.time_s >= onset_s - 1e-9))
+        blockage = {"k_flow": "k_flow" if "k_flow" in self.names else float(k_flow)}
+        self.simulators = {
+            "gen1": ParametricSimulator(model, dt_s, blocked, self.names, [{"k_flow": 1.0}, blockage]),
+            "gen2": ParametricSimulator(model, dt_s, frame, self.names, [{"k_flow": 1.0}])}
+        self.indicators = {"gen1": self.simulators["gen1"].indicator([after]),
+                           "gen2": self.simulators["gen2"].indicator()}
+
+    def peaks(self, theta, softmax_K: float) -> dict:
+        """Smooth winding peaks (°C) of gen1 and gen2 in each K-condition: name → (4,) expressions of
+        ``theta`` and :attr:`displaced`."""
+        peaks = {}
+        for unit, simulator in self.simulators.items():
+            # both start cold, every node at the mission's ambient (x0 = a (steady - inlet) + c, a = 0)
+            winding = simulator.symbolic(theta, ca.DM([0.0, self.ambient_C]), ca.DM(self.indicators[unit]),
+                                         self.inputs[unit])[0, :]
+            values = []
+            for mask in self.masks:
+                inside = np.flatnonzero(mask > 0)
+                window = ca.horzcat(*[winding[i] for i in inside])
+                values.append(softmax_K * ca.logsumexp(window.T / softmax_K))
+            peaks[unit] = ca.vertcat(*values)
+        return peaks
+
+    def residuals(self, theta, softmax_K: float):
+        """Excess of each generator's peak over :data:`LIMIT_C` per K-condition, K (8,)."""
+        peaks = self.peaks(theta, softmax_K)
+        return ca.vertcat(*[smooth_excess(peaks[u], LIMIT_C) for u in ("gen1", "gen2")])
+
+
+def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_rise_C: float,
+                      inlet_rise_tau_s: float, onset_s: float, dt_s: float = 30.0,
+                      softmax_K: float = 0.1) -> dict:
+    """The displaced currents that give the managed-blockage proxy of ``plant`` (blockage values
+    fixed) its lowest worst peak, by IPOPT over the four currents (minimise the bound :math:`w` on
+    every K-condition's smooth peak of both generators): what the thesis's outcome asks of the
+    plant, free of any manager's prediction error and of a current limit.
+
+    Parameters
+    ----------
+    plant : ThermalModel
+        The plant of both generators (the chapter-7 scenarios fly the model itself).
+    k_flow, n_flow : float
+        Flow fraction and convection exponent of the large blockage.
+    inlet_rise_C, inlet_rise_tau_s : float
+        Inlet rise of gen1 after the onset, K, and its time constant, s.
+    onset_s : float
+        Fault onset, s.
+    dt_s, softmax_K : float
+        Sample period (s) and smoothness of the peaks (K).
+
+    Returns
+    -------
+    dict
+        ``conditions`` (condition, displaced_A, gen1_peak_C, gen2_peak_C), ``worst_peak_C`` (the
+        lowest reachable highest smooth peak of either generator, °C), ``worst_excess_K`` (over
+        :data:`LIMIT_C`), ``converged``.
+    """
+    from .chapter7 import blockable  # chapter7 imports this module
+
+    if not (isinstance(k_flow, (int, float)) and 0.0 < k_flow <= 1.0):
+        raise InputError("k_flow", k_flow, "must be a flow fraction in (0, 1]")
+    if not (isinstance(n_flow, (int, float)) and 0.0 <= n_flow <= 1.5):
+        raise InputError("n_flow", n_flow, "must be a convection exponent in [0, 1.5] (the effect's range)")
+    model = blockable(plant)
+    proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s)
+    peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
+    every = ca.vertcat(peaks["gen1"], peaks["gen2"])
+    d, bound = proxy.displaced, ca.MX.sym("worst")
+    solver = ca.nlpsol("managed_displacement", "ipopt",
+                       {"x": ca.vertcat(d, bound), "f": bound + 1e-6 * ca.sumsqr(d), "g": every - bound},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-8})
+    n = len(CONDITIONS)
+    solution = solver(x0=[1.0] * n + [150.0], lbx=[DISPLACEMENT_BOUNDS_A[0]] * n + [-ca.inf],
+                      ubx=[DISPLACEMENT_BOUNDS_A[1]] * n + [ca.inf], ubg=0.0)
+    x = np.asarray(solution["x"]).ravel()
+    displaced = x[:n]
+    gen1, gen2 = (np.asarray(v).ravel() for v in ca.Function("peaks", [d], [peaks["gen1"], peaks["gen2"]])(displaced))
+    worst = float(max(gen1.max(), gen2.max()))
+    return {"conditions": [{"condition": c[0], "displaced_A": float(v), "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
+                           for c, v, a, b in zip(CONDITIONS, displaced, gen1, gen2)],
+            "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C, "converged": bool(solver.stats()["success"])}
