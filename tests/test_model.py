@@ -201,12 +201,20 @@ def test_equal_networks_built_again_share_compiled_functions_not_values(plant_mo
         StructureCache(size=0)
 
 
-def test_one_more_sensor_on_the_same_network_reuses_its_equations(plant_model):
+def test_one_more_sensor_on_the_same_network_reuses_its_equations(plant_model, monkeypatch):
     """The outlet sensor a diagnosis fits: a new model on the same network, its equations shared
     (EQUATIONS), its own sensor outputs compiled, the other sensors reading the same."""
+    import genthermal.model as model_module
     from genthermal.diagnose.sensor_view import with_outlet_sensor
-    from genthermal.model import EQUATIONS
+    from genthermal.model import StructureCache, ThermalModel
 
+    # fresh caches: in a whole session the least recently used of the 128 structures kept may be
+    # the plant's equations (a miss here) or the view's functions (no equation lookup at all)
+    monkeypatch.setattr(model_module, "STRUCTURES", StructureCache())
+    monkeypatch.setattr(model_module, "EQUATIONS", StructureCache())
+    plant_model = ThermalModel(plant_model.network, plant_model.parameters, plant_model.spec)
+    EQUATIONS = model_module.EQUATIONS
+    assert EQUATIONS.misses == 1
     hits = EQUATIONS.hits
     viewed = with_outlet_sensor(plant_model)
     assert EQUATIONS.hits == hits + 1

@@ -288,6 +288,59 @@ def test_a_steady_ambient_reading_is_never_claimed_for_a_step(tmp_path):
     assert watch._stepped_alone(1, "T_ambient", Record([steady, drifting])) is None
 
 
+INLET_HIGH = {"generator": 1, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": 3.0}
+
+
+def test_an_inlet_sensor_reading_high_is_held_from_the_plan_claimed_and_changes_no_load(tmp_path, healthy_flight):
+    """gen1's inlet PT100 reads 3 K high from 60 min: the warmer reading is unconfirmed (the
+    machine does not follow it), so the plan keeps the last agreeing inlet until the record check
+    claims the sensor; not one re-plan or load change (planned at once, it re-planned at 60 min and
+    changed three cycles' loads)."""
+    result = fly(_system(tmp_path, [INLET_HIGH]), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    [claim] = watch["claimed"]
+    assert (claim["generator"], claim["sensor"], claim["kind"]) == ("gen1", "T_inlet", "bias")
+    assert claim["value"] == pytest.approx(3.0, abs=0.1) and claim["claimed_at_s"] <= 3600.0 + 600.0
+    [hold] = watch["inlet_readings_unconfirmed"]
+    assert hold["generator"] == "gen1" and hold["since_s"] == 3600.0 and hold["until_s"] == claim["claimed_at_s"]
+    assert hold["rise_K"] == pytest.approx(3.0) and "claimed" in hold["ended"]
+    assert "filter held" in claim["action"]  # its filter never took the bias: nothing to take back
+    assert result.monitor.beliefs == [(), ()]
+    assert _replans_from(result, 3600.0) == _replans_from(healthy_flight, 3600.0)
+    np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
+def test_a_real_inlet_rise_is_confirmed_a_cycle_later_and_planned(tmp_path):
+    """The air at gen1's inlet really rises by 3 K at 60 min: the held reading is confirmed by the
+    record check one cycle later (the winding and iron followed the model's response to it), the
+    plan takes it from then on, and nothing is claimed."""
+    document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
+    document["generators"] = {"limit_C": LIMIT_C}
+    document["faults"] = [{"generator": 1, "kind": "inlet_rise", "onset_min": 60, "inlet_rise_C": 3}]
+    path = tmp_path / "scenario.yaml"
+    path.write_text(yaml.safe_dump(document))
+    result = fly(PowerSystem.from_mission(load_mission(str(path))), "engineer", ManagerSettings())
+    watch = flight_summary(result)["sensor_faults"]
+    assert watch["claimed"] == []
+    [hold] = watch["inlet_readings_unconfirmed"]
+    assert (hold["generator"], hold["since_s"], hold["until_s"]) == ("gen1", 3600.0, 3900.0)
+    assert hold["ended"].startswith("confirmed by the record check")
+    assert min(_replans_from(result, 3600.0)) == 3900.0  # the first plan after the confirmation
+    assert float(np.max(result.temperatures_C[:, 0, :])) < LIMIT_C
+
+
+def test_without_the_inlet_hold_the_same_high_reading_moves_the_load(tmp_path, healthy_flight):
+    """The comparison case of the test above: with nothing held back, the plan takes the 3-K warmer
+    reading at its onset."""
+    from genthermal.schedule.input_watch import InputWatchSettings
+
+    settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(unconfirmed_rise_K=0.0))
+    result = fly(_system(tmp_path, [INLET_HIGH]), "engineer", settings)
+    assert 3600.0 in _replans_from(result, 3600.0) and 3600.0 not in _replans_from(healthy_flight, 3600.0)
+    assert result.currents_A.shape != healthy_flight.currents_A.shape or \
+        not np.allclose(result.currents_A, healthy_flight.currents_A, atol=1e-3)
+
+
 def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):
     from genthermal.schedule.input_watch import InputWatchSettings
 
@@ -314,10 +367,15 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
     assert summary["sensor_faults"]["claimed"] == []
     assert any(c["alarmed"] == ["T_inlet"] for c in summary["sensor_faults"]["checks"])  # it was looked at
     assert [i["effect"] for i in summary["identified"] if i["effect"]][:1] == ["coolant_flow_reduction"]
+    # its held inlet reading is confirmed by its fault test alarming (the blockage heats the unit)
+    assert [h["ended"].split(",")[0] for h in summary["sensor_faults"]["inlet_readings_unconfirmed"]] == \
+        ["confirmed: the unit heats"]
+    assert min(plan["time_s"] for plan in result.plans if plan["time_s"] >= 3600.0) == 3600.0  # as before the hold
 
 
 @pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),
-                                          ("max_checks", 2.5)])
+                                          ("max_checks", 2.5), ("unconfirmed_rise_K", -1.0),
+                                          ("max_unconfirmed_s", float("inf"))])
 def test_bad_input_watch_settings_name_the_field(field, value):
     from genthermal.schedule.input_watch import InputWatchSettings
 

@@ -55,7 +55,7 @@ def run(args) -> int:
             with working("disturbance prior"):
                 prior = learn_disturbance_prior(result.model, record)
             model_out = result.model.with_disturbance_prior(prior)
-            print(f"  disturbance prior (what an EKF on the calibrated model starts from, W; dT_inlet K): "
+            print("  disturbance prior (what an EKF on the calibrated model starts from, W; dT_inlet K): "
                   + ", ".join(f"{n} {m:.1f}" for n, m in zip(prior.names, prior.mean)))
         print(f"wrote {save_model(model_out, args.out)}")
     if args.json:

@@ -27,7 +27,12 @@ An effect is *significant* when all four hold:
   :math:`RMSE_{before}^2 - RMSE_{after}^2 \ge \tfrac12(RMSE_{before}^2 - \hat\sigma^2)`: an effect
   that only nibbles at a misfit is not the missing physics.
 
-The verdict is the best-ranked significant effect, else ``"none"``.
+The verdict is the best-ranked significant effect, else ``"none"``. When the phase sensors are
+fitted one by one (:mod:`genthermal.diagnose.phase_winding`), the three practical tests pass on
+every sensor or on the design sensors, the phase sensors averaged
+(:mod:`genthermal.diagnose.design_scale`); the evidence is always the ΔBIC on every sensor. The
+onsets of the verdict are then refined on their profile, and the interval of onsets the data allow
+is reported (:mod:`genthermal.diagnose.onset_profile`).
 
 Beyond one effect:
 
@@ -55,6 +60,7 @@ from ..errors import InputError
 from ..machines.interface import Role
 from ..model import ThermalModel
 from .compare import MeasuredSeries, measured_series
+from .design_scale import DesignSensorScale
 from .experiment import SeparatingExperiment
 from .joint import JointCandidate
 from .residual import correlation
@@ -81,23 +87,43 @@ def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise:
                 and rmse_before ** 2 - rmse_after ** 2 >= MIN_EXCESS_EXPLAINED * (rmse_before ** 2 - noise ** 2))
 
 
-def is_significant(candidate: Candidate, noise: float, evidence_limit: float = DELTA_BIC_LIMIT) -> bool:
-    """The four tests of the module docstring, against the model without the candidate."""
-    return passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise, evidence_limit)
+def is_significant(candidate: Candidate, noise: float, evidence_limit: float = DELTA_BIC_LIMIT,
+                   design: DesignSensorScale | None = None) -> bool:
+    """The four tests of the module docstring, against the model without the candidate; with
+    ``design`` (phase sensors fitted one by one), the practical tests pass on every sensor or on
+    the design sensors (:mod:`genthermal.diagnose.design_scale`)."""
+    if passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise, evidence_limit):
+        return True
+    return design is not None and passes_tests(design.rmse_before, design.rmse(candidate.predicted),
+                                               candidate.delta_bic, design.noise, evidence_limit)
 
 
 def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,
-                evidence_limit: float = DELTA_BIC_LIMIT) -> JointCandidate | None:
+                evidence_limit: float = DELTA_BIC_LIMIT, design: DesignSensorScale | None = None) -> JointCandidate | None:
     """The best-ranked pair that passes the four tests against the model without effects, against
     each of its two effects alone and against the best single effect (each effect must earn its
-    place, and the pair must beat the best answer with one effect); None if no pair does."""
+    place, and the pair must beat the best answer with one effect); None if no pair does.
+
+    With ``design`` (phase sensors fitted one by one), each comparison passes when it passes on
+    every sensor or on the design sensors, the phase sensors averaged
+    (:mod:`genthermal.diagnose.design_scale`): the phase spread's noise, which no effect common
+    to all phases can explain, would otherwise dilute such an effect's share. The evidence is
+    always the ΔBIC on every sensor."""
     by_name = {c.effect: c for c in singles}
     best_single = min(singles, key=lambda c: c.delta_bic)
+
+    def beats(pair: JointCandidate, rival: Candidate | None) -> bool:
+        """``pair`` passes the tests against ``rival`` (None: the model without effects)."""
+        delta = pair.delta_bic - (rival.delta_bic if rival else 0.0)
+        before = rival.rmse_after if rival else pair.rmse_before
+        if passes_tests(before, pair.rmse_after, delta, noise, evidence_limit):
+            return True
+        return design is not None and passes_tests(design.rmse(rival.predicted) if rival else design.rmse_before,
+                                                   design.rmse(pair.predicted), delta, design.noise, evidence_limit)
+
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
-        rivals = [by_name[e] for e in pair.effects] + [best_single]
-        if passes_tests(pair.rmse_before, pair.rmse_after, pair.delta_bic, noise, evidence_limit) and all(
-                passes_tests(r.rmse_after, pair.rmse_after, pair.delta_bic - r.delta_bic, noise, evidence_limit)
-                for r in rivals):
+        rivals = [None] + [by_name[e] for e in pair.effects] + [best_single]
+        if all(beats(pair, rival) for rival in rivals):
             return pair
     return None
 
@@ -235,6 +261,11 @@ class Diagnosis:
         return model_with_effects(self.model, self.found, source=f"diagnosis on {self.series.source}",
                                   catalogue=self.catalogue)
 
+    def _verdict_profiles(self) -> list:
+        """The onset profiles of the first round's verdict (:mod:`~genthermal.diagnose.onset_profile`)."""
+        chosen = self.iterations[0].added_pair or self.iterations[0].added
+        return list(chosen.onset_profiles) if chosen is not None else []
+
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""
         first = self.iterations[0]
@@ -248,7 +279,10 @@ class Diagnosis:
             "thresholds": {"delta_bic_below": DELTA_BIC_LIMIT, "min_rmse_reduction": MIN_RMSE_REDUCTION,
                            "rmse_before_above_noise_factor": NOISE_FLOOR_FACTOR,
                            "min_excess_variance_explained": MIN_EXCESS_EXPLAINED},
-            "found": [{"effect": f.effect, "params": f.values, "onset_s": f.onset_s} for f in self.found],
+            "found": [{"effect": f.effect, "params": f.values, "onset_s": f.onset_s,
+                       "onset_interval_s": list(f.onset_interval_s) if f.onset_interval_s else None}
+                      for f in self.found],
+            "onset_profiles": [p.to_dict() for p in self._verdict_profiles()],
             "iterations": [it.to_dict() for it in self.iterations],
             "rmse_final": self.iterations[-1].rmse_after,
             "unexplained": self.unexplained, "residual": self.residual,

@@ -33,11 +33,13 @@ from ..model import ThermalModel
 from .compare import MeasuredSeries, as_measurements
 from .catalogue import Catalogue
 from .criterion import BIC
+from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
                        choose_pair, explain, explain_pair, is_significant, rival, series_for)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
+from .onset_profile import refine_verdict
 from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
 from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
@@ -193,6 +195,28 @@ class Discovery:
             "the phase sensors tell them apart.")
         return diagnosis
 
+    def _refine_onsets(self, search: EffectSearch, iteration: Iteration, runner_up):
+        """Refine the onsets of the first round's verdict on their profile and give their
+        intervals (:func:`~genthermal.diagnose.onset_profile.refine_verdict`); the iteration's
+        verdict and explanation are updated. Returns the single effect added (None for a pair)."""
+        if iteration.added_pair:
+            chosen = iteration.added_pair = refine_verdict(search, iteration.added_pair, iteration.pairs)
+            iteration.explanation = explain_pair(chosen, search, iteration.ranked[0])
+        else:
+            chosen = iteration.added = refine_verdict(search, iteration.added, iteration.ranked)
+            iteration.explanation = explain(chosen, search, runner_up)
+        profiles = chosen.onset_profiles
+        iteration.explanation += (
+            f" Onsets the data allow ({search.criterion.name} within {profiles[0].threshold:g} of the best, "
+            "the other values and the initial state refitted at each): "
+            + "; ".join(f"{p.effect} {p.interval_s[0] / 3600:.2f}-{p.interval_s[1] / 3600:.2f} h" for p in profiles)
+            + ".")
+        onsets = chosen.onsets_s if iteration.added_pair else {chosen.effect: chosen.onset_s}
+        self._report("onsets profiled: " + "; ".join(
+            f"{p.effect} {onsets[p.effect] / 3600:.2f} h ({p.interval_s[0] / 3600:.2f}-{p.interval_s[1] / 3600:.2f} h)"
+            for p in profiles))
+        return iteration.added
+
     def _report(self, text: str) -> None:
         if self.progress:
             self.progress(text)
@@ -256,8 +280,9 @@ class Discovery:
         while True:
             search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view).fit_found()
             ranked = self.fitter.singles(search)
+            design = DesignSensorScale.of(search, phase_sensor(model).columns) if view and view.phases else None
             for candidate in ranked:
-                candidate.significant = is_significant(candidate, search.noise, evidence)
+                candidate.significant = is_significant(candidate, search.noise, evidence, design)
             self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
             best = ranked[0] if ranked and ranked[0].significant else None
@@ -273,15 +298,18 @@ class Discovery:
             if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
                 iteration.pairs = self.fitter.joint(
                     search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
-                chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence)
+                chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence, design)
                 if chosen is not None:
                     chosen.significant = True
                     iteration.added, iteration.added_pair = None, chosen
                     iteration.explanation = explain_pair(chosen, search, ranked[0])
+            if self.fitter.onset_profiles and not found and (iteration.added_pair or iteration.added):
+                best = self._refine_onsets(search, iteration, runner_up)
             iterations.append(iteration)
             if iteration.added_pair:
                 chosen = iteration.added_pair
-                found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e])
+                intervals = {p.effect: p.interval_s for p in chosen.onset_profiles}
+                found = [FoundEffect(e, chosen.values[e], chosen.onsets_s[e], chosen.onset_indices[e], intervals.get(e))
                          for e in chosen.effects]
             elif best is None:
                 break
@@ -289,7 +317,9 @@ class Discovery:
                 found = [FoundEffect(f.effect, best.found_values[f.effect],
                                      search.elapsed_s(best.found_onsets[f.effect]), best.found_onsets[f.effect])
                          for f in found]
-                found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index))
+                intervals = {p.effect: p.interval_s for p in best.onset_profiles}
+                found.append(FoundEffect(best.effect, best.values, best.onset_s, best.onset_index,
+                                         intervals.get(best.effect)))
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)

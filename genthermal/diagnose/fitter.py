@@ -35,12 +35,17 @@ class OnsetFitter:
         Warm starts: when given, only these pairs are fitted, from these onsets (effect, onset s,
         effect, onset s), refined locally (:meth:`~genthermal.diagnose.joint.PairSearch.refit`);
         e.g. the pairs a fit of the same record on other sensors found.
+    onset_profiles : bool
+        Refine the onsets of the first round's verdict on their profile (the other values and the
+        initial state refitted at each onset) and report the interval of onsets the data allow
+        (:mod:`genthermal.diagnose.onset_profile`).
     """
 
     pairs: bool = True
     pair_pool: int = PAIR_POOL
     workers: int = 1
     pair_starts: tuple = ()
+    onset_profiles: bool = True
 
     def __post_init__(self):
         if int(self.pair_pool) != self.pair_pool or self.pair_pool < 2:

@@ -108,6 +108,9 @@ class JointCandidate:
         Model outputs with the pair, (n_outputs, N), °C.
     significant : bool
         Chosen by :func:`genthermal.diagnose.discover.choose_pair`.
+    onset_profiles : list of OnsetProfile
+        Set on the verdict: the criterion over each onset and the interval of onsets the data
+        allow (:mod:`genthermal.diagnose.onset_profile`).
     """
 
     effects: tuple
@@ -121,12 +124,16 @@ class JointCandidate:
     delta_bic: float
     predicted: np.ndarray
     significant: bool = False
+    onset_profiles: list = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict:
-        """The JSON entry of the pair ranking."""
-        return {"effects": list(self.effects), "params": self.values, "onset_s": self.onsets_s,
-                "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
-                "k": self.k, "significant": self.significant}
+        """The JSON entry of the pair ranking (with the onset intervals on the verdict)."""
+        entry = {"effects": list(self.effects), "params": self.values, "onset_s": self.onsets_s,
+                 "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
+                 "k": self.k, "significant": self.significant}
+        if self.onset_profiles:
+            entry["onset_interval_s"] = {p.effect: list(p.interval_s) for p in self.onset_profiles}
+        return entry
 
 
 def _start(scaling, value: float, parameter) -> float:

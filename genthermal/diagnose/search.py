@@ -66,12 +66,15 @@ def noise_std(outputs: np.ndarray) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class FoundEffect:
-    """An effect accepted in an earlier iteration: values and onset (s and sample index)."""
+    """An effect accepted in an earlier iteration: values and onset (s and sample index), and the
+    interval of onsets the data allow when its onset was profiled
+    (:mod:`genthermal.diagnose.onset_profile`; (earliest, latest) s, else None)."""
 
     effect: str
     values: dict
     onset_s: float
     onset_index: int
+    onset_interval_s: tuple | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,6 +123,9 @@ class Candidate:
     onset_responses : OnsetResponses or None
         What the effect alone does to the sensors from each onset of the coarse grid (the residual
         screen of the pair search, :func:`genthermal.diagnose.joint.residual_partners`).
+    onset_profiles : list of OnsetProfile
+        Set on the verdict: the criterion over its onset and the interval of onsets the data
+        allow (:mod:`genthermal.diagnose.onset_profile`).
     """
 
     effect: str
@@ -136,12 +142,16 @@ class Candidate:
     found_onsets: dict = dataclasses.field(default_factory=dict)
     significant: bool = False
     onset_responses: "OnsetResponses | None" = None
+    onset_profiles: list = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict:
-        """The JSON entry of the ranking."""
-        return {"effect": self.effect, "params": self.values, "onset_s": self.onset_s,
-                "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
-                "k": self.k, "significant": self.significant}
+        """The JSON entry of the ranking (with the onset interval on the verdict)."""
+        entry = {"effect": self.effect, "params": self.values, "onset_s": self.onset_s,
+                 "rmse_before": self.rmse_before, "rmse_after": self.rmse_after, "delta_ic": self.delta_bic,
+                 "k": self.k, "significant": self.significant}
+        if self.onset_profiles:
+            entry["onset_interval_s"] = {p.effect: list(p.interval_s) for p in self.onset_profiles}
+        return entry
 
 
 def model_with_effects(model: ThermalModel, found: Sequence[FoundEffect], extra: str | None = None,

@@ -47,7 +47,7 @@ from ..simulate import simulate
 from .flight_result import FlightRecorder, FlightResult, FlightTimeout
 from .flown import FlownPlanning
 from .input_watch import InputWatch
-from .manager_settings import ManagerSettings, flight_filter, infeasible_response
+from .manager_settings import ManagerSettings, flight_filter, infeasible_response, planning_margin_K
 from .monitor import FaultMonitor
 from .state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
@@ -174,7 +174,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
     check_fit_step("sensor_watch.identify_dt_s", settings.sensor_watch.identify_dt_s, dt)
     watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
-    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators)
+    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators,
+                              planning_margin_K(system, settings))
 
     def read_inputs(times):
         """The inputs as the manager reads them at ``times`` (s): injected faults, claimed ones substituted."""
@@ -234,7 +235,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
         inputs_read = read_inputs(step_times)
-        inlets, ambients = _filter_inputs(system, inputs_read, step_times)
+        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], inlets[g], ambients[g])

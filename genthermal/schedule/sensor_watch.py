@@ -228,6 +228,12 @@ class SensorWatch:
         self.deferrals: list[dict] = []
         self._last_check = [-math.inf] * n
         roles = detector_node_roles(system.planning_model)
+        #: Warmer coolant-inlet readings the plan held back while unconfirmed (the input watch's
+        #: :class:`~genthermal.schedule.unconfirmed_inlet.UnconfirmedInlet` events).
+        self.inlet_holds: list[dict] = []
+        #: The fault test's :math:`r_{gj}` (n_gen, n_nodes) of the last cycle looked at (after its
+        #: claims): the input watch confirms a warmer inlet reading on a unit that heats.
+        self.last_statistics = np.full((n, len(self.outputs)), np.nan)
         self.unconfirmed = UnconfirmedExcess([getattr(settings, f"unconfirmed_{role}") for role in roles],
                                              settings.max_unconfirmed_s, n)
 
@@ -276,6 +282,7 @@ class SensorWatch:
         claimed, known = [], set(self.corrections)
         pattern_sums = [test.high for test in self.patterns]
         statistics = monitor.statistics(estimators if detectors is None else detectors)
+        self.last_statistics = statistics
         flows = opposite_flows(statistics)
         for g in range(len(estimators)):
             if self._frozen(g, t_s, monitor):  # a frozen channel needs no model: claimed at once
@@ -334,6 +341,7 @@ class SensorWatch:
         if t_s >= self.detection.detector.settle_s:  # the fault test's own start; after this cycle's claims
             # and held-out sensors (a unit compared with one whose faulty reading the filter took shows it mirrored)
             statistics = monitor.statistics(estimators if detectors is None else detectors)
+            self.last_statistics = statistics
             self.unconfirmed.update(t_s, statistics, [not b for b in monitor.beliefs],
                                     {h for h, _ in self.corrections})
         return claimed
@@ -627,4 +635,5 @@ class SensorWatch:
                 "pattern_alarms": [{**a, "generator": names[a["generator"]]} for a in self.pattern_alarms],
                 "beliefs_held": [{**d, "generator": names[d["generator"]]} for d in self.deferrals],
                 "heat_flows_unconfirmed": [{**e, "generator": names[e["generator"]]} for e in self.unconfirmed.events],
+                "inlet_readings_unconfirmed": [{**e, "generator": names[e["generator"]]} for e in self.inlet_holds],
                 "load_plan": "unchanged by sensor faults: the believed machine is not changed by a claim"}

@@ -1,0 +1,232 @@
+r"""Onsets of the verdict refined on their profile, and the interval of onsets the data allow.
+
+The searches place an onset by a grid and golden section with the initial state held
+(:mod:`genthermal.diagnose.search`, :mod:`genthermal.diagnose.joint`). A slow conductance change
+(better frame cooling) has a broad onset likelihood: from an earlier onset, a smaller change and a
+slightly different initial state fit almost as well, so a grid can settle far from the truth, and
+a single onset says nothing of how well the record fixes it. Here, for each effect of the verdict
+(one effect or a pair), on the decimated series of the search (one sample per
+:data:`~genthermal.diagnose.search.GRID_DT_S`):
+
+* the *profile* of the criterion over its onset: at every onset of the series, walking out from
+  the fitted one sample at a time, the values of every effect of the verdict and the initial state
+  are refitted (Levenberg-Marquardt warm-started from the neighbour, the other onsets held), and
+
+  .. math::
+      \Delta\mathrm{IC}(t_0) = N \ln\frac{RSS(t_0)}{\min_t RSS(t)}
+
+  (the same for BIC and AIC: the onsets compared have the same number of parameters); the walk
+  stops on each side at the first onset above the threshold, or at the end of the record;
+* when the profile rejects the onset the search found (its :math:`\Delta\mathrm{IC}` above the
+  threshold), the onset moves to the least RSS of its profile, then the profile of the other
+  effect is taken at that onset, and so on until no onset moves (at most :data:`MAX_ROUNDS`
+  rounds): a joint refinement on a fine grid near the optimum. An onset the profile does not
+  reject stays where the search put it: within the interval the data cannot tell onsets apart,
+  and a move there would trade an effect "from the start" for one from the next sample on noise;
+* the *onset interval*: from the earliest to the latest onset sample of the last profile whose
+  :math:`\Delta\mathrm{IC}` lies within the threshold (by default the magnitude of the
+  criterion's evidence limit, 10: onsets the data do not reject with "very strong" evidence),
+  widened by one sample period before the earliest: an effect that holds from sample :math:`k`
+  began after sample :math:`k-1`.
+  The samples are time-correlated, so the interval is narrower than a confidence interval from
+  independent errors would be; it is a measure of how sharply the record fixes the onset.
+
+The refined onsets are kept when the verdict refitted at them on the full series fits better
+(:meth:`~genthermal.diagnose.joint.PairSearch.refit_at`); the intervals are reported either way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from .search import _indicator, _Problem, _Structure
+
+#: Levenberg-Marquardt iterations per profile point (warm-started from its neighbour).
+PROFILE_ITERATIONS = 3
+#: Rounds of the joint refinement (profile of each effect in turn, onsets moved to its minimum).
+MAX_ROUNDS = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class OnsetProfile:
+    """The criterion over one effect's onset, the other parameters refitted at each.
+
+    Attributes
+    ----------
+    effect : str
+    onsets_s : tuple of float
+        Onsets profiled, s from the start of the record, ascending.
+    delta_ic : tuple of float
+        Criterion change of each against the best onset of the profile.
+    onset_s : float
+        Onset of least RSS of the profile, s (the verdict keeps the search's onset when the
+        profile does not reject it).
+    interval_s : (float, float)
+        Onsets the data allow, s: from one sample period before the earliest onset sample with
+        ``delta_ic`` within ``threshold`` (not before the start) to the latest.
+    threshold : float
+        Criterion change that bounds the interval.
+    """
+
+    effect: str
+    onsets_s: tuple
+    delta_ic: tuple
+    onset_s: float
+    interval_s: tuple
+    threshold: float
+
+    def to_dict(self) -> dict:
+        """JSON entry: the onset, its interval and the profile."""
+        return {"effect": self.effect, "onset_s": self.onset_s, "interval_s": list(self.interval_s),
+                "threshold": self.threshold,
+                "profile": {"onset_s": list(self.onsets_s), "delta_ic": [round(d, 3) for d in self.delta_ic]}}
+
+
+class OnsetProfiler:
+    """Profile and refine the onsets of effects fitted together on one (decimated) series.
+
+    Parameters
+    ----------
+    structure : _Structure
+        The effects' simulator and parameter scalings on the series (every effect's parameters,
+        in the order of ``onsets``' effects).
+    x0_coefficients : array-like
+        Initial-state coefficients of the search; the profile refits a shift of them.
+    criterion : BIC, AIC or compatible
+        Gives the criterion change of an RSS ratio.
+    threshold : float, optional
+        Criterion change that bounds the interval; default the magnitude of the criterion's
+        evidence limit.
+    """
+
+    def __init__(self, structure: _Structure, x0_coefficients, criterion, threshold: float | None = None):
+        self.series = structure.series
+        self.problem = _Problem(structure.problem.simulator, structure.series, structure.problem.scalings,
+                                fit_initial_state=True)
+        self.x0_coefficients = np.asarray(x0_coefficients, dtype=float)
+        self.criterion = criterion
+        self.threshold = abs(criterion.evidence_limit) if threshold is None else float(threshold)
+        if not (math.isfinite(self.threshold) and self.threshold > 0):
+            raise InputError("threshold", threshold, "must be a criterion change > 0")
+        self.n_valid = int(self.problem.mask.sum())
+
+    def _delta(self, rss: float, best: float) -> float:
+        return self.criterion.delta(max(rss, 1e-300), max(best, 1e-300), self.n_valid, 0)
+
+    def _fit(self, onsets: Sequence[int], z) -> tuple[np.ndarray, float]:
+        indicator = _indicator(self.series.time_s.size, onsets)
+        return self.problem.gauss_newton(z, self.x0_coefficients, indicator, PROFILE_ITERATIONS, 1e-4)
+
+    def profile(self, onsets: Sequence[int], position: int, z) -> dict:
+        """Onset index → (z, RSS) for ``onsets[position]`` walked out from its value until the
+        criterion change against the least RSS so far exceeds the threshold on each side."""
+        n = self.series.time_s.size
+        start = int(onsets[position])
+        points = {start: self._fit(onsets, z)}
+        for step in (-1, 1):
+            onset, z_near = start, points[start][0]
+            while 0 <= onset + step <= n - 2:
+                onset += step
+                trial = list(onsets)
+                trial[position] = onset
+                points[onset] = self._fit(trial, z_near)
+                z_near = points[onset][0]
+                best = min(rss for _, rss in points.values())
+                if self._delta(points[onset][1], best) > self.threshold:
+                    break
+        return points
+
+    def refine(self, effects: Sequence[str], onsets: Sequence[int], z) -> tuple[list, np.ndarray, float, list]:
+        """Joint refinement of ``onsets`` (module docstring) from the values ``z`` (decision
+        variables, without the initial state).
+
+        Returns
+        -------
+        onsets : list of int
+            Refined onset indices on the series.
+        z : numpy.ndarray
+            Values at those onsets (decision variables, without the initial state).
+        rss : float
+            Their RSS on the series, K².
+        profiles : list of OnsetProfile
+            The last profile of each effect, in the order of ``effects``.
+        """
+        if len(effects) != len(onsets):
+            raise InputError("onsets", list(onsets), f"need one per effect {list(effects)}")
+        onsets = [int(o) for o in onsets]
+        z = np.concatenate([np.asarray(z, dtype=float), [0.0, 0.0]])
+        last: dict[int, dict] = {}
+        for _ in range(MAX_ROUNDS):
+            moved = False
+            for position in range(len(onsets)):
+                points = last[position] = self.profile(onsets, position, z)
+                best = min(points, key=lambda o: points[o][1])
+                current = onsets[position]
+                if self._delta(points[current][1], points[best][1]) > self.threshold:
+                    moved, onsets[position] = True, best
+                z = points[onsets[position]][0]
+            if not moved:
+                break
+        rss = self._fit(onsets, z)[1]
+        profiles = [self._profile_of(effect, last[position]) for position, effect in enumerate(effects)]
+        return onsets, z[:-2], rss, profiles
+
+    def _profile_of(self, effect: str, points: dict) -> OnsetProfile:
+        """The :class:`OnsetProfile` of ``points`` (onset index → (z, RSS))."""
+        order = sorted(points)
+        best = min(rss for _, rss in points.values())
+        delta = [self._delta(points[o][1], best) for o in order]
+        elapsed = [float(self.series.time_s[o] - self.series.time_s[0]) for o in order]
+        inside = [t for t, d in zip(elapsed, delta) if d <= self.threshold]
+        onset = elapsed[int(np.argmin(delta))]
+        interval = (max(min(inside) - self.series.dt_s, 0.0), max(inside))
+        return OnsetProfile(effect, tuple(elapsed), tuple(delta), onset, interval, self.threshold)
+
+
+def refine_verdict(search, chosen, pool: list):
+    """``chosen`` (the first round's verdict: a Candidate or a JointCandidate of ``search``) with
+    its onsets refined on their profile (kept when the refit on the full series fits better) and
+    its :class:`OnsetProfile` list set; the entry of ``pool`` (the ranking it came from) that is
+    ``chosen`` is replaced by the result, which is returned."""
+    from .joint import JointCandidate, PairSearch
+
+    if search.found:
+        raise InputError("search.found", [f.effect for f in search.found], "onsets are profiled in the first round")
+    factor = int(round(search.coarse.dt_s / search.series.dt_s))
+    if isinstance(chosen, JointCandidate):
+        pairs = PairSearch(search)
+        effects = list(chosen.effects)
+        structure = pairs._structure(effects, search.coarse)
+        values = [chosen.values[e][p.name] for e in effects for p in search.effect(e).parameters]
+    else:
+        effects = [chosen.effect]
+        structure = search._structure(chosen.effect, search.coarse)
+        values = [chosen.values[p.name] for p in search.effect(chosen.effect).parameters]
+    z = [s.decision(float(np.clip(v, s.lower, s.upper))) for s, v in zip(structure.problem.scalings, values)]
+    onsets = [(chosen.onset_indices[e] if isinstance(chosen, JointCandidate) else chosen.onset_index) // factor
+              for e in effects]
+    profiler = OnsetProfiler(structure, search.x0_coefficients, search.criterion)
+    refined_onsets, z, _, profiles = profiler.refine(effects, onsets, z)
+    result = chosen
+    if refined_onsets != onsets:
+        if isinstance(chosen, JointCandidate):
+            moved = pairs._finish(tuple(effects), refined_onsets, z, polish=True)
+        else:
+            theta = structure.problem.theta(z)
+            moved = search.polish(dataclasses.replace(
+                chosen, values={p.name: float(v) for p, v in zip(search.effect(chosen.effect).parameters, theta)},
+                onset_index=refined_onsets[0] * factor, onset_s=search.elapsed_s(refined_onsets[0] * factor),
+                rss=math.inf))
+        if moved.rss < chosen.rss:
+            moved.significant = chosen.significant
+            if hasattr(chosen, "onset_responses"):
+                moved.onset_responses = chosen.onset_responses
+            result = moved
+    result.onset_profiles = profiles
+    pool[:] = [result if entry is chosen else entry for entry in pool]
+    return result
