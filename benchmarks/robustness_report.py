@@ -3,6 +3,12 @@
 Usage::
 
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json [--png benchmarks/figures/robustness.png]
+    python benchmarks/robustness_report.py benchmarks/figures/robustness.json --merge refly.json
+
+``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
+seed) that every scheduler flew to the end in place of the same cases of the whole grid, recomputes every summary key with
+:func:`genthermal.schedule.sweep.summarise`, records the re-fly under ``provenance.merged`` and
+writes the whole grid's JSON back before reporting on it.
 
 Prints two markdown tables: one row per scheduler (cases flown to the end, breach-free share,
 longest breach, median and max detection delay, false alarms), then the figures of the optimal
@@ -71,6 +77,54 @@ def rest_lines(report: dict) -> list[str]:
             f"({', '.join(rest['cases_optimal_rests_more']) or 'none'})."]
 
 
+def rest_table(report: dict) -> str:
+    """One row per faulty case where anyone rests or leaves load unserved: the optimal
+    scheduler's rest and load not served, the best baseline's and the hindsight plan's."""
+    rest = report.get("rest_vs_best_baseline") or {}
+    rows = [c for c in rest.get("per_case", []) if c["optimal_rest_s"] > 0 or c["best_baseline_rest_s"] > 0
+            or c.get("optimal_not_served_Ah") or c.get("best_baseline_not_served_Ah")]
+    lines = ["| case | optimal rest, min | best baseline rest, min | hindsight rest, min "
+             "| not served optimal / baseline / hindsight, A·h |", "|---|---|---|---|---|"]
+
+    def amount(value, digits=2):
+        return "–" if value is None else f"{value:.{digits}f}"
+    for c in rows:
+        hindsight = c.get("hindsight_rest_s")
+        lines.append(f"| {c['case']} | {c['optimal_rest_s'] / 60:.1f} | {c['best_baseline_rest_s'] / 60:.1f} "
+                     f"({c['best_baseline']}) | {'–' if hindsight is None else f'{hindsight / 60:.1f}'} | "
+                     f"{amount(c.get('optimal_not_served_Ah'))} / {amount(c.get('best_baseline_not_served_Ah'))} / "
+                     f"{amount(c.get('hindsight_not_served_Ah'))} |")
+    return "\n".join(lines)
+
+
+def merge_cases(report: dict, partial: dict) -> dict:
+    """``report`` (a whole grid) with the cases of ``partial`` (a re-fly of some of them) in place of
+    its own, every summary key recomputed and the re-fly's provenance under ``provenance.merged``.
+
+    Raises
+    ------
+    ValueError
+        When ``partial`` names a case the grid does not have, or flies other schedulers.
+    """
+    from genthermal.schedule.sweep import summarise
+
+    schedulers = list(report["robustness"]["breach_s"])
+    if list(partial["robustness"]["breach_s"]) != schedulers:
+        raise ValueError(f"the re-fly flew {list(partial['robustness']['breach_s'])}, the grid {schedulers}: "
+                         "re-fly with the same --schedulers")
+    names = [c["name"] for c in report["cases"]]
+    unknown = [c["name"] for c in partial["cases"] if c["name"] not in names]
+    if unknown:
+        raise ValueError(f"cases {unknown} of the re-fly are not in the grid (same --cases and --seed?)")
+    new = {c["name"]: c for c in partial["cases"]  # a case the re-fly did not finish keeps the grid's record
+           if all(run.get("status", "ok") == "ok" for run in c["runs"].values())}
+    cases = [new.get(name, case) for name, case in zip(names, report["cases"])]
+    provenance = dict(report.get("provenance") or {})
+    provenance["merged"] = list(provenance.get("merged") or []) + [
+        {**(partial.get("provenance") or {}), "cases": sorted(new, key=names.index)}]
+    return {**report, **summarise(cases, schedulers), "provenance": provenance, "cases": cases}
+
+
 def missed_lines(report: dict) -> list[str]:
     """One line per case and scheduler that misses a target, with its cause as the flight reports it."""
     lines = []
@@ -133,15 +187,29 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("json", help="a genthermal sweep --json file")
     parser.add_argument("--png", help="write the plot here (default: next to the JSON, .png)")
+    parser.add_argument("--merge", metavar="REFLY_JSON", help="a partial re-fly of the grid: its cases replace "
+                        "the grid's, and the JSON is written back with the summary recomputed")
     args = parser.parse_args(argv)
     path = Path(args.json)
     report = json.loads(path.read_text())
     if "cases" not in report or "robustness" not in report:
         print(f"{path}: not a genthermal sweep JSON (needs 'robustness' and 'cases')", file=sys.stderr)
         return 2
+    if args.merge:
+        partial = json.loads(Path(args.merge).read_text())
+        try:
+            report = merge_cases(report, partial)
+        except (KeyError, ValueError) as error:
+            print(f"{args.merge}: cannot merge into {path}: {error}", file=sys.stderr)
+            return 2
+        from genthermal.outputs import report_json
+
+        report_json(path, report)
     print(scheduler_table(report))
     print()
     print("\n".join(rest_lines(report)))
+    print()
+    print(rest_table(report))
     missed = missed_lines(report)
     print(f"\nTargets missed ({len(missed)}):" if missed else "\nNo target missed.")
     print("\n".join(missed))

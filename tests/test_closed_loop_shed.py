@@ -216,3 +216,26 @@ def test_shed_plan_sheds_more_now_for_a_rise_its_filter_did_not_explain(tmp_path
         assert guarded.schedule.displaced_A[0, 0] > 0.1
         assert guarded.schedule.displaced_A[1, 0] <= 0.0  # the healthy one sheds none of its own
     assert rises[1] > rises[0]
+
+
+def test_shed_plan_precools_a_generator_that_must_shed_later(tmp_path):
+    """gen1 (inlet 50 °C) must shed in the landing only: with pre-cooling it gives the healthy gen2
+    all that gen2 can take in the cruise before (there the current limit, 7 A), so it reaches the
+    landing cooler and less of its landing load goes unserved; gen2 stays within the receivers'
+    limit either way, and nothing is moved in the taxi, where gen2 is at its current limit."""
+    system = _system(tmp_path, HOT_AT_REST)
+    segments = mission_segments(system.mission)  # taxi, cruise/combat, landing: 7 A at the start of taxi and landing
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    problem = PlanningProblem(segments, generators, x0, np.array([50.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, 92.0, rise_backoff=0.3)
+    myopic = shed_plan(problem, [False, False], receiver_margin_K=2.5, precool=False)
+    precooled = shed_plan(problem, [False, False], receiver_margin_K=2.5)
+    room_A = system.current_limit_A - segments[1].peak_A  # gen2's room in the cruise: the current limit
+    assert myopic.schedule.displaced_A[0, 1] < room_A - 0.5
+    assert precooled.schedule.displaced_A[:, 1] == pytest.approx([room_A, -room_A], abs=1e-6)  # moved, not lost
+    assert np.all(np.abs(precooled.schedule.displaced_A[:, 0]) < 1e-9)
+    landing_lost = [r.schedule.displaced_A[:, 2].sum() for r in (myopic, precooled)]
+    assert landing_lost[1] < landing_lost[0] - 0.3
+    for result in (myopic, precooled):
+        assert predict(problem, result.schedule).outputs[1].max() <= problem.limit_C - 2.5 + 0.05

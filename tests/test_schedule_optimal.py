@@ -109,3 +109,42 @@ def test_while_shedding_the_manager_keeps_shedding_rather_than_use_up_the_margin
     assert kept.peak_C < relaxed.peak_C and kept.peak_C <= lowest + 1.0  # load not served instead of margin
     assert kept.warnings[-1].startswith("margin not kept") and "keeps shedding" in kept.warnings[-1]
     assert "within the planning limit" in kept.details["response"]
+
+
+def test_the_optimal_scheduler_keeps_the_plan_with_the_least_rest_of_its_candidates(tiny, monkeypatch):
+    """IPOPT's local optimum is one candidate among the heuristic's, the engineer's and the previous
+    plan, all judged on the same problem: a baseline's plan that rests less is flown, and says so."""
+    import genthermal.schedule.optimal as optimal
+    from genthermal.schedule.plan import evaluate
+
+    honest = optimal.optimal_plan(tiny)
+    assert honest.feasible and honest.method == "optimal"
+    resting = Schedule(honest.schedule.displaced_A, honest.schedule.rest_before_s + [600.0, 0.0])  # 10 min more
+
+    def worse_optimum(transcription, guess):
+        return resting, True, "Solve_Succeeded"
+    monkeypatch.setattr(optimal._Transcription, "solve", worse_optimum)
+    safeguarded = optimal.optimal_plan(tiny)
+    assert evaluate(tiny, resting, "x", 0.0).feasible
+    assert safeguarded.feasible and safeguarded.method == "optimal"
+    assert safeguarded.schedule.added_rest_s < 600.0 - optimal.MIN_REST_S
+    assert safeguarded.details["chosen_from"] in ("heuristic", "engineer")
+
+
+def test_a_previous_plan_that_sheds_load_is_no_candidate(tiny):
+    from genthermal.schedule.optimal import least_rest, optimal_plan, serves_all_load
+    from genthermal.schedule.plan import evaluate
+
+    shedding = Schedule(np.array([[2.0, 2.0], [0.0, 0.0]]), np.zeros(2))  # gen1's 2 A go to nobody
+    assert not serves_all_load(tiny, shedding) and not serves_all_load(tiny, None)
+    assert not serves_all_load(tiny, Schedule.nominal(2, 2, switched_off=[True, False]))
+    assert serves_all_load(tiny, Schedule(np.array([[1.0, 0.5], [-1.0, -0.5]]), np.zeros(2)))
+    plan = optimal_plan(tiny).schedule
+    cool = evaluate(tiny, Schedule(plan.displaced_A, plan.rest_before_s + 60.0), "a minute more", 0.0)
+    quick = evaluate(tiny, Schedule(plan.displaced_A, plan.rest_before_s + [60.0, 59.5]), "half a second less", 0.0)
+    quicker = evaluate(tiny, Schedule(plan.displaced_A, plan.rest_before_s + [60.0, 0.0]), "a minute less", 0.0)
+    assert cool.feasible and quick.feasible and quicker.feasible
+    assert least_rest([cool, quick]) is cool  # less than MIN_REST_S less is no saving
+    assert least_rest([cool, None, quicker]) is quicker
+    with pytest.raises(ValueError, match="feasible"):
+        least_rest([None])

@@ -41,12 +41,47 @@ def test_summary_keys_and_the_best_baseline_ratio():
     assert summary["robustness"]["breach_free_fraction"]["optimal"] == pytest.approx(2 / 3)
     rest = summary["rest_vs_best_baseline"]
     assert rest["per_case"][0] == {"case": "a", "optimal_rest_s": 150.0, "best_baseline": "engineer",
-                                   "best_baseline_rest_s": 300.0, "ratio": pytest.approx(0.5)}  # not the thesis heuristic
+                                   "best_baseline_rest_s": 300.0, "ratio": pytest.approx(0.5),  # not the thesis heuristic
+                                   "optimal_not_served_Ah": 0.0, "best_baseline_not_served_Ah": 0.0,
+                                   "hindsight_rest_s": None, "hindsight_not_served_Ah": None}
     assert rest["per_case"][1]["ratio"] is None and rest["cases_optimal_rests_more"] == ["c"]
     assert rest["mean_ratio"] == pytest.approx(270 / 300)
     assert summary["detect_delay_s"]["median"] == 450.0 and summary["detect_delay_s"]["max"] == 600.0
     assert {"case": "a", "scheduler": "heuristic"} in summary["detect_delay_s"]["not_detected"]
     assert summary["false_alarms"]["on_healthy_flights"] == 1
+
+
+def test_rest_is_the_time_rested_and_one_step_more_is_more(monkeypatch):
+    """``rested_s`` (whole steps flown in the minimum power mode) is the rest when a record has it,
+    not the mission time over the nominal duration (the actions' rounding to the step); a flight
+    that never re-planned rested none; and one 10-s step more than the best baseline is more."""
+    def flown(rested, added, replans=3, not_served=0.0):
+        return {**run(0, added), "rested_s": rested, "replans": replans,
+                "shed": {"not_served_Ah": {"gen1": not_served, "gen2": 0.0}}}
+    records = [{"name": "x", "faulty": True, "hindsight": {"rest_s": 30.0, "not_served_Ah": 0.1},
+                "runs": {"heuristic": flown(60.0, 52.0), "engineer": flown(50.0, 42.0, not_served=0.5),
+                         "optimal": flown(60.0, 52.0)}},
+               {"name": "y", "faulty": True,
+                "runs": {"heuristic": {**run(0, 14.0), "replans": 0}, "engineer": {**run(0, 14.0), "replans": 0},
+                         "optimal": {**run(0, 14.0), "replans": 0}}}]
+    rest = summarise(records, ("heuristic", "engineer", "optimal"))["rest_vs_best_baseline"]
+    x, y = rest["per_case"]
+    assert (x["optimal_rest_s"], x["best_baseline"], x["best_baseline_rest_s"]) == (60.0, "engineer", 50.0)
+    assert (x["best_baseline_not_served_Ah"], x["hindsight_rest_s"], x["hindsight_not_served_Ah"]) == (0.5, 30.0, 0.1)
+    assert y["optimal_rest_s"] == y["best_baseline_rest_s"] == 0.0  # 14 s of rounding, no re-plan: no rest
+    assert rest["cases_optimal_rests_more"] == ["x"]
+
+
+def test_hindsight_records_join_their_case():
+    import genthermal.schedule.sweep as sweep
+
+    document = robustness_case(5)
+    flights = [{"case": document["name"], "scheduler": sweep.HINDSIGHT, "status": "ok",
+                "hindsight": {"rest_s": 120.0, "not_served_Ah": 0.0}},
+               {"case": "elsewhere", "scheduler": sweep.HINDSIGHT, "status": "error", "error": "boom"}]
+    record = sweep.case_records([document, robustness_case(6)], flights, ("optimal",))
+    assert record[0]["hindsight"] == {"rest_s": 120.0, "not_served_Ah": 0.0}
+    assert "hindsight" not in record[1]
 
 
 def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
@@ -124,15 +159,17 @@ def test_sweep_only_flies_the_named_cases_of_the_grid_and_checks_them(monkeypatc
     flown = {}
 
     def fake(documents, schedulers, *rest):
-        flown["names"], flown["planner"] = [d["name"] for d in documents], rest[-1]
+        flown["names"], flown["planner"], flown["hindsight"] = [d["name"] for d in documents], rest[-2], rest[-1]
         return [{"name": d["name"], "faulty": bool(d["faults"]), "runs": {"engineer": run(0, 0.0)}} for d in documents]
     monkeypatch.setattr(sweep, "run_sweep", fake)
     assert main(["sweep", "--cases", "20", "--only", "15,3", "--schedulers", "engineer", "--planner-model",
                  "nonlinear"]) == 0
     assert flown["names"] == [robustness_case(15)["name"], robustness_case(3)["name"]]  # the grid's own cases
-    assert flown["planner"] == "nonlinear"
+    assert flown["planner"] == "nonlinear" and flown["hindsight"] is True
     provenance = json.loads(capsys.readouterr().out)["provenance"]
     assert "--only 15,3" in provenance["command"] and provenance["optimal_planner_model"] == "nonlinear"
+    assert main(["sweep", "--cases", "20", "--only", "3", "--schedulers", "engineer", "--no-hindsight"]) == 0
+    assert flown["hindsight"] is False and "--no-hindsight" in json.loads(capsys.readouterr().out)["provenance"]["command"]
     for only, message in (("15,x", "indices"), ("20", "not in the grid"), ("3,3", "more than once"), ("", "indices")):
         assert main(["sweep", "--cases", "20", "--only", only, "--schedulers", "engineer"]) == 2
         error = capsys.readouterr().err
@@ -152,3 +189,38 @@ def test_schedulers_share_a_flight_only_when_they_plan_on_the_same_model():
     assert third["same_flight_as"] == "heuristic"
     with pytest.raises(Exception, match="optimal_planner_model"):
         sweep.run_sweep([], ("optimal",), optimal_planner_model="quadratic")
+
+
+def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys):
+    """A partial re-fly replaces its cases of the whole grid and every summary key is recomputed
+    from the merged cases; a re-fly of another grid or other schedulers is refused."""
+    import importlib.util
+    import json
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "robustness_report", Path(__file__).resolve().parents[1] / "benchmarks" / "robustness_report.py")
+    report_module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(report_module)
+    schedulers = ("heuristic", "engineer", "optimal")
+
+    def grid(cases):
+        return {**summarise(cases, schedulers), "provenance": {"command": "whole"}, "cases": cases}
+    old = [{"name": "case0:a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                  "optimal": run(50, 400)}},
+           {"name": "case1:b", "faulty": True, "runs": {s: run(0, 0) for s in schedulers}}]
+    new_a = {"name": "case0:a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                   "optimal": run(0, 200)}}
+    whole, refly = tmp_path / "grid.json", tmp_path / "refly.json"
+    whole.write_text(json.dumps(grid(old)))
+    refly.write_text(json.dumps({**grid([new_a]), "provenance": {"command": "refly a"}}))
+    assert report_module.main([str(whole), "--merge", str(refly), "--png", str(tmp_path / "g.png")]) == 0
+    merged = json.loads(whole.read_text())
+    assert [c["name"] for c in merged["cases"]] == ["case0:a", "case1:b"] and merged["cases"][0]["runs"]["optimal"]["added_rest_s"] == 200
+    assert merged["robustness"]["breach_s"]["optimal"] == 0 and merged["rest_vs_best_baseline"]["mean_ratio"] == pytest.approx(200 / 300)
+    assert merged["provenance"]["command"] == "whole" and merged["provenance"]["merged"][0]["cases"] == ["case0:a"]
+    assert "| case0:a | 3.3 | 5.0 (engineer) | – |" in capsys.readouterr().out
+    stranger = tmp_path / "stranger.json"
+    stranger.write_text(json.dumps(grid([{**new_a, "name": "case9:z"}])))
+    assert report_module.main([str(whole), "--merge", str(stranger), "--png", str(tmp_path / "g.png")]) == 2
+    assert "not in the grid" in capsys.readouterr().err

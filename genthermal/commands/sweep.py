@@ -43,6 +43,8 @@ def register(subparsers) -> None:
     parser.add_argument("--planner-model", default="affine", choices=PLANNER_MODELS,
                         help="model the optimal scheduler plans on (the baselines plan on the design model): "
                              "affine (default) or nonlinear")
+    parser.add_argument("--no-hindsight", action="store_true", help="do not plan the faulty cases in hindsight "
+                        "(the least rest with the true plant and fault known from the onset, a few seconds a case)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=run)
 
@@ -65,12 +67,13 @@ def run(args) -> int:
     documents = [robustness_case(i, args.seed) for i in case_indices(args.only, args.cases)]
     started = time.perf_counter()
     records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress,
-                        args.flight_limit_s, args.timeout_s, args.planner_model)
+                        args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight)
     report = {**summarise(records, schedulers),
               "provenance": {"command": equivalent_command(args),
                              "commit": source_commit(), "workers": None if args.cluster else args.workers,
                              "cluster": args.cluster, "seed": args.seed, "only": args.only,
-                             "optimal_planner_model": args.planner_model, "sweep_wall_s": time.perf_counter() - started},
+                             "optimal_planner_model": args.planner_model, "hindsight": not args.no_hindsight,
+                             "sweep_wall_s": time.perf_counter() - started},
               "cases": records}
     if not args.json:
         print(json.dumps(finite_document(report), indent=2, default=str, allow_nan=False))
@@ -118,6 +121,7 @@ def equivalent_command(args) -> str:
              "--seed", str(args.seed), "--flight-limit-s", f"{args.flight_limit_s:g}"]
     words += ["--only", args.only] if args.only is not None else []
     words += ["--planner-model", args.planner_model]
+    words += ["--no-hindsight"] if args.no_hindsight else []
     words += ["--cluster", args.cluster] if args.cluster else ["--workers", str(args.workers)]
     words += ["--timeout-s", f"{args.timeout_s:g}"] if args.timeout_s is not None else []
     words += ["--json", args.json, "--force"] if args.json else []

@@ -95,13 +95,13 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         off = np.array(switched_off, dtype=bool)
         return _shed(problem, off, off, names, limit_C, "", settings.margin_K)
 
-    def run(p):
+    def run(p, initial=previous):
         if scheduler == "heuristic":
             return heuristic_plan(p, settings.heuristic)
         if scheduler == "engineer":
             return engineer_plan(p, settings.engineer)
         if scheduler == "optimal":
-            return optimal_plan(p, settings.optimal, previous)
+            return optimal_plan(p, settings.optimal, initial)
         return milp_plan(p, settings.milp)
     result = _within_budget(problem, run(problem))
     if result.feasible:
@@ -134,7 +134,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         best.solve_s += lowest.solve_s
         return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
-    relaxed = _within_budget(problem, run(within_lowest))
+    relaxed = _within_budget(problem, run(within_lowest, lowest.schedule))  # the min-max schedule is feasible there
     if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
         relaxed = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(relaxed.warnings))
     response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "

@@ -3,7 +3,9 @@
 Keys of :func:`flight_summary`:
 
 ``mission_time_s``      end of the last action, s
-``added_rest_s``        mission time minus the nominal mission duration, s
+``added_rest_s``        mission time minus the nominal mission duration, s (with the rounding of
+                        every action's duration to the step: a few seconds either way)
+``rested_s``            time flown in the minimum power mode (the rests), s: whole steps, exact
 ``max_T_winding``       per generator name, highest winding temperature, °C (true plant when flown)
 ``max_T_iron``          per generator name, highest iron temperature, °C
 ``breach_s``            time with any generator above θmax, s
@@ -63,6 +65,7 @@ def flight_summary(result: FlightResult) -> dict:
         "closed_loop": result.closed_loop,
         "mission_time_s": float(result.time_s[-1]),
         "added_rest_s": float(result.time_s[-1] - system.mission.duration_s),
+        "rested_s": float(np.count_nonzero(result.resting) * dt),
         "max_T_winding": {n: float(result.temperatures_C[g, 0].max()) for g, n in enumerate(names)},
         "max_T_iron": {n: float(result.temperatures_C[g, 1].max()) for g, n in enumerate(names)},
         "breach_s": float(np.count_nonzero(above.any(axis=(0, 1))) * dt),

@@ -28,10 +28,16 @@ Keys of :func:`summarise` (benchmark JSON):
 ``robustness.failed_flights``        flights that did not finish: case, scheduler, status, error
 ``rest_vs_best_baseline``            ``per_case`` (faulty cases): optimal added rest, the best baseline
                                      (heuristic or engineer, the one with less added rest) and its rest,
-                                     their ratio (None when the baseline does not rest); ``mean_ratio``: total
-                                     optimal rest / total best-baseline rest over those cases;
-                                     ``cases_optimal_rests_more``: cases where the optimal scheduler
-                                     rests more than the best baseline (by more than one step)
+                                     their ratio (None when the baseline does not rest), the load each
+                                     left unserved (A·h) and the hindsight plan's rest and load not served
+                                     (:mod:`~genthermal.schedule.hindsight`; None when not computed);
+                                     ``mean_ratio``: total optimal rest / total best-baseline rest over
+                                     those cases; ``cases_optimal_rests_more``: cases where the optimal
+                                     scheduler rests more than the best baseline (any more: rests are
+                                     whole steps). Rest is ``rested_s``, the time flown in the minimum
+                                     power mode (records without it: ``added_rest_s`` below
+                                     :data:`REST_RESOLUTION_S` taken as none, 0 for a flight that never
+                                     re-planned)
 ``detect_delay_s``                   median and max over the faulty flights detected, how many were
                                      detected, and the faulty flights not detected (case, scheduler)
 ``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
@@ -57,8 +63,9 @@ FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_los
 #: the manager re-plans and sheds every cycle) take one to two minutes of processor time; ten
 #: times that still marks a flight that does not end.
 DEFAULT_FLIGHT_CPU_LIMIT_S = 900.0
-#: Added rests closer than this to zero are rounding of the last step, not rest, s (the 10-s step
-#: of the closed loop).
+#: In records without ``rested_s`` (older sweeps), added rests (mission time minus nominal
+#: duration) closer than this to zero are the rounding of the actions' durations to the 10-s step
+#: of the closed loop, not rest, s.
 REST_RESOLUTION_S = 10.0
 
 
@@ -116,12 +123,15 @@ def planner_model_of(scheduler: str, optimal_planner_model: str = "affine") -> s
 
 
 def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S,
-             optimal_planner_model: str = "affine") -> list:
+             optimal_planner_model: str = "affine", hindsight: bool = False) -> list:
     """Fly case ``document`` with each of ``schedulers`` (:func:`fly_flight`); once a flight ends
     without a re-plan, the remaining schedulers that plan on the same model (:func:`planner_model_of`:
     the re-plan test predicts on it) get its record (module docstring) with ``same_flight_as``
-    naming its scheduler, ``wall_s`` and ``cpu_s`` 0."""
+    naming its scheduler, ``wall_s`` and ``cpu_s`` 0. With ``hindsight`` and a faulty case, one more
+    record, scheduler :data:`HINDSIGHT`: :func:`hindsight_record`."""
     flights, shared = [], {}
+    if hindsight and document["faults"]:
+        flights.append(hindsight_record(document))
     for scheduler in schedulers:
         model = planner_model_of(scheduler, optimal_planner_model)
         if model in shared:
@@ -134,6 +144,37 @@ def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLI
         if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
             shared[model] = flight
     return flights
+
+
+#: Scheduler name of a case's hindsight record (:func:`hindsight_record`).
+HINDSIGHT = "hindsight"
+
+
+def hindsight_record(document: dict) -> dict:
+    """The hindsight plan of faulty case ``document`` (:func:`~genthermal.schedule.hindsight.hindsight_plan`);
+    never raises.
+
+    Returns
+    -------
+    dict
+        ``case``, ``scheduler`` :data:`HINDSIGHT`, ``status`` (``ok`` or ``error``), ``wall_s``,
+        ``cpu_s`` and ``hindsight`` (``onset_s``, ``rest_s``, ``not_served_Ah``, ``peak_C``,
+        ``served_all``, ``method``) or ``error``.
+    """
+    import dataclasses
+
+    from .hindsight import hindsight_plan
+    from .power_system import PowerSystem
+
+    started, cpu_started = time.perf_counter(), time.process_time()
+    record = {"case": document["name"], "scheduler": HINDSIGHT}
+    try:
+        result = hindsight_plan(PowerSystem.from_mission(Mission.from_dict(document)))
+        record.update(status="ok", hindsight=dataclasses.asdict(result))
+    except Exception as error:  # noqa: BLE001 - the sweep records it and goes on
+        record.update(status="error", error=f"{type(error).__name__}: {error}")
+    record.update(wall_s=time.perf_counter() - started, cpu_s=time.process_time() - cpu_started)
+    return record
 
 
 def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S,
@@ -173,8 +214,9 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
 
 
 def case_records(documents, flights: list, schedulers) -> list:
-    """One record per case: ``name``, ``faulty``, ``faults`` and ``runs`` (per scheduler the flight
-    summary with ``status`` ``ok`` and ``wall_s``, or the failure: ``status``, ``error``, ``wall_s``)."""
+    """One record per case: ``name``, ``faulty``, ``faults``, ``runs`` (per scheduler the flight
+    summary with ``status`` ``ok`` and ``wall_s``, or the failure: ``status``, ``error``, ``wall_s``)
+    and, when ``flights`` hold one for the case, ``hindsight`` (:func:`hindsight_record`)."""
     by_key = {(f["case"], f["scheduler"]): f for f in flights}
     records = []
     for document in documents:
@@ -189,15 +231,20 @@ def case_records(documents, flights: list, schedulers) -> list:
                                    **flight["summary"]}
             else:
                 runs[scheduler] = {k: v for k, v in flight.items() if k not in ("case", "scheduler", "summary")}
-        records.append({"name": document["name"], "faulty": bool(document["faults"]),
-                        "faults": document["faults"], "plant_mismatch": document["generators"]["plant_mismatch"],
-                        "runs": runs})
+        record = {"name": document["name"], "faulty": bool(document["faults"]),
+                  "faults": document["faults"], "plant_mismatch": document["generators"]["plant_mismatch"],
+                  "runs": runs}
+        hindsight = by_key.get((document["name"], HINDSIGHT))
+        if hindsight is not None:
+            record["hindsight"] = hindsight.get("hindsight") or {"status": hindsight["status"],
+                                                                  "error": hindsight.get("error")}
+        records.append(record)
     return records
 
 
 def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True,
               flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None,
-              optimal_planner_model: str = "affine") -> list:
+              optimal_planner_model: str = "affine", hindsight: bool = True) -> list:
     """Fly every case with every scheduler on Dask: a :class:`distributed.LocalCluster` of
     ``workers`` single-threaded processes, or the scheduler at ``cluster`` (``tcp://host:8786``);
     a tqdm bar when ``progress``.
@@ -217,6 +264,8 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
         ``unfinished`` and cancelled.
     optimal_planner_model : str
         Model the optimal scheduler plans on (:func:`planner_model_of`), ``affine`` or ``nonlinear``.
+    hindsight : bool
+        Also plan each faulty case in hindsight (:func:`hindsight_record`, a few seconds a case).
 
     Returns
     -------
@@ -239,7 +288,7 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     try:
         order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
         futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s,
-                                 optimal_planner_model, pure=False,
+                                 optimal_planner_model, hindsight, pure=False,
                                  priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
         bar = tqdm(total=len(futures), disable=not progress, desc="cases")
         try:
@@ -262,9 +311,19 @@ def _ok(run: dict) -> bool:
 
 
 def _rest(run: dict) -> float:
-    """Added rest of a flight, s, with rounding below one step taken as none."""
+    """Rest of a flight, s: ``rested_s``; in older records, none for a flight that never re-planned
+    (it flew the nominal schedule) and ``added_rest_s`` with rounding below one step taken as none."""
+    if run.get("rested_s") is not None:
+        return float(run["rested_s"])
+    if run.get("replans") == 0:
+        return 0.0
     rest = float(run["added_rest_s"])
     return rest if rest >= REST_RESOLUTION_S else 0.0
+
+
+def _not_served_Ah(run: dict) -> float:
+    """Load a flight left unserved, A·h (all generators)."""
+    return float(sum(((run.get("shed") or {}).get("not_served_Ah") or {}).values()))
 
 
 def rest_versus_best_baseline(records: list) -> dict:
@@ -279,13 +338,18 @@ def rest_versus_best_baseline(records: list) -> dict:
         optimal, baseline = _rest(runs["optimal"]), _rest(runs[best])
         optimal_total, best_total = optimal_total + optimal, best_total + baseline
         ratio = optimal / baseline if baseline > 0 else None
+        hindsight = r.get("hindsight") or {}
         per_case.append({"case": r["name"], "optimal_rest_s": optimal, "best_baseline": best,
-                         "best_baseline_rest_s": baseline, "ratio": ratio})
+                         "best_baseline_rest_s": baseline, "ratio": ratio,
+                         "optimal_not_served_Ah": _not_served_Ah(runs["optimal"]),
+                         "best_baseline_not_served_Ah": _not_served_Ah(runs[best]),
+                         "hindsight_rest_s": hindsight.get("rest_s"),
+                         "hindsight_not_served_Ah": hindsight.get("not_served_Ah")})
     return {"per_case": per_case,
             "mean_ratio": (optimal_total / best_total) if best_total > 0 else None,
             "optimal_total_rest_s": optimal_total, "best_baseline_total_rest_s": best_total,
             "cases_optimal_rests_more": [c["case"] for c in per_case
-                                         if c["optimal_rest_s"] > c["best_baseline_rest_s"] + REST_RESOLUTION_S]}
+                                         if c["optimal_rest_s"] > c["best_baseline_rest_s"]]}
 
 
 def summarise(records: list, schedulers) -> dict:
