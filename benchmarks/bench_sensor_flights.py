@@ -19,7 +19,9 @@ true onset), ``replans_caused`` (re-plans at times the healthy flight did not re
 healthy flight's re-plans missing), ``load_changes`` (management cycles whose applied currents
 differ from the healthy flight's by more than 1 mA on any generator) and, for the physical cases,
 what was identified, the first re-plan after the onset, the hottest winding and the time above the
-limit. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE]``.
+limit. Usage: ``python benchmarks/bench_sensor_flights.py [--json FILE] [--only NAME ...]``
+(``--only`` flies the healthy flight and the named cases alone, names as :func:`case_name` gives
+them, e.g. ``T_winding-drift-1.5-gen2`` or ``phase_short_circuit-gen1``).
 """
 
 from __future__ import annotations
@@ -69,6 +71,15 @@ PHYSICAL_CASES = (
 LOAD_CHANGE_A = 1e-3
 
 
+def case_name(entry: dict) -> str:
+    """A case's name for ``--only``: sensor, kind, value and unit of a sensor case
+    (``T_iron-stuck-gen2``), the effect or kind and unit of a physical one."""
+    if "sensor" in entry:
+        value = f"{entry['value']:+g}" if "value" in entry else ""
+        return f"{entry['sensor']}-{entry['kind']}{value}-gen{entry['generator']}"
+    return f"{entry.get('effect', entry['kind'])}-gen{entry['generator']}"
+
+
 def flight(sensor_faults=(), faults=(), settings: ManagerSettings = ManagerSettings()):
     """Fly the Fig. 7.7 mission at :data:`LIMIT_C` with the given scenario entries."""
     document = yaml.safe_load((SCENARIO_DIR / "thesis_fig_7_7.yaml").read_text())
@@ -98,26 +109,32 @@ def compared(result, healthy, onset_s: float, cycle_s: float) -> dict:
 def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", help="also write the result to this file")
+    parser.add_argument("--only", nargs="+", metavar="NAME", help="fly only these cases (and the healthy flight)")
     args = parser.parse_args(argv)
+    names = [case_name(entry) for entry in SENSOR_CASES + PHYSICAL_CASES]
+    unknown = [name for name in args.only or () if name not in names]
+    if unknown:
+        parser.error(f"--only {unknown[0]}: no such case; the cases are {', '.join(names)}")
+    chosen = set(args.only or names)
     settings, started = ManagerSettings(), time.perf_counter()
     healthy = flight()
     rows = [{"case": "healthy", "replans": len(healthy.plans),
              "claimed": flight_summary(healthy)["sensor_faults"]["claimed"]}]
-    for entry in SENSOR_CASES:
+    for entry in [e for e in SENSOR_CASES if case_name(e) in chosen]:
         result = flight([entry], settings=settings)
         claims = flight_summary(result)["sensor_faults"]["claimed"]
         onset = 60.0 * entry["onset_min"]
         right = [c for c in claims if c["generator"] == f"gen{entry['generator']}" and c["sensor"] == entry["sensor"]]
-        rows.append({"case": "sensor", "injected": entry,
+        rows.append({"case": "sensor", "name": case_name(entry), "injected": entry,
                      "claimed": [(c["generator"], c["sensor"], c["kind"]) for c in claims],
                      "right_sensor": bool(right),
                      "claim_delay_min": (right[0]["claimed_at_s"] - onset) / 60.0 if right else None,
                      **compared(result, healthy, onset, settings.cycle_s)})
         print(json.dumps(rows[-1]), flush=True)
-    for entry in PHYSICAL_CASES:
+    for entry in [e for e in PHYSICAL_CASES if case_name(e) in chosen]:
         result = flight(faults=[entry], settings=settings)
         summary = flight_summary(result)
-        rows.append({"case": "physical", "fault": entry,
+        rows.append({"case": "physical", "name": case_name(entry), "fault": entry,
                      "claimed": [(c["generator"], c["sensor"], c["kind"]) for c in summary["sensor_faults"]["claimed"]],
                      "identified": [(i["generator"], i["detected_at_s"], i["effect"]) for i in summary["identified"]],
                      "beliefs_held": summary["sensor_faults"].get("beliefs_held", []),
