@@ -382,3 +382,25 @@ def test_bad_input_watch_settings_name_the_field(field, value):
     with pytest.raises(InputError) as error:
         InputWatchSettings(**{field: value})
     assert f"input_watch.{field}" in str(error.value)
+
+
+def test_a_sensor_claimed_noisier_is_kept_not_masked(tmp_path):
+    """A noisier reading is still unbiased: the claim is reported, but the sensor stays in the
+    filter, the record and the fault test, and the claim does not explain the alarm away (masked,
+    the blocked unit of the robustness grid's case 45 flew to 139 °C unobserved)."""
+    from genthermal.diagnose.sensor_faults import SensorFault, SensorHypothesis
+    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.sensor_watch import NOISE_KEPT, SensorWatch, SensorWatchSettings
+
+    watch = SensorWatch(_system(tmp_path, []), SensorWatchSettings(), DetectionSettings())
+
+    class Monitor:
+        def mask(self, *args):
+            raise AssertionError("a noisier sensor must not be masked")
+
+    noisier = SensorHypothesis(SensorFault("T_winding", "noise", 2.6, 7270.0), 10, 0.6, 0.1, -14.9, "noise",
+                               np.zeros(3), alternative="", columns=("T_winding",), output="T_winding")
+    assert watch._claim(0, 7800.0, [noisier], Monitor()) is False
+    assert not watch.corrections and watch.noisier == {(0, "T_winding")}
+    [claim] = watch.claims
+    assert claim["action"] == NOISE_KEPT and claim["fault"].kind == "noise"
