@@ -80,6 +80,7 @@ import math
 
 import numpy as np
 
+from ..errors import InputError
 from ..sensor_faults import SensorFault
 from .monitor import Cusum, detector_node_roles
 from .state_estimator import believed_model
@@ -576,12 +577,27 @@ class SensorWatch:
         window_s = min(alarm_s, t_s if since_s is None else since_s) - self.settings.lookback_s
         before = record[record["time_s"] < window_s]
         span_s = before["time_s"].iloc[-1] - before["time_s"].iloc[0] if before["time_s"].size else 0.0
+        models = [model]
         if span_s >= self.settings.min_calibration_s:
-            model = calibrate(model, before, [p for p in self.settings.calibrate_parameters if p in model.parameters],
-                              self.settings.identify_dt_s).model  # the model as this unit was before the change
-        series = series_for(model, record, self.settings.identify_dt_s)
+            models.insert(0, calibrate(model, before, [p for p in self.settings.calibrate_parameters
+                                                       if p in model.parameters],
+                                       self.settings.identify_dt_s).model)  # the unit as it was before the change
+        for model in models:
+            # a calibration on a short stretch can leave a model with no physical steady state at the
+            # record's load (measured: a 10-min stretch before a blockage with a +31-K inlet, the
+            # steady state -1048 °C): the check then runs on the model before that calibration
+            try:
+                series = series_for(model, record, self.settings.identify_dt_s)
+                search = EffectSearch(model, series).fit_found()
+                break
+            except InputError as error:
+                failure = str(error)
+        else:
+            self.checks.append({"time_s": t_s, "generator": g, "alarmed": list(alarmed), "claimed": False,
+                                "refused": [], "best_machine_fault": None, "error": failure,
+                                "solve_s": time.perf_counter() - started})
+            return []
         screen = SensorScreen(record, series, model.spec.interface)
-        search = EffectSearch(model, series).fit_found()
         names = [n for n in search.candidates() if n in self.detection.fault_effects]
         ranked = search.rank(names) if names else []
         onsets = np.flatnonzero((series.time_s >= window_s)
