@@ -375,7 +375,7 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
 
 @pytest.mark.parametrize("field, value", [("disagreement_K", 0.0), ("lookback_s", float("nan")), ("max_checks", -1),
                                           ("max_checks", 2.5), ("unconfirmed_rise_K", -1.0),
-                                          ("max_unconfirmed_s", float("inf"))])
+                                          ("max_unconfirmed_s", float("inf")), ("shared_step_K", 0.0)])
 def test_bad_input_watch_settings_name_the_field(field, value):
     from genthermal.schedule.input_watch import InputWatchSettings
 

@@ -170,12 +170,11 @@ class InputWatch:
         self._own_fits: dict[tuple[int, str], float] = {}
         #: Per generator, (time s, state names, disturbance states) after each cycle's update.
         self._flows: list[list] = [[] for _ in range(n_generators)]
+        generator = watch.system.planning_model.spec.interface.generator
         #: The input every unit reads the same air of (the ambient: the mission has one).
-        self.shared_air_input = watch.system.planning_model.spec.interface.generator.ambient_input
-        interface = getattr(getattr(getattr(watch, "system", None), "planning_model", None), "spec", None)
-        generator = getattr(getattr(interface, "interface", None), "generator", None)
-        #: The coolant-inlet input, whose warmer reading is held while unconfirmed (None: no hold).
-        self.coolant_input = getattr(generator, "coolant_input", None)
+        self.shared_air_input = generator.ambient_input
+        #: The coolant-inlet input, whose warmer reading is held while unconfirmed.
+        self.coolant_input = generator.coolant_input
         #: Most of a warmer inlet reading held back, K: the setting scaled to the flight's margin.
         from .manager_settings import DEFAULT_MARGIN_K  # it holds these settings: imported here
 
