@@ -59,8 +59,9 @@ def smooth_excess(value, limit: float):
     return s * ca.if_else(x > 30, x, ca.log1p(ca.exp(ca.fmin(x, 30))))
 
 
-def managed_timeline(dt_s: float) -> dict:
-    """The Fig 7.7 mission with the 10-min rest before landing, sampled every ``dt_s`` s.
+def managed_timeline(dt_s: float, rest_s: float = REST_BEFORE_LANDING_S) -> dict:
+    """The Fig 7.7 mission with the rest of ``rest_s`` s (default the thesis's 10 min; its rig rested
+    20 min) before landing, sampled every ``dt_s`` s.
 
     Returns
     -------
@@ -72,13 +73,15 @@ def managed_timeline(dt_s: float) -> dict:
     if not (isinstance(dt_s, (int, float)) and np.isfinite(dt_s) and dt_s > 0
             and abs(300.0 / dt_s - round(300.0 / dt_s)) < 1e-9):
         raise InputError("dt_s", dt_s, "must be a sample period in s that divides 300 s (the mission's 5-min levels)")
+    if not (isinstance(rest_s, (int, float)) and np.isfinite(rest_s) and rest_s > 0
+            and abs(rest_s / dt_s - round(rest_s / dt_s)) < 1e-9):
+        raise InputError("rest_s", rest_s, f"must be a rest in s > 0, a multiple of the sample period {dt_s:g} s")
     mission = load_mission("thesis_fig_7_7")
     rest_start = CONDITIONS[-1][1]
-    end = mission.duration_s + REST_BEFORE_LANDING_S
+    end = mission.duration_s + rest_s
     time_s = np.arange(int(round(end / dt_s)) + 1) * dt_s
-    resting = (time_s >= rest_start - 1e-9) & (time_s < rest_start + REST_BEFORE_LANDING_S - 1e-9)
-    mission_time = np.where(time_s < rest_start + REST_BEFORE_LANDING_S - 1e-9, np.minimum(time_s, rest_start),
-                            time_s - REST_BEFORE_LANDING_S)
+    resting = (time_s >= rest_start - 1e-9) & (time_s < rest_start + rest_s - 1e-9)
+    mission_time = np.where(time_s < rest_start + rest_s - 1e-9, np.minimum(time_s, rest_start), time_s - rest_s)
     currents = mission.phase_currents(np.minimum(mission_time, mission.duration_s)).mean(axis=1)
     currents = np.where(resting, REST_PERCENT / 100.0 * mission.rated_current_A, currents)
     masks = np.array([(mission_time >= start - 1e-9) & (mission_time < end_ - 1e-9) & ~resting
@@ -104,13 +107,20 @@ class ManagedBlockageProxy:
         Inlet rise of gen1 from the onset on, K, and its time constant, s.
     onset_s : float
         Fault onset, s.
+    rest_s : float
+        Rest of both generators before landing, s (thesis simulation 10 min, rig 20 min).
+    inlet_rise_of : callable, optional
+        ``inlet_rise_of(time_s, gen1_current)`` → the inlet rise of gen1 (1, n) as a CasADi expression
+        (e.g. of a fitted amplitude and time constant, or of the current gen1 carries after
+        displacement), replacing ``inlet_rise_C`` and ``inlet_rise_tau_s``.
     """
 
     def __init__(self, model: ThermalModel, names, dt_s: float, k_flow: float | None, inlet_rise_C: float,
-                 inlet_rise_tau_s: float, onset_s: float):
+                 inlet_rise_tau_s: float, onset_s: float, rest_s: float = REST_BEFORE_LANDING_S, inlet_rise_of=None):
         self.names = list(names)
-        line = managed_timeline(dt_s)
+        line = managed_timeline(dt_s, rest_s)
         self.time_s, self.masks = line["time_s"], line["masks"]
+        self.nominal_current_A = line["current_A"]
         generator = model.spec.interface.generator
         mission = line["mission"]
         self.ambient_C = mission.T_ambient_C
@@ -137,6 +147,11 @@ class ManagedBlockageProxy:
         self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
         moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
         self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
+        if inlet_rise_of is not None:
+            gen1_current = ca.DM(current).T - ca.mtimes(ca.DM(self.masks).T, self.displaced).T
+            row = np.zeros((frame.shape[0], 1))
+            row[index(generator.coolant_input)] = 1.0
+            self.inputs["gen1"] = ca.DM(frame) - moved + ca.mtimes(ca.DM(row), inlet_rise_of(self.time_s, gen1_current))
         after = int(np.argmax(self.time_s >= onset_s - 1e-9))
         blockage = {"k_flow": "k_flow" if "k_flow" in self.names else float(k_flow)}
         self.simulators = {
