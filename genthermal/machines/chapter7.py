@@ -219,8 +219,9 @@ class ProxySimulator:
             self.cases.append((proxy, simulator, indicator))
         self.model = model
 
-    def peaks(self, theta) -> list:
-        """Smooth winding peaks (or values) of the proxies, °C (CasADi or numbers)."""
+    def peaks(self, theta, softmax_K: float = SOFTMAX_K) -> list:
+        """Smooth winding peaks (or values) of the proxies, °C (CasADi or numbers); ``softmax_K`` the
+        smoothness of the smooth maximum (a few mK: the sharp peak of the samples)."""
         values = []
         for proxy, simulator, indicator in self.cases:
             winding = simulator.symbolic(theta, ca.DM([0.0, 20.0]), ca.DM(indicator))[0, :]
@@ -228,7 +229,7 @@ class ProxySimulator:
             inside = np.flatnonzero((self.time_s >= start - 1e-9) & (self.time_s <= end + 1e-9))
             window = ca.horzcat(*[winding[i] for i in inside])
             values.append(window[0] if inside.size == 1 else
-                          SOFTMAX_K * ca.logsumexp(window.T / SOFTMAX_K))
+                          softmax_K * ca.logsumexp(window.T / softmax_K))
         return values
 
 
