@@ -121,3 +121,29 @@ def test_minimax_holds_its_epigraph_and_its_cap(chapter7):
         minimise_worst_violation(problem, start, managed_cap_C=float("inf"))
     with pytest.raises(InputError, match="others_cap_K"):
         minimise_worst_violation(problem, start, managed_cap_C=111.0, others_cap_K=0.0)
+
+
+def _reproduce_module():
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "reproduce_thesis", Path(__file__).resolve().parents[1] / "benchmarks" / "reproduce_thesis.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_reproduction_row_states_the_least_violation_and_the_conflicting_outcomes():
+    """The managed-plant row of benchmarks/reproduce_thesis.py says whether a calibration meets every
+    outcome from the study's sharp check, with the least violation, the values at a bound and the
+    outcomes at the worst; --quick names the command instead."""
+    text = _reproduce_module()._feasibility_text
+    study = {"worst_violation_K": 0.0706, "sharp_worst_violation_K": 0.1028, "at_bound": ["h_top_air", "k_flow"],
+             "receiver_max_current_A": 7.61, "active": ["cruise_combat_16K", "managed_gen2_cruise_combat"]}
+    missed = text(study)
+    assert "+0.07 K (+0.10 K on the samples' sharp peaks): no calibration meets them all" in missed
+    assert "2 values at a bound (h_top_air, k_flow)" in missed and "cruise_combat_16K, managed_gen2_cruise_combat" in missed
+    met = text({**study, "worst_violation_K": -0.2, "sharp_worst_violation_K": -0.1})
+    assert "a calibration meets them all" in met and "no calibration" not in met
+    assert "benchmarks/chapter7_feasibility.py" in text(None)
