@@ -13,6 +13,8 @@ fitting it (the comparison in the README's "Reproducing the thesis"). ``--manage
 managed large blockage (:mod:`genthermal.machines.chapter7_managed`: displacement alone in the three
 K-conditions after the fault and a 10-min rest before landing keep both generators within θmax) to
 the fit; the proxies then conflict (README), so the shipped calibration is fitted without it.
+Whether any calibration meets every chapter-7 outcome within the thesis's tolerances, with all
+assumed values and the blockage's inlet free: ``benchmarks/chapter7_feasibility.py``.
 """
 
 from __future__ import annotations

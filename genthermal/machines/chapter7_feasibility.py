@@ -103,13 +103,13 @@ BLOCKAGE_NAMES = ("n_flow", "k_flow")
 
 @dataclasses.dataclass(frozen=True)
 class Start:
-    """One starting point: plant values (name → value; missing: the plant's own), inlet rise (K),
-    time constant (min) and load share."""
+    """One starting point: plant values (name → value; missing: the reference of the scaling, the
+    plant's own), inlet rise (K), its time constant (min) and load share."""
 
     label: str
     values: dict
     inlet_rise_K: float = BLOCKAGE_INLET_RISE_C
-    inlet_tau_min: float = 41.5
+    inlet_tau_min: float = 0.5 * (INLET_TAU_BOUNDS_MIN[0] + INLET_TAU_BOUNDS_MIN[1])
     load_share: float = 0.0
 
 
@@ -193,7 +193,7 @@ class FeasibilityProblem:
         return self._inlet_rise(time_s) * (1 - self.share + self.share * (gen1_current / nominal) ** 2)
 
     def managed_nominal_current(self, time_s: np.ndarray) -> np.ndarray:
-        """Phase current of the managed timeline before any displacement, A (set by the proxy)."""
+        """Phase current of the managed timeline (sampled as ``time_s``) before any displacement, A."""
         from .chapter7_managed import managed_timeline
 
         line = managed_timeline(float(time_s[1] - time_s[0]), self.rest_s)
@@ -323,11 +323,16 @@ def minimise_worst_violation(problem: FeasibilityProblem, start: Start, managed_
 
 
 def default_starts(chapter7: ThermalModel, default: ThermalModel) -> tuple[Start, ...]:
-    """Starts of the study: the shipped chapter-7 calibration (with its blockage), the chapter-3-5
-    default, and the geometric centre of every bound."""
+    """Starts of the study: the shipped chapter-7 calibration with the blockage of
+    ``scenarios/chapter7_blockage_large.yaml``, the chapter-3-5 default (same blockage, a faster
+    inlet), and the geometric centre of every bound."""
+    from ..schedule.power_system import PowerSystem
+
+    fault = PowerSystem.from_mission(load_mission("chapter7_blockage_large")).faults[0]
     bounds = {**FIT_BOUNDS, "h_air_gap": H_AIR_GAP_BOUNDS}
-    blockage = {"k_flow": 0.53, "n_flow": 0.5}
-    return (Start("shipped chapter7", {**{n: chapter7.parameters.value(n) for n in MACHINE_NAMES}, **blockage}),
+    blockage = {n: fault.values[n] for n in BLOCKAGE_NAMES}
+    return (Start("shipped chapter7", {**{n: chapter7.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
+                  fault.inlet_rise_C, fault.inlet_rise_tau_s / 60.0),
             Start("default (ch. 3-5)", {**{n: default.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
                   inlet_tau_min=20.0),
             Start("centre of the bounds", {n: math.sqrt(bounds[n][0] * bounds[n][1]) for n in MACHINE_NAMES + BLOCKAGE_NAMES},
