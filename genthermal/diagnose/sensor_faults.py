@@ -268,6 +268,16 @@ def _lowpass(signal: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
     return out
 
 
+def mean_of_finite(rows) -> np.ndarray:
+    """Sample-wise mean of the finite values of ``rows`` (sequence of equal-length arrays); NaN
+    where none is finite (a gap in every sensor of an output), without numpy's empty-slice warning."""
+    stacked = np.asarray(rows, dtype=float)
+    finite = np.isfinite(stacked)
+    count = finite.sum(axis=0)
+    total = np.where(finite, stacked, 0.0).sum(axis=0)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
 def sensor_columns(interface) -> dict:
     """Model output → the record columns it is read from (the machine's sensor schema)."""
     return {sensor.output: tuple(sensor.columns) for sensor in interface.sensors}
@@ -328,7 +338,7 @@ def screen_redundant(readings: dict, inputs, elapsed_s: np.ndarray, dt_s: float,
             continue
         best = None
         for name in names:
-            others = np.nanmean([readings[o] for o in names if o != name], axis=0)
+            others = mean_of_finite([readings[o] for o in names if o != name])
             disagreement = readings[name] - others
             position = list(columns[output]).index(name)
             phase = currents[position] if len(currents) == len(columns[output]) else None
@@ -438,8 +448,5 @@ def outputs_from(readings: dict, output_names, columns: Mapping) -> np.ndarray:
     rows = []
     for output in output_names:
         names = output_columns(readings, output, columns)
-        stacked = np.array([readings[s] for s in names])
-        with np.errstate(all="ignore"):
-            count = np.isfinite(stacked).sum(axis=0)
-            rows.append(np.where(count > 0, np.nansum(stacked, axis=0) / np.maximum(count, 1), np.nan))
+        rows.append(mean_of_finite([readings[s] for s in names]))
     return np.array(rows)
