@@ -45,3 +45,16 @@ def test_a_noise_free_logged_input_that_stops_changing_is_not_called_stuck():
     # a logged set point: no sensor noise, so a constant stretch is what a healthy one looks like
     held = _with(_inputs(0.0), SensorFault("T_inlet", "stuck", 0.0, 1.5 * HOUR), 0.0)
     assert _claims(held) == []
+
+
+def test_white_noise_rarely_passes_for_a_noise_increase():
+    # 200 healthy 4-h readings at 60 s: the correlated second differences made 9 of them pass
+    # before the likelihood ratio was divided by their variance inflation
+    from genthermal.diagnose.sensor_faults import MIN_NOISE_FACTOR, PREFERENCE_BIC, fit_noise_increase
+
+    elapsed = np.arange(240) * 60.0
+    passed = 0
+    for seed in range(200):
+        factor, _, delta = fit_noise_increase(0.1 * np.random.default_rng(seed).standard_normal(240), elapsed)
+        passed += factor >= MIN_NOISE_FACTOR and delta < -PREFERENCE_BIC
+    assert passed <= 2
