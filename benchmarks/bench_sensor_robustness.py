@@ -2,8 +2,8 @@
 
 Every (sensor kind, fault kind) pair — a winding phase (which one drawn per case), the iron,
 the cooling-air outlet, the inlet and the ambient × bias, drift, stuck, gain and noise
-(:mod:`sensor_robustness_records`) — is one case on a record whose plant, sampling period, duration, noise and input noise are drawn from
-a seeded generator; plus healthy records and every catalogue effect the plant can take, on both
+(:mod:`sensor_robustness_records`) — is one case on a record whose plant, sampling period,
+duration, noise and input noise are drawn from a seeded generator; plus healthy records and every catalogue effect the plant can take, on both
 plants (these must claim no sensor). Every case is diagnosed blind on the built-in model
 (:class:`~genthermal.diagnose.discovery.Discovery`, single effects, no experiment design).
 
@@ -146,7 +146,8 @@ def main(argv=None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", choices=tuple(SEED_BASE), default="train", dest="seed_set")
     parser.add_argument("--repeats", type=int, default=1, help="passes over every (sensor, kind) pair")
-    parser.add_argument("--only", nargs="*", default=(), help="fault cases to run alone: SENSOR_KIND:KIND (phase, T_iron, ...) or a case seed")
+    parser.add_argument("--only", nargs="*", default=(),
+                        help="fault cases to run alone: SENSOR_KIND:KIND (phase, T_iron, ...) or a case seed")
     parser.add_argument("--json", help="also write the summary and rows to this file")
     args = parser.parse_args(argv)
     if args.repeats < 1:

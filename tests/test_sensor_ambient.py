@@ -184,7 +184,8 @@ def test_noisy_inlet_and_ambient_readings_still_tell_the_ambient_step(input_nois
 
 @pytest.mark.parametrize("case", ["the room warmed", "two airs"])
 def test_noisy_readings_do_not_make_a_same_air_claim_out_of_a_real_change(case):
-    readings = {"the room warmed": dict(ambient_step=3.0, inlet_step=3.0), "two airs": dict(ambient_step=3.0, offset=4.0)}
+    readings = {"the room warmed": dict(ambient_step=3.0, inlet_step=3.0),
+                "two airs": dict(ambient_step=3.0, offset=4.0)}
     inputs, elapsed = _readings(onset=700, **readings[case])
     noisy = inputs + 0.3 * np.random.default_rng(6).standard_normal(inputs.shape)
     assert _screen(noisy, elapsed, _residual(0.0, 700)) is None
