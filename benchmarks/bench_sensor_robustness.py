@@ -86,6 +86,7 @@ def planned_cases(seed_set: str, repeats: int, only=()):
 
 
 def run_case(discovery, model, case, seed, name, kind, plant) -> dict:
+    """Diagnose one planned case (:func:`planned_cases`); its JSON row with the elapsed seconds."""
     conditions = conditions_for(seed, plant)
     started = time.perf_counter()
     if case == "sensor":
@@ -101,10 +102,12 @@ def run_case(discovery, model, case, seed, name, kind, plant) -> dict:
 
 
 def right_sensor(row) -> bool:
+    """A claim of the fault case ``row`` names the faulty sensor."""
     return any(c["sensor"] == row["injected"]["sensor"] for c in row["claimed"])
 
 
 def right_kind(row) -> bool:
+    """A claim of the fault case ``row`` names the faulty sensor and the fault's kind."""
     return any(c["sensor"] == row["injected"]["sensor"] and c["kind"] == row["injected"]["kind"]
                for c in row["claimed"])
 
@@ -119,6 +122,7 @@ def tally(rows, key) -> dict:
 
 
 def summarize(rows, seed_set: str, elapsed_s: float) -> dict:
+    """The figures of the module docstring over ``rows``."""
     faults = [r for r in rows if r["case"] == "sensor"]
     innocent = [r for r in rows if r["case"] in ("healthy", "physical")]
     return {

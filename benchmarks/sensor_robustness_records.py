@@ -70,6 +70,7 @@ class Conditions:
     seed: int
 
     def to_dict(self) -> dict:
+        """JSON entry."""
         return dataclasses.asdict(self)
 
 
