@@ -202,3 +202,32 @@ def test_shed_on_the_flown_model_serves_all_it_can_within_thetamax(believed, des
     assert not_served.max() > 0.1 and not_served.min() >= -1e-6
     assert managed.peak_C <= 110.0 + 0.05  # its own prediction, back-off included
     assert managed.schedule.displaced_A[:, -1].max() < 7.0  # and it still serves load
+
+
+def test_design_model_shedding_of_a_flown_problem_is_posed_and_judged_on_the_design_model(believed, design_model):
+    """When the nonlinear planner's own shedding finds no plan (or a generator is off), the
+    manager sheds on the design models within θmax minus the margin, as the affine planner: the
+    shed plan's receivers are predicted on the design model (before, with the flown filters still
+    in the problem, the prediction of one receiver raised an IndexError) and the plan is judged
+    there, not on the flown model with its back-off."""
+    from genthermal.schedule.replanning import on_design_model
+    from genthermal.schedule.shed import shed_plan
+
+    models, filters = believed
+    generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
+                  AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 100.0), np.full(models[1].n_states, 80.0)]
+    segments = split_segments([Segment(5, "6 cruise_combat", 600.0, ((0.0, 5.0),)),
+                               Segment(7, "7 landing", 600.0, ((0.0, 5.0),))], 300.0)
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
+    settings = ManagerSettings(planner_model="nonlinear")
+    design = on_design_model(problem, settings, 110.0)
+    assert design.flown is None and design.limit_C == pytest.approx(110.0 - settings.margin_K)
+    assert design.rise_backoff == settings.rise_backoff
+    assert on_design_model(design, settings, 110.0) is design
+    shed_plan(problem, np.array([True, False]), settings.margin_K)  # receivers predicted on the design model
+    shed = shed_plan(design, np.array([True, False]), settings.margin_K)
+    assert shed.schedule.displaced_A[1].min() < -0.1  # gen2 takes gen1's load ...
+    assert shed.peak_C <= design.limit_C + 0.05  # ... within the design model's planning limit
+    managed = plan_with("optimal", problem, settings, ("gen1", "gen2"), 110.0, switched_off=[True, False])
+    assert managed.method == "shed" and managed.peak_C == pytest.approx(shed.peak_C)
