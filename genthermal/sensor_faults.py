@@ -12,9 +12,10 @@ stuck      :math:`T` before, :math:`c` from :math:`t_0`     :math:`c` (0: the re
                                                             at the onset is held)
 gain       :math:`T\,(1 + g\,H(t-t_0))` (PT100 scale error  :math:`g`                  (relative)
            about 0 °C)
-noise      :math:`T + (k-1)\,\sigma\,\varepsilon(t)\,H(t-t_0)`  :math:`k`: noise std       (factor)
-           with :math:`\sigma` the sensor's noise std and     multiplied by :math:`k`
-           :math:`\varepsilon \sim N(0, 1)`
+noise      :math:`T + \sqrt{k^2-1}\,\sigma\,\varepsilon`    :math:`k`: the noise std   (factor)
+           from :math:`t_0`, :math:`\sigma` the sensor's    is multiplied by it
+           noise std, :math:`\varepsilon(t) \sim N(0, 1)`
+           independent of the usual noise
 =========  ===============================================  =========================  ============
 
 These five are the common failure modes of resistance thermometers in service (IEC 60751 drift and
@@ -111,7 +112,8 @@ class SensorFault:
             reading[after] *= 1.0 + self.value
         else:
             rng = np.random.default_rng(0) if rng is None else rng
-            reading[after] += (self.value - 1.0) * noise_std_K * rng.standard_normal(int(after.sum()))
+            # independent noise of std sqrt(k^2 - 1) sigma on a reading of std sigma: std k sigma
+            reading[after] += math.sqrt(self.value ** 2 - 1.0) * noise_std_K * rng.standard_normal(int(after.sum()))
         return reading
 
     def describe(self) -> str:

@@ -168,3 +168,24 @@ def test_a_real_ambient_change_the_machine_followed_is_not_claimed(plant_model):
     record = inject(plant_model, [], inputs, seed=110)
     result = Discovery(fitter=OnsetFitter(pairs=False), design_experiment=False).fit(plant_model, record)
     assert result.sensor_faults == []
+
+
+@pytest.mark.parametrize("input_noise_K", [0.05, 0.3])
+def test_noisy_inlet_and_ambient_readings_still_tell_the_ambient_step(input_noise_K):
+    """Input PT100s as noisy as the others (0.05-0.3 K): the excursions of their difference are
+    noise, not two airs; before, any excursion above 0.6 K refused the claim."""
+    inputs, elapsed = _readings(ambient_step=2.4, onset=700)
+    rng = np.random.default_rng(5)
+    noisy = inputs + input_noise_K * rng.standard_normal(inputs.shape)
+    found = _screen(noisy, elapsed, _residual(2.4, 700))
+    assert found is not None and (found.fault.sensor, found.fault.kind) == ("T_ambient", "bias")
+    assert found.fault.value == pytest.approx(2.4, abs=0.1)
+
+
+@pytest.mark.parametrize("case", ["the room warmed", "two airs"])
+def test_noisy_readings_do_not_make_a_same_air_claim_out_of_a_real_change(case):
+    readings = {"the room warmed": dict(ambient_step=3.0, inlet_step=3.0),
+                "two airs": dict(ambient_step=3.0, offset=4.0)}
+    inputs, elapsed = _readings(onset=700, **readings[case])
+    noisy = inputs + 0.3 * np.random.default_rng(6).standard_normal(inputs.shape)
+    assert _screen(noisy, elapsed, _residual(0.0, 700)) is None

@@ -39,8 +39,9 @@ def test_readings_of_each_kind_follow_the_table():
     stuck = SensorFault("T_iron", "stuck", 0.0, HOUR).reading(elapsed, true)
     assert np.all(stuck[after] == true[after][0]) and np.allclose(stuck[~after], true[~after])
     assert np.allclose(SensorFault("T_iron", "gain", 0.05).reading(elapsed, true), 1.05 * true)
-    noisy = SensorFault("T_iron", "noise", 5.0, 0.0).reading(np.arange(4000.0), np.zeros(4000), 0.1)
-    assert 0.35 < np.std(noisy) < 0.45
+    usual = 0.1 * np.random.default_rng(3).standard_normal(4000)  # the healthy reading's own noise
+    noisy = SensorFault("T_iron", "noise", 5.0, 0.0).reading(np.arange(4000.0), usual, 0.1)
+    assert 0.47 < np.std(noisy) < 0.53  # five times the usual 0.1 K
 
 
 @pytest.mark.parametrize("kwargs, field", [

@@ -21,9 +21,10 @@ like a single-sensor fault (:func:`~genthermal.diagnose.sensor_faults.screen_aga
 has: every sensor moves by the same response to one input, whatever the load; a blockage or a loss
 scales with the load and heats the winding more than the iron.
 
-A *stuck* input sensor is not fitted: the inputs of a record are logged without the sensor's noise
-(:mod:`genthermal.synth`), so a constant reading is what a healthy one looks like, and what the
-true input did after the reading froze is not in the record.
+A *stuck* input sensor is not fitted here: what the true input did after the reading froze is not
+in the record. A noisy reading that froze, or got noisier, is claimed from the reading alone
+(:mod:`~genthermal.diagnose.input_readings`); a reading logged without noise (:mod:`genthermal.synth`)
+that stays constant is what a healthy one looks like.
 """
 
 from __future__ import annotations

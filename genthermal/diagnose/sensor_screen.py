@@ -5,7 +5,8 @@ Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``
 1. before any model: a sensor that disagrees with the other sensors of its output
    (:func:`~genthermal.diagnose.sensor_faults.screen_redundant`) and a sensor whose noise grew
    (:func:`~genthermal.diagnose.sensor_faults.screen_noise`) are claimed and corrected; the search
-   runs on the corrected record;
+   runs on the corrected record; an input sensor (coolant inlet, ambient) whose reading froze or
+   got noisier is claimed (:mod:`~genthermal.diagnose.input_readings`);
 2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
    over all model outputs, is claimed when it passes the four tests and beats the best physical
    effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
@@ -41,6 +42,7 @@ from ..machines.interface import Role
 from .compare import MeasuredSeries, as_measurements
 from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
                                 misfit_from_start, on_series_grid, sensor_hypotheses)
+from .input_readings import screen_input_readings
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .shared_air import minimal_detectable_error, screen_ambient_against_inlet
@@ -138,6 +140,7 @@ class SensorScreen:
         noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
                              self.columns)
         self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
+        self.found += screen_input_readings(series.inputs, input_sensors(interface), self.elapsed_s)
 
     def corrected_series(self) -> MeasuredSeries:
         """The series with the claimed sensor faults removed from its outputs."""

@@ -16,10 +16,11 @@ of the two logged readings is fitted by a bias :math:`v\,H(t-t_0)` or a drift
 air may have). The ambient sensor is claimed when
 
 1. the two read the same air before the onset: :math:`d` stays within
-   :data:`SHARED_AIR_TOLERANCE_K` of its mean over at least :data:`MIN_BEFORE_FRACTION` of the
+   :data:`SHARED_AIR_TOLERANCE_K` (plus what the readings' noise adds to a largest excursion,
+   :func:`noise_allowance`) of its mean over at least :data:`MIN_BEFORE_FRACTION` of the
    record, and that mean is itself within the tolerance (two class-B PT100s, IEC 60751);
 2. the difference changed by at least :data:`MIN_CHANGE_K` and the shape explains it (what is left
-   stays within the tolerance: a step or a ramp, not the slow wander of two airs);
+   stays within the same tolerance: a step or a ramp, not the slow wander of two airs);
 3. it is the ambient reading that moved: the same shape fitted to the ambient reading alone
    agrees with :math:`v` within :data:`OWN_AGREEMENT`, fitted to the inlet alone it is below
    that share of :math:`v`;
@@ -63,6 +64,19 @@ MIN_BEFORE_FRACTION = 0.1
 OWN_AGREEMENT = 0.5
 #: Onset grid of the difference's fit, samples (then every sample near the best).
 ONSET_STEP = 5
+
+
+def noise_allowance(difference: np.ndarray) -> float:
+    r"""What the readings' own noise adds to the largest excursion of their difference, K: the
+    largest of :math:`N` independent normal values of standard deviation :math:`\sigma` is about
+    :math:`\sigma\sqrt{2\ln N}`, with :math:`\sigma` the difference's noise from its second
+    differences (:func:`~genthermal.diagnose.search.noise_std`; 0 for readings logged without noise)."""
+    from .search import noise_std
+
+    sigma = noise_std(np.asarray(difference, float)[None, :])
+    if not np.isfinite(sigma):
+        return 0.0
+    return float(sigma * math.sqrt(2.0 * math.log(max(difference.size, 2))))
 
 
 def _shape(kind: str, onset: int, elapsed_s: np.ndarray) -> np.ndarray:
@@ -184,11 +198,12 @@ def screen_ambient_against_inlet(inputs, ambient: str, inlet: str, elapsed_s, dt
     if onset >= difference.size:
         return None
     before = difference[:onset]
+    tolerance = SHARED_AIR_TOLERANCE_K + noise_allowance(difference)
     same_air = before.size >= MIN_BEFORE_FRACTION * difference.size and \
         abs(float(np.mean(before))) <= SHARED_AIR_TOLERANCE_K and \
-        float(np.max(np.abs(before - np.mean(before)))) <= SHARED_AIR_TOLERANCE_K
+        float(np.max(np.abs(before - np.mean(before)))) <= tolerance
     change = abs(value) * (1.0 if kind == "bias" else (elapsed_s[-1] - elapsed_s[onset]) / 3600.0)
-    explained = float(np.max(np.abs(left))) <= SHARED_AIR_TOLERANCE_K
+    explained = float(np.max(np.abs(left))) <= tolerance
     if not (same_air and change >= MIN_CHANGE_K and explained):
         return None
     shape = _shape(kind, onset, elapsed_s)
