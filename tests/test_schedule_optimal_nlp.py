@@ -10,10 +10,10 @@ from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.schedule.manager_settings import ManagerSettings
 from genthermal.schedule.replanning import plan_with
-from genthermal.schedule.flown import FlownPlanning
+from genthermal.schedule.flown import FlownPlanning, update_steps
 from genthermal.schedule.optimal import OptimalSettings, optimal_plan
 from genthermal.schedule.optimal_nlp import flown_optimal_plan
-from genthermal.schedule.plan import PlanningProblem, Segment, predict, split_segments
+from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict, split_segments
 from genthermal.schedule.power_system import AffineGenerator
 
 BLOCKAGE = {"k_flow": 0.2, "n_flow": 0.0}
@@ -77,13 +77,40 @@ def test_plan_flown_open_loop_keeps_every_generator_below_thetamax_minus_its_bac
     result = flown_optimal_plan(problem)
     assert result.method == "optimal" and result.feasible
     flown = predict(problem, result.schedule)  # the filter's own step, every 10 s, with its back-off
-    assert flown.backoff_K[:, :, 1:].min() > 0.5  # a real back-off, on every generator
+    assert flown.backoff_K[:, :, 1:].min() > 0.0 and flown.backoff_K.max(axis=2).min() > 0.5  # on every generator
     backed_off = flown.outputs + flown.backoff_K
     assert backed_off[:, :, 1:].max() <= 110.0 + 0.05
     assert flown.outputs[1, :, 1:].max() > flown.outputs[1, :, 0].max()  # the healthy one takes load ...
     assert backed_off[1].max() <= 110.0 + 0.05  # ... and is held to its own back-off too
     landing = [k for k, s in enumerate(problem.segments) if s.action_index == 7]
     assert result.schedule.displaced_A[0, landing].max() > 0.2  # load moved off the blocked one while landing
+
+
+def test_backoff_is_the_covariance_of_the_estimate_the_manager_will_have(believed, design_model):
+    """The back-off follows the filter's covariance with the measurement update the closed loop
+    makes once per cycle: over the first cycle it is the open-loop propagation of the covariance
+    now; after an update it drops below it, and it grows again within the cycle. A filter that has
+    just restarted its disturbance states (its prior ``P0``) gets no smaller back-off over the
+    first cycle than a converged one."""
+    models, filters = believed
+    generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
+                  AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
+    segments = split_segments([Segment(4, "5 cruise", 1800.0, ((0.0, 4.9),))], 300.0)
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0))
+    schedule = Schedule.nominal(2, len(segments))
+    updated = predict(problem, schedule).backoff_K
+    never_updated = predict(dataclasses.replace(problem, window_s=1e9), schedule).backoff_K
+    cycle = 30  # steps of 10 s in a 300-s cycle
+    np.testing.assert_allclose(updated[:, :, :cycle + 1], never_updated[:, :, :cycle + 1], rtol=1e-9)
+    assert np.all(updated[:, :, cycle + 1:] < never_updated[:, :, cycle + 1:])
+    assert np.all(updated[:, :, cycle + 1] < updated[:, :, cycle])  # the update ...
+    assert np.all(updated[:, :, 2 * cycle] > updated[:, :, cycle + 1])  # ... and the cycle's growth after it
+    converged = predict(dataclasses.replace(problem, flown=_flown(filters, x0, CONVERGED * filters[0].P0)),
+                        schedule).backoff_K
+    assert np.all(converged[:, :, 1:cycle + 1] <= updated[:, :, 1:cycle + 1])
+    with pytest.raises(InputError, match="cycle_s"):
+        update_steps(10, 10.0, 0.0)
 
 
 def test_displacement_during_landing_saves_rest(believed, design_model):
@@ -175,3 +202,32 @@ def test_shed_on_the_flown_model_serves_all_it_can_within_thetamax(believed, des
     assert not_served.max() > 0.1 and not_served.min() >= -1e-6
     assert managed.peak_C <= 110.0 + 0.05  # its own prediction, back-off included
     assert managed.schedule.displaced_A[:, -1].max() < 7.0  # and it still serves load
+
+
+def test_design_model_shedding_of_a_flown_problem_is_posed_and_judged_on_the_design_model(believed, design_model):
+    """When the nonlinear planner's own shedding finds no plan (or a generator is off), the
+    manager sheds on the design models within θmax minus the margin, as the affine planner: the
+    shed plan's receivers are predicted on the design model (before, with the flown filters still
+    in the problem, the prediction of one receiver raised an IndexError) and the plan is judged
+    there, not on the flown model with its back-off."""
+    from genthermal.schedule.replanning import on_design_model
+    from genthermal.schedule.shed import shed_plan
+
+    models, filters = believed
+    generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
+                  AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 100.0), np.full(models[1].n_states, 80.0)]
+    segments = split_segments([Segment(5, "6 cruise_combat", 600.0, ((0.0, 5.0),)),
+                               Segment(7, "7 landing", 600.0, ((0.0, 5.0),))], 300.0)
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
+    settings = ManagerSettings(planner_model="nonlinear")
+    design = on_design_model(problem, settings, 110.0)
+    assert design.flown is None and design.limit_C == pytest.approx(110.0 - settings.margin_K)
+    assert design.rise_backoff == settings.rise_backoff
+    assert on_design_model(design, settings, 110.0) is design
+    shed_plan(problem, np.array([True, False]), settings.margin_K)  # receivers predicted on the design model
+    shed = shed_plan(design, np.array([True, False]), settings.margin_K)
+    assert shed.schedule.displaced_A[1].min() < -0.1  # gen2 takes gen1's load ...
+    assert shed.peak_C <= design.limit_C + 0.05  # ... within the design model's planning limit
+    managed = plan_with("optimal", problem, settings, ("gen1", "gen2"), 110.0, switched_off=[True, False])
+    assert managed.method == "shed" and managed.peak_C == pytest.approx(shed.peak_C)

@@ -6,21 +6,33 @@ effects identified so far) and estimates the node temperatures and the disturban
 :math:`(d, m)`. :class:`FlownPlanning` predicts a schedule with the filter's own step
 :math:`z_{k+1} = \Phi(z_k, u_k)` (:mod:`genthermal.discretise`'s ETD2RK step with the disturbances
 held, as :meth:`~genthermal.estimation.ekf.ExtendedKalmanFilter.forecast`) and derives the
-**back-off** from the filter's uncertainty instead of a fixed margin:
+**back-off** from the filter's uncertainty instead of a fixed margin: the covariance the filter's
+estimate will have along the plan, the measurement update it makes once per management cycle
+included,
 
 .. math::
-    P^{a}_{k+1} = F_k P^{a}_k F_k^T,\qquad
-    P^{w}_{k+1} = F_k \bigl(P^{w}_k [k \notin W]\bigr) F_k^T + Q,\qquad
-    b_k = z_\alpha \sqrt{\operatorname{diag}\bigl(H (P^{a}_k + P^{w}_k) H^T\bigr)},
+    P^{+}_k = P_k - P_k H^T (H P_k H^T + R)^{-1} H P_k \;\;(k \in U,\ \text{else } P^{+}_k = P_k),\qquad
+    P_{k+1} = F_k P^{+}_k F_k^T + Q,\qquad
+    b_k = z_\alpha \sqrt{\operatorname{diag}\bigl(H P_k H^T\bigr)},
 
-with :math:`F_k` the exact Jacobian of the step along the predicted trajectory (CasADi), :math:`Q`
-the filter's process noise, :math:`P^a_0` the filter's covariance now and :math:`W` the steps
-that start a management window (:meth:`~genthermal.schedule.plan.Segment.windows`): the
-estimate's present uncertainty is carried along the whole plan (it includes the disturbance
-states, so an uncertain heat flow becomes a growing temperature uncertainty), and the process
-noise builds up over one window only, because the filter corrects the state once per cycle and the
-manager re-plans as soon as the corrected prediction crosses the limit. Every generator, healthy
-ones included, is held to :math:`\theta + b \le \theta_{max}`.
+with :math:`P_0` the filter's covariance now, :math:`F_k` the exact Jacobian of the step along the
+predicted trajectory (CasADi), :math:`Q` and :math:`R` the filter's process and measurement noise
+and :math:`U` the steps at which the closed loop updates the filter (one per cycle from now:
+:func:`update_steps`; the filter takes the cycle's last sample, ``closed_loop``). :math:`b_k` is the
+standard deviation of the temperature the manager's estimate at its last update before step
+:math:`k` predicts for step :math:`k`: the manager re-plans as soon as that corrected prediction
+crosses θmax, so a step's temperature is held by the plan made one cycle before it at the latest,
+not by the prediction made now. The estimate's present uncertainty (the disturbance states
+included: an uncertain heat flow is a growing temperature uncertainty) counts in full over the
+first cycle and shrinks as the filter's updates will shrink it; what the measurements cannot see
+(an unobservable combination of heat flows) keeps growing. Every generator, healthy ones
+included, is held to :math:`\theta + b \le \theta_{max}`.
+
+Before (the present covariance carried along the whole plan without the updates, the process
+noise over one window), a filter whose model had just changed (its disturbance states restart
+from their prior, :meth:`~genthermal.schedule.state_estimator.StateEstimator.use`) gave a
+back-off of 16.6 K on the robustness grid's case 10 at the identification, and the manager rested
+27 min and shed load on a generator that then peaked at 93.8 °C.
 
 :math:`z_\alpha` = :data:`DEFAULT_CONFIDENCE_SIGMAS` (one-sided 97.7 % for a Gaussian error).
 """
@@ -44,30 +56,42 @@ DEFAULT_CONFIDENCE_SIGMAS = 2.0
 
 
 def covariance_steps(ekf: ExtendedKalmanFilter) -> ca.Function:
-    """``(z, Pa, Pw, U, restart) -> (Z, Pa, Pw, variance)``: :data:`PREDICTION_CHUNK_STEPS` filter
-    steps with the two covariance recursions of the module docstring (``restart`` 1 at a window's
-    first step): the states and the outputs' variances (K²) after each step side by side, the
-    covariances after the last. Built once per filter."""
+    """``(z, P, U, update) -> (Z, P_end, variance)``: :data:`PREDICTION_CHUNK_STEPS` filter steps
+    with the covariance recursion of the module docstring (``update`` 1 where the filter makes its
+    measurement update before the step): the states and the outputs' variances (K²) after each
+    step side by side, the covariance after the last. Built once per filter."""
     cached = getattr(ekf, "_planning_covariance_steps", None)
     if cached is not None:
         return cached
     nz, chunk = len(ekf.state_names), PREDICTION_CHUNK_STEPS
-    z, u, restart = ca.SX.sym("z", nz), ca.SX.sym("u", len(ekf.model.input_names)), ca.SX.sym("restart")
-    Pa, Pw = ca.SX.sym("Pa", nz, nz), ca.SX.sym("Pw", nz, nz)
+    z, u, update = ca.SX.sym("z", nz), ca.SX.sym("u", len(ekf.model.input_names)), ca.SX.sym("update")
+    P = ca.SX.sym("P", nz, nz)
+    H, R = ca.DM(ekf.H), ca.DM(ekf.R)
+    gain = ca.solve(H @ P @ H.T + R, H @ P).T
+    P_updated = P - update * gain @ H @ P
     z_next, F = ekf.transition(z, u)
-    Pa_next, Pw_next = F @ Pa @ F.T, F @ ((1 - restart) * Pw) @ F.T + ca.DM(ekf.Q)
-    H = ca.DM(ekf.H)
-    variance = ca.diag(H @ (Pa_next + Pw_next) @ H.T)
-    step = ca.Function("planning_covariance_step", [z, Pa, Pw, u, restart], [z_next, Pa_next, Pw_next, variance])
-    steps = step.mapaccum("planning_prediction", chunk, 3, {})
-    z0, Pa0, Pw0 = ca.MX.sym("z", nz), ca.MX.sym("Pa", nz, nz), ca.MX.sym("Pw", nz, nz)
-    U, restarts = ca.MX.sym("U", len(ekf.model.input_names), chunk), ca.MX.sym("restart", 1, chunk)
-    Z, Pa_all, Pw_all, V = steps(z0, Pa0, Pw0, U, restarts)
+    P_next = F @ P_updated @ F.T + ca.DM(ekf.Q)
+    variance = ca.diag(H @ P_next @ H.T)
+    step = ca.Function("planning_covariance_step", [z, P, u, update], [z_next, P_next, variance])
+    steps = step.mapaccum("planning_prediction", chunk, 2, {})
+    z0, P0 = ca.MX.sym("z", nz), ca.MX.sym("P", nz, nz)
+    U, updates = ca.MX.sym("U", len(ekf.model.input_names), chunk), ca.MX.sym("update", 1, chunk)
+    Z, P_all, V = steps(z0, P0, U, updates)
     ekf._planning_covariance_steps = ca.Function(
-        "planning_prediction_chunk", [z0, Pa0, Pw0, U, restarts],
-        [Z, Pa_all[:, -nz:], Pw_all[:, -nz:], V], ["z", "Pa", "Pw", "U", "restart"],
-        ["Z", "Pa_end", "Pw_end", "variance"])
+        "planning_prediction_chunk", [z0, P0, U, updates], [Z, P_all[:, -nz:], V],
+        ["z", "P", "U", "update"], ["Z", "P_end", "variance"])
     return ekf._planning_covariance_steps
+
+
+def update_steps(n_steps: int, dt_s: float, cycle_s: float) -> np.ndarray:
+    """(n_steps,) 1.0 at the steps before which the closed loop updates the filter (one cycle of
+    ``cycle_s`` after another from now, the first one cycle ahead: the filter's covariance now is
+    already updated), else 0.0."""
+    if not (np.isfinite(dt_s) and dt_s > 0 and np.isfinite(cycle_s) and cycle_s > 0):
+        raise InputError("cycle_s", cycle_s, f"and dt_s {dt_s!r} must be positive numbers of seconds")
+    every = max(int(round(cycle_s / dt_s)), 1)
+    steps = np.arange(n_steps)
+    return ((steps > 0) & (steps % every == 0)).astype(float)
 
 
 @dataclasses.dataclass
@@ -105,25 +129,24 @@ class FlownPlanning:
 
     def predict(self, problem, timeline) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(time_s, outputs, backoff_K)`` of ``timeline`` from the filter states: outputs and
-        back-off (n_generators, n_outputs, n_steps + 1), °C and K."""
+        back-off (n_generators, n_outputs, n_steps + 1), °C and K; the filter updated once per
+        ``problem.window_s`` (the management cycle) along it."""
         n = timeline.n_steps
-        restart = np.zeros(n)
-        restart[np.unique(timeline.window_start)] = 1.0
         n_out = self.filters[0].H.shape[0]
         outputs = np.empty((problem.n_generators, n_out, n + 1))
         backoff = np.empty_like(outputs)
         chunk = PREDICTION_CHUNK_STEPS
         n_padded = int(np.ceil(n / chunk)) * chunk
-        restart = np.concatenate([restart, np.zeros(n_padded - n)])
+        updates = update_steps(n_padded, problem.dt_s, problem.window_s)
         for g, ekf in enumerate(self.filters):
             currents = np.concatenate([timeline.currents_A[g], np.full(n_padded - n, timeline.currents_A[g, -1])])
             U = problem.inputs(g, currents).T
             run = covariance_steps(ekf)
-            z, Pa, Pw = self.z0[g], self.P0[g], np.zeros_like(self.P0[g])
+            z, P = self.z0[g], self.P0[g]
             parts = []
             for start in range(0, n_padded, chunk):
-                part = run(z, Pa, Pw, U[:, start:start + chunk], restart[start:start + chunk].reshape(1, -1))
-                Z_part, Pa, Pw, variance_part = (np.asarray(m) for m in part)
+                part = run(z, P, U[:, start:start + chunk], updates[start:start + chunk].reshape(1, -1))
+                Z_part, P, variance_part = (np.asarray(m) for m in part)
                 z = Z_part[:, -1]
                 parts.append((Z_part, variance_part))
             Z = np.column_stack([self.z0[g], np.hstack([p[0] for p in parts])[:, :n]])

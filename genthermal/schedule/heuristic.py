@@ -106,8 +106,11 @@ def future_room(problem: PlanningProblem, g: int, k: int, response: SegmentRespo
     later = problem.segments[k + 1:]
     if not later:
         return np.inf
+    # the design model's prediction, as ``response``'s states are the design model's: a problem
+    # that also carries the flown models (the nonlinear planner's) would predict on every filter
     alone = dataclasses.replace(problem, segments=later, generators=[problem.generators[g]],
-                                inlet_C=problem.inlet_C[[g]], x0=response.x_end0[None, :])
+                                inlet_C=problem.inlet_C[[g]], x0=response.x_end0[None, :], flown=None,
+                                unexplained_rise_K=None)
     nominal = Schedule.nominal(1, len(later))
 
     def future(x_end):
