@@ -13,7 +13,7 @@ from genthermal.schedule.replanning import plan_with
 from genthermal.schedule.flown import FlownPlanning, update_steps
 from genthermal.schedule.optimal import OptimalSettings, optimal_plan
 from genthermal.schedule.optimal_nlp import flown_optimal_plan
-from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict, split_segments
+from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, build_timeline, predict, split_segments
 from genthermal.schedule.power_system import AffineGenerator
 
 BLOCKAGE = {"k_flow": 0.2, "n_flow": 0.0}
@@ -53,7 +53,7 @@ def test_agrees_with_the_affine_transcription_when_no_nonlinearity_is_active(des
                  inlet_drift_K=0.0, initial_disturbance_W=0.0)
     filters = [ExtendedKalmanFilter(m, 10.0, **quiet) for m in (faulty, design_model)]
     x0 = [g.steady_state(g.input(4.5, t, 20.0)) for g, t in zip(generators, INLETS_C)]
-    segments = split_segments([Segment(0, "a", 900.0, ((0.0, 5.5),)), Segment(1, "b", 1200.0, ((0.0, 6.5),))], 300.0)
+    segments = split_segments([Segment(0, "a", 900.0, ((0.0, 5.5),)), Segment(1, "b", 1200.0, ((0.0, 6.5),))], 300.0, 10.0)
     affine = optimal_plan(_problem(generators, x0, segments, 108.0, rest_current_A=2.2), OptimalSettings(check_s=10.0))
     nz = len(filters[0].state_names)
     flown_problem = _problem(generators, x0, segments, 108.0, _flown(filters, x0, np.zeros((nz, nz))),
@@ -72,7 +72,7 @@ def test_plan_flown_open_loop_keeps_every_generator_below_thetamax_minus_its_bac
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
     segments = split_segments([Segment(4, "5 cruise", 1800.0, ((0.0, 4.9),)),
-                               Segment(7, "7 landing", 1200.0, ((0.0, 5.0),))], 300.0)
+                               Segment(7, "7 landing", 1200.0, ((0.0, 5.0),))], 300.0, 10.0)
     problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
     result = flown_optimal_plan(problem)
     assert result.method == "optimal" and result.feasible
@@ -96,7 +96,7 @@ def test_backoff_is_the_covariance_of_the_estimate_the_manager_will_have(believe
     generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
-    segments = split_segments([Segment(4, "5 cruise", 1800.0, ((0.0, 4.9),))], 300.0)
+    segments = split_segments([Segment(4, "5 cruise", 1800.0, ((0.0, 4.9),))], 300.0, 10.0)
     problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0))
     schedule = Schedule.nominal(2, len(segments))
     updated = predict(problem, schedule).backoff_K
@@ -122,13 +122,13 @@ def test_displacement_during_landing_saves_rest(believed, design_model):
     x0 = [np.full(models[0].n_states, 92.0), np.full(models[1].n_states, 60.0)]
     landing = Segment(7, "7 landing", 1200.0, ((0.0, 5.0),))
     P0 = CONVERGED * filters[0].P0
-    per_interval = flown_optimal_plan(_problem(generators, x0, split_segments([landing], 300.0), 110.0,
+    per_interval = flown_optimal_plan(_problem(generators, x0, split_segments([landing], 300.0, 10.0), 110.0,
                                                _flown(filters, x0, P0)))
     per_action = flown_optimal_plan(_problem(generators, x0, [landing], 110.0, _flown(filters, x0, P0)))
     assert per_interval.feasible and per_action.feasible
     assert per_interval.schedule.displaced_A[0].max() > 0.2
     assert per_interval.schedule.added_rest_s < per_action.schedule.added_rest_s - 30.0 or \
-        (per_action.schedule.added_rest_s == 0 and per_interval.schedule.displaced_Ah(split_segments([landing], 300.0))
+        (per_action.schedule.added_rest_s == 0 and per_interval.schedule.displaced_Ah(split_segments([landing], 300.0, 10.0))
          < per_action.schedule.displaced_Ah([landing]))
 
 
@@ -137,7 +137,7 @@ def test_plan_that_exceeds_thetamax_with_its_back_off_is_not_feasible(believed, 
     generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 109.5), np.full(models[1].n_states, 109.5)]  # both at the limit
-    problem = _problem(generators, x0, split_segments([Segment(0, "x", 600.0, ((0.0, 7.0),))], 300.0), 110.0,
+    problem = _problem(generators, x0, split_segments([Segment(0, "x", 600.0, ((0.0, 7.0),))], 300.0, 10.0), 110.0,
                        _flown(filters, x0))
     result = flown_optimal_plan(problem)
     assert not result.feasible
@@ -153,7 +153,9 @@ def test_planner_model_settings_and_options_reject_bad_values(tmp_path, capsys):
     with pytest.raises(InputError, match="filter"):
         ManagerSettings(planner_model="nonlinear", filter="kf")
     with pytest.raises(InputError, match="interval_s"):
-        split_segments([Segment(0, "a", 600.0, ((0.0, 5.0),))], 0.0)
+        split_segments([Segment(0, "a", 600.0, ((0.0, 5.0),))], 0.0, 10.0)
+    with pytest.raises(InputError, match="step_s"):
+        split_segments([Segment(0, "a", 600.0, ((0.0, 5.0),))], 300.0, 0.0)
     with pytest.raises(InputError, match="filter"):
         FlownPlanning([object()], np.zeros((1, 3)), np.zeros((1, 3, 3)))
     for extra, option in ((["--planner-model", "quadratic"], "--planner-model"),
@@ -192,7 +194,7 @@ def test_shed_on_the_flown_model_serves_all_it_can_within_thetamax(believed, des
     generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 100.0), np.full(models[1].n_states, 100.0)]
-    segments = split_segments([Segment(5, "6 cruise_combat", 1200.0, ((0.0, 7.0),))], 300.0)
+    segments = split_segments([Segment(5, "6 cruise_combat", 1200.0, ((0.0, 7.0),))], 300.0, 10.0)
     flown = _flown(filters, x0, CONVERGED * filters[0].P0)
     problem = dataclasses.replace(_problem(generators, x0, segments, 110.0, flown), max_rest_s=0.0, rest_budget_s=0.0)
     managed = plan_with("optimal", problem, ManagerSettings(planner_model="nonlinear"), ("gen1", "gen2"), 110.0)
@@ -218,7 +220,7 @@ def test_design_model_shedding_of_a_flown_problem_is_posed_and_judged_on_the_des
                   AffineGenerator(design_model)]
     x0 = [np.full(models[0].n_states, 100.0), np.full(models[1].n_states, 80.0)]
     segments = split_segments([Segment(5, "6 cruise_combat", 600.0, ((0.0, 5.0),)),
-                               Segment(7, "7 landing", 600.0, ((0.0, 5.0),))], 300.0)
+                               Segment(7, "7 landing", 600.0, ((0.0, 5.0),))], 300.0, 10.0)
     problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
     settings = ManagerSettings(planner_model="nonlinear")
     design = on_design_model(problem, settings, 110.0)
@@ -231,3 +233,16 @@ def test_design_model_shedding_of_a_flown_problem_is_posed_and_judged_on_the_des
     assert shed.peak_C <= design.limit_C + 0.05  # ... within the design model's planning limit
     managed = plan_with("optimal", problem, settings, ("gen1", "gen2"), 110.0, switched_off=[True, False])
     assert managed.method == "shed" and managed.peak_C == pytest.approx(shed.peak_C)
+
+
+def test_control_intervals_are_whole_steps_and_keep_the_mission_length():
+    """The 49-min cruise piece of ``blockage_large`` cut into 5-min intervals gives ten windows of
+    294 s; each is put on whole 10-s steps, so the timeline of the cut mission is exactly as long
+    as the mission (it lost 4 s per window, and the nonlinear planner's flight ended 40 s early)."""
+    segment = Segment(4, "5 cruise", 3240.0, ((0.0, 5.831), (300.0, 4.9)))
+    split = split_segments([segment], 300.0, 10.0)
+    lengths = np.array([s.duration_s for s in split])
+    assert np.allclose(lengths / 10.0, np.round(lengths / 10.0)) and np.all(lengths <= 300.0 + 5.0)
+    assert np.isclose(lengths.sum(), segment.duration_s)
+    assert [s.levels[0][1] for s in split] == [5.831] + [4.9] * 10
+    assert build_timeline(split, Schedule.nominal(1, len(split)), 1.9, 10.0).n_steps == 324

@@ -134,7 +134,7 @@ def hindsight_problem(system, cycle_s: float = 300.0, dt_s: float = 10.0, rest_b
     generators = [system.design_generator(g, faults) for g in range(system.n_generators)]
     x_design = np.array([[dict(zip(system.plant_model(g).state_names, x0[g]))[name]
                           for name in generators[g].model.state_names] for g in range(system.n_generators)])
-    return PlanningProblem(split_segments(remaining, cycle_s), generators, x_design, inlet,
+    return PlanningProblem(split_segments(remaining, cycle_s, dt_s), generators, x_design, inlet,
                            system.mission.T_ambient_C, system.rest_current_A, system.current_limit_A,
                            system.limit_C - margin_K, min(max_rest_s, budget), dt_s, 0.0, cycle_s, budget, 0.0, flown)
 

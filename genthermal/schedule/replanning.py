@@ -293,5 +293,5 @@ def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x
 def flight_segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
     """The mission's segments; for the nonlinear planner cut into control intervals of one cycle."""
     segments = mission_segments(system.mission)
-    return split_segments(segments, settings.cycle_s) if settings.nonlinear else segments
+    return split_segments(segments, settings.cycle_s, settings.dt_s) if settings.nonlinear else segments
 
