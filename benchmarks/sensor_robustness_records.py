@@ -50,8 +50,7 @@ HOLD_MIN = (15, 45)
 RATED_CURRENT_A = 7.0
 #: Air temperature about which inlet and ambient wander, °C, the wander's amplitude, K, and period, h.
 AIR_C, AIR_AMPLITUDE_K, AIR_PERIOD_H = 20.0, (0.5, 3.0), (2.0, 5.0)
-#: Sensor columns of the Genco record and the fault kinds tried on each.
-SENSORS = ("T_winding_u", "T_winding_v", "T_winding_w", "T_iron", "T_outlet", "T_inlet", "T_ambient")
+#: The fault kinds tried on each sensor.
 KINDS = ("bias", "drift", "stuck", "gain", "noise")
 #: Fault sizes (magnitude ranges; bias K, drift K/h, gain relative, noise factor).
 FAULT_SIZES = {"bias": (1.0, 8.0), "drift": (0.5, 5.0), "gain": (0.05, 0.10), "noise": (2.0, 5.0)}

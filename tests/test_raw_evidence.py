@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from genthermal.errors import InputError
-from genthermal.schedule.raw_evidence import (RawEvidenceSettings, noise_factor, raw_noise_K, step_near,
+from genthermal.diagnose.search import noise_std
+from genthermal.schedule.raw_evidence import (RawEvidenceSettings, noise_factor, step_near,
                                               stuck_spread, unsupported)
 from genthermal.sensor_faults import SensorFault
 
@@ -25,7 +26,7 @@ def _noisy(true_C, seed: int = 0, std_K: float = NOISE_K) -> np.ndarray:
 
 
 def test_the_noise_of_a_heating_reading_is_its_sensor_noise():
-    assert raw_noise_K(_noisy(_heating())) == pytest.approx(NOISE_K, rel=0.15)
+    assert noise_std(_noisy(_heating())) == pytest.approx(NOISE_K, rel=0.15)
 
 
 @pytest.mark.parametrize("bias_K", [1.0, -1.5, 4.0])

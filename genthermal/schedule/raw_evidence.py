@@ -19,7 +19,8 @@ records every simulation step (10 s), and two signatures of a sensor fault show 
   of the fitted onset, the reading over :math:`\pm` :attr:`RawEvidenceSettings.step_window_s` is
   fitted by an offset, a slope and a slope change at :math:`t_j` (the heat flows), with and
   without a step :math:`v\,H(t-t_j)`; :math:`z = \sqrt{RSS_0 - RSS_1}/\hat\sigma`
-  (:math:`\hat\sigma` the sensor noise, :func:`raw_noise_K`) is the step's size in noise units.
+  (:math:`\hat\sigma` the sensor noise, :func:`~genthermal.diagnose.search.noise_std`) is the
+  step's size in noise units.
   The claim stands when the largest step there is significant (:math:`z \ge`
   :attr:`RawEvidenceSettings.step_min_sigma`), has the fitted fault's sign, at least
   :attr:`RawEvidenceSettings.step_min_share` of its size and
@@ -50,13 +51,9 @@ import math
 
 import numpy as np
 
+from ..diagnose.search import noise_std
 from ..diagnose.sensor_faults import MIN_NOISE_FACTOR
 from ..errors import InputError
-
-#: Robust standard deviation of a normal sample from its median absolute deviation.
-MAD_TO_STD = 1.4826
-#: Standard deviation of a second difference of white noise, in units of the noise's own.
-SECOND_DIFFERENCE_STD = math.sqrt(6.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -148,16 +145,6 @@ class RawStep:
     fastest_K: float = 0.0
 
 
-def raw_noise_K(reading) -> float:
-    """Noise standard deviation of a raw reading, K: the robust scale of its second differences
-    (:data:`MAD_TO_STD`) over :data:`SECOND_DIFFERENCE_STD`; NaN with fewer than 3 finite ones."""
-    second = np.diff(np.asarray(reading, dtype=float), 2)
-    second = second[np.isfinite(second)]
-    if second.size < 3:
-        return math.nan
-    return MAD_TO_STD * float(np.median(np.abs(second - np.median(second)))) / SECOND_DIFFERENCE_STD
-
-
 def step_near(times_s, reading, onset_s: float, settings: RawEvidenceSettings = RawEvidenceSettings()) -> RawStep:
     """The largest step of ``reading`` (°C at ``times_s``, s, a uniform step) at a sample within
     ``settings.onset_tolerance_s`` of ``onset_s`` (s), over a local offset, slope and slope change
@@ -170,7 +157,7 @@ def step_near(times_s, reading, onset_s: float, settings: RawEvidenceSettings = 
     step_s = float(np.median(np.diff(times)))
     width = max(2, int(round(settings.step_window_s / step_s)))
     before = values[times < onset_s - settings.onset_tolerance_s - settings.step_window_s]
-    noise = raw_noise_K(before) if np.isfinite(before).sum() >= settings.min_samples + 2 else raw_noise_K(values)
+    noise = noise_std(before) if np.isfinite(before).sum() >= settings.min_samples + 2 else noise_std(values)
     if not (noise > 0):
         return none
     local = np.arange(-width, width) / width
@@ -197,26 +184,27 @@ def step_near(times_s, reading, onset_s: float, settings: RawEvidenceSettings = 
 
 
 def noise_factor(times_s, reading, onset_s: float, settings: RawEvidenceSettings = RawEvidenceSettings()) -> float:
-    """Raw noise after ``onset_s`` (s) over raw noise before it (:func:`raw_noise_K`); NaN when a
+    """Raw noise after ``onset_s`` (s) over raw noise before it
+    (:func:`~genthermal.diagnose.search.noise_std`); NaN when a
     side has fewer than ``settings.min_samples`` finite samples."""
     times, values = np.asarray(times_s, dtype=float), np.asarray(reading, dtype=float)
     sides = [values[times < onset_s], values[times >= onset_s]]
     if any(np.isfinite(side).sum() < settings.min_samples for side in sides):
         return math.nan
-    before, after = (raw_noise_K(side) for side in sides)
+    before, after = (noise_std(side) for side in sides)
     return after / before if before > 0 else math.nan
 
 
 def stuck_spread(times_s, reading, onset_s: float, settings: RawEvidenceSettings = RawEvidenceSettings()) -> float:
     """Standard deviation of the raw reading from ``onset_s`` (s) on, over its noise before
-    (:func:`raw_noise_K`): about 1 for a held reading with noise, 0 without; NaN when a side has
-    fewer than ``settings.min_samples`` finite samples."""
+    (:func:`~genthermal.diagnose.search.noise_std`): about 1 for a held reading with noise, 0
+    without; NaN when a side has fewer than ``settings.min_samples`` finite samples."""
     times, values = np.asarray(times_s, dtype=float), np.asarray(reading, dtype=float)
     before, after = values[times < onset_s], values[times >= onset_s]
     before, after = before[np.isfinite(before)], after[np.isfinite(after)]
     if before.size < settings.min_samples or after.size < settings.min_samples:
         return math.nan
-    noise = raw_noise_K(before)
+    noise = noise_std(before)
     return float(np.std(after)) / noise if noise > 0 else math.nan
 
 
