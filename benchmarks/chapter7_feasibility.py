@@ -43,12 +43,14 @@ def _progress(label: str, result: dict, started: float) -> None:
           f"({result['worst_outcome']})", file=sys.stderr, flush=True)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", help="also write the JSON here")
     parser.add_argument("--rounds", type=int, default=2, help="solves with the manager lags re-measured (default 2)")
     parser.add_argument("--quick", action="store_true", help="shipped start only, one round, no Pareto or variants")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
+    if args.rounds < 1:
+        parser.error(f"--rounds must be >= 1 (one solve, then one more per re-measured lag), got {args.rounds}")
     started = time.perf_counter()
     chapter7, default = load_model("genco_rf201a:chapter7"), build_model()
     starts = default_starts(chapter7, default)[:1] if args.quick else None

@@ -147,3 +147,20 @@ def test_reproduction_row_states_the_least_violation_and_the_conflicting_outcome
     met = text({**study, "worst_violation_K": -0.2, "sharp_worst_violation_K": -0.1})
     assert "a calibration meets them all" in met and "no calibration" not in met
     assert "benchmarks/chapter7_feasibility.py" in text(None)
+
+
+def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys):
+    """`benchmarks/chapter7_feasibility.py --rounds 0` stops with a usage error naming the option
+    and the value, before any solve (it raised the study's InputError as a traceback)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "chapter7_feasibility_bench", Path(__file__).resolve().parents[1] / "benchmarks" / "chapter7_feasibility.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    with pytest.raises(SystemExit) as stop:
+        module.main(["--rounds", "0"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert "--rounds must be >= 1" in err and "got 0" in err
