@@ -9,8 +9,9 @@ Run ``python benchmarks/bench_kalman.py --json bench_kalman.json``; prints JSON 
   (steady-state mode), median of repeats.
 * ``casadi_update_ns`` -- the same CasADi function evaluated in-process with numpy arguments.
 * ``ekf_c_update_ns`` -- ``gt_ekf_update`` (the extended Kalman filter on the nonlinear model with
-  two disturbance heat flows and two load-scaled losses: 12 states, full covariance, update and
-  prediction with the exact Jacobian of the discrete step) in the same kind of C loop;
+  the disturbance states of :class:`ExtendedKalmanFilter`: ``ekf_states`` in the JSON, 15 for the
+  thesis machine; full covariance, update and prediction with the exact Jacobian of the discrete
+  step) in the same kind of C loop;
   ``ekf_python_update_ns`` --
   :meth:`ExtendedKalmanFilter.update` + :meth:`ExtendedKalmanFilter.predict`.
 
