@@ -163,7 +163,7 @@ def test_jacobians_match_finite_differences(plant_model):
 def test_discrete_steps_match_a_stiff_integrator(plant_model, design_model, dt):
     u = plant_model.input_vector(**RATED)
     n = int(3600 / dt)
-    # exact ZOH for the linear model; ETD2RK is second order: error ~ dt^2 (2.6e-4 K at 10 s)
+    # exact ZOH for the linear model; ETD2RK is second order: error ~ dt^2 (2.7e-4 K at 10 s)
     for model, tolerance in ((design_model, 1e-6), (plant_model, 5e-4 * (dt / 10.0) ** 2 + 1e-5)):
         X = np.asarray(model.discretise(dt).simulator(n)(np.full(8, 20.0), np.tile(u[:, None], (1, n))))
         sol = solve_ivp(lambda t, x: model.rhs(x, u), (0, n * dt), np.full(8, 20.0), method="Radau",
