@@ -14,6 +14,10 @@ for an existing scheduler) and adds its keys (``robustness``, ``rest_vs_best_bas
 Usage::
 
     python benchmarks/bench_scheduler.py --json bench_scheduler.json [--quick] [--workers 2] [--robustness 60]
+                                         [--mission fig_7_7 fig_3_2 long_combat]
+
+``--mission`` flies the scenarios of the named missions only (10 each, 6 with ``--quick``), so that
+the 30 scenarios can be flown in parts on a busy machine.
 
 Prints a markdown table, writes the JSON (``scenarios``, ``summary``,
 ``rest_ratio_optimal_over_heuristic``, ``rest_ratio_optimal_over_best_baseline``,
@@ -78,6 +82,33 @@ def scenario_mission(mission: tuple, onset_min: float, severity: tuple) -> Missi
     return Mission.from_dict({"name": f"{name}@{onset_min:g}min/{label}",
                               "actions": [{"condition": c, "duration_min": m} for c, m in actions],
                               "faults": [fault]})
+
+
+def scenario_missions(quick: bool, mission_names=None) -> list:
+    """The scenarios to fly: every onset and severity of each mission named (all when None).
+
+    Parameters
+    ----------
+    quick : bool
+        The first mission's scenarios of the three quick severities only (as ``--quick``).
+    mission_names : sequence of str, optional
+        Names from :data:`MISSIONS`; None flies every mission (the first only with ``quick``).
+
+    Returns
+    -------
+    list of Mission
+        One mission with its fault per scenario.
+    """
+    known = [m[0] for m in MISSIONS]
+    unknown = [name for name in (mission_names or []) if name not in known]
+    if unknown:
+        raise ValueError(f"mission {unknown[0]!r} is not one of {', '.join(known)}")
+    severities = [s for s in SEVERITIES if not quick or s[0] in QUICK_SEVERITIES]
+    if mission_names:
+        missions = [m for m in MISSIONS if m[0] in mission_names]
+    else:
+        missions = MISSIONS[:1] if quick else MISSIONS
+    return [scenario_mission(m, onset, s) for m in missions for onset in m[2] for s in severities]
 
 
 def fly_scenario(mission: Mission, margin_cost: bool) -> dict:
@@ -170,10 +201,10 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
     parser.add_argument("--robustness", type=int, default=0, help="cases of the robustness grid (0: none)")
     parser.add_argument("--cluster", help="address of an existing Dask scheduler for the robustness grid")
+    parser.add_argument("--mission", nargs="+", choices=[m[0] for m in MISSIONS], metavar="NAME",
+                        help="fly only these missions' scenarios: " + ", ".join(m[0] for m in MISSIONS))
     args = parser.parse_args(argv)
-    severities = [s for s in SEVERITIES if not args.quick or s[0] in QUICK_SEVERITIES]
-    missions = MISSIONS[:1] if args.quick else MISSIONS
-    scenarios = [scenario_mission(m, onset, s) for m in missions for onset in m[2] for s in severities]
+    scenarios = scenario_missions(args.quick, args.mission)
     started = time.perf_counter()
     with concurrent.futures.ProcessPoolExecutor(max_workers=args.workers) as pool:
         records = list(pool.map(fly_scenario, scenarios, [not args.quick] * len(scenarios)))
@@ -190,6 +221,7 @@ def main(argv=None) -> int:
               "rest_ratio_optimal_over_heuristic": None if ratio is None else float(ratio),
               "optimal_never_rests_more_than_heuristic": bool(never_worse),
               "scenarios_where_heuristic_rests": len(resting),
+              "missions": sorted({s.name.split("@")[0] for s in scenarios}),
               "settings": dataclasses.asdict(ManagerSettings()), "elapsed_s": time.perf_counter() - started}
     if not args.quick:
         with_margin = np.mean([r["runs"]["optimal"]["mission_time_s"] for r in records])

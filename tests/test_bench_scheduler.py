@@ -44,3 +44,16 @@ def test_the_ratio_is_against_the_best_baseline_of_each_scenario():
 def test_no_resting_baseline_gives_no_ratio():
     comparison = bench_module().best_baseline_comparison([scenario("quiet", 0.0, 0.0, 0.0)])
     assert comparison["mean_ratio"] is None and comparison["cases_optimal_rests_more"] == []
+
+
+def test_mission_option_picks_that_missions_scenarios():
+    """Ten scenarios per mission (two onsets × five severities), six with --quick on the first
+    mission; a name the benchmark does not fly is refused with the name and the ones it knows."""
+    module = bench_module()
+    part = module.scenario_missions(False, ["fig_3_2"])
+    assert len(part) == 10 and {m.name.split("@")[0] for m in part} == {"fig_3_2"}
+    assert len(module.scenario_missions(False, None)) == 30
+    assert len(module.scenario_missions(True, None)) == 6
+    assert len(module.scenario_missions(True, ["long_combat"])) == 6
+    with pytest.raises(ValueError, match="'fig_9_9' is not one of fig_7_7, fig_3_2, long_combat"):
+        module.scenario_missions(False, ["fig_9_9"])
