@@ -60,10 +60,10 @@ def scenario_fault(best: dict) -> dict:
     """The large blockage of the chapter-7 scenarios as the study ``best`` fits it (fault keys of
     :func:`genthermal.schedule.power_system.parse_fault`)."""
     values = best["values"]
-    return {"generator": 1, "kind": "coolant_blockage", "onset_min": 66, "k_flow": round(values["k_flow"], 4),
-            "n_flow": round(values["n_flow"], 4), "inlet_rise_C": round(best["inlet_rise_K"], 3),
-            "inlet_rise_tau_min": round(best["inlet_tau_min"], 3),
-            "inlet_load_share": round(best["inlet_load_share"], 4)}
+    return {"generator": 1, "kind": "coolant_blockage", "onset_min": 66, "k_flow": round(values["k_flow"], 3),
+            "n_flow": round(values["n_flow"], 3), "inlet_rise_C": round(best["inlet_rise_K"], 2),
+            "inlet_rise_tau_min": round(best["inlet_tau_min"], 2),
+            "inlet_load_share": round(best["inlet_load_share"], 3)}
 
 
 def write_calibration(best: dict, path: Path) -> None:

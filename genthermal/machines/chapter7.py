@@ -236,15 +236,17 @@ class ProxySimulator:
         return values
 
 
-def no_action_blockage_minutes(plant: ThermalModel, k_flow: float, n_flow: float, inlet_tau_s: float) -> float | None:
+def no_action_blockage_minutes(plant: ThermalModel, k_flow: float, n_flow: float, inlet_tau_s: float,
+                               inlet_rise_K: float = BLOCKAGE_INLET_RISE_C) -> float | None:
     """Minutes from the fault to 109 °C of ``plant`` flying the Fig 7.7 mission with the large blockage
-    from :data:`ONSET_S` and no load management (inlet +31 K with time constant ``inlet_tau_s``);
-    None if it stays below."""
+    from :data:`ONSET_S` and no load management (inlet +``inlet_rise_K`` K, default 31, with time
+    constant ``inlet_tau_s``; both generators carry the mission's load, so a load-following share
+    of the rise changes nothing); None if it stays below."""
     from ..simulate import simulate  # simulate builds on the model modules this one is imported with
 
     inputs = load_mission("thesis_fig_7_7").to_inputs(DT_S)
     time_s = inputs["time_s"].to_numpy()
-    inputs["T_inlet"] = inputs["T_inlet"] + inlet_rise(time_s, ONSET_S, BLOCKAGE_INLET_RISE_C, inlet_tau_s)
+    inputs["T_inlet"] = inputs["T_inlet"] + inlet_rise(time_s, ONSET_S, inlet_rise_K, inlet_tau_s)
     blocked = plant.with_effect("coolant_flow_reduction", k_flow=k_flow, n_flow=n_flow)
     winding = simulate(plant, inputs, switches=[(ONSET_S, blocked)])["T_winding"].to_numpy()
     over = np.flatnonzero(winding >= 109.0)
