@@ -286,8 +286,9 @@ def _flight_reason(outcome, displaced: bool, rested: bool, only_displaced: bool 
     differs = ([] if displaced else ["not every one of the three conditions displaces load"]) + \
         ([] if only_displaced else ["the heuristic also rests within the three conditions"]) + \
         ([] if rested else [f"{landing['rest_before_min']:.0f} min of rest before landing (thesis 10, rig 20)"])
-    text = ("; ".join(differs) or "as the thesis") + f" (rests: {rests}); gen1 {outcome['peak_gen1_C']:.1f} °C, gen2 " \
-        f"{outcome['peak_gen2_C']:.1f} °C, {outcome['breach_s']:.0f} s above 110 °C, where the thesis breached by 0.7 and 1 K"
+    text = (("; ".join(differs) or "as the thesis") + f" (rests: {rests}); gen1 {outcome['peak_gen1_C']:.1f} °C, "
+            f"gen2 {outcome['peak_gen2_C']:.1f} °C, {outcome['breach_s']:.0f} s above 110 °C, where the thesis "
+            "breached by 0.7 and 1 K")
     if outcome["peak_gen1_C"] < 110.0 - 1.0:
         text += ("; the manager plans gen1 to 110 °C on its design model, which predicts gen1 hot (the lag the "
                  "calibration measures at the thresholds), so it holds the plant "
