@@ -86,3 +86,24 @@ def test_the_rise_falls_when_load_is_displaced_off_the_blocked_generator():
     read = true_inputs(system, ("T_inlet",), t, displaced)["T_inlet"]
     assert read[0, 0] == pytest.approx(system.inlet_C(0, t, displaced)[0])
     assert "0.5 of it following the load" in _system(0.5).describe()
+
+
+def test_the_closed_loops_plant_flies_the_load_following_inlet():
+    """The plant step of the closed loop (``closed_loop._plant_steps``) reads the currents it flies:
+    with load moved off the blocked generator a load-following rise leaves it cooler than a fixed
+    one does; undisplaced the two are the same plant run."""
+    from genthermal.schedule.closed_loop import _plant_steps
+    from genthermal.schedule.plan import Schedule, build_timeline, mission_segments
+
+    def end_winding(share, displaced_A):
+        system = _system(share)
+        segments = mission_segments(system.mission)
+        schedule = Schedule(np.array([[displaced_A], [-displaced_A]]), np.zeros(1))
+        timeline = build_timeline(segments, schedule, system.rest_current_A, 30.0)
+        x0 = np.full(system.nominal_model.n_states, 20.0)
+        outputs, _ = _plant_steps(system, 0, x0, timeline, 0.0)
+        return outputs[0, -1]
+
+    assert end_winding(1.0, 0.0) == end_winding(0.0, 0.0)
+    fixed, following = end_winding(0.0, 1.5), end_winding(1.0, 1.5)
+    assert following < fixed - 1.0
