@@ -339,7 +339,7 @@ def default_starts(chapter7: ThermalModel, default: ThermalModel) -> tuple[Start
     bounds = {**FIT_BOUNDS, "h_air_gap": H_AIR_GAP_BOUNDS}
     blockage = {n: fault.values[n] for n in BLOCKAGE_NAMES}
     return (Start("shipped chapter7", {**{n: chapter7.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
-                  fault.inlet_rise_C, fault.inlet_rise_tau_s / 60.0),
+                  fault.inlet_rise_C, fault.inlet_rise_tau_s / 60.0, fault.inlet_load_share),
             Start("default (ch. 3-5)", {**{n: default.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
                   inlet_tau_min=20.0),
             Start("centre of the bounds", {n: math.sqrt(bounds[n][0] * bounds[n][1]) for n in MACHINE_NAMES + BLOCKAGE_NAMES},
