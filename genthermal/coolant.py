@@ -74,7 +74,7 @@ def outlet_flow_fraction(diameter_mm: float, healthy_diameter_mm: float = OUTLET
 
 
 def inlet_load_factor(current_A, share_current_A, load_share):
-    r"""Factor on a fault's inlet rise for the load the blocked generator carries, 1.
+    r"""Factor (dimensionless) on a fault's inlet rise for the load the blocked generator carries.
 
     .. math::
         f = 1 + \alpha\left(\left(\frac{I}{I_{share}}\right)^2 - 1\right)
@@ -166,7 +166,8 @@ def inlet_rise(time_s, onset_s: float, rise_K: float, time_constant_s: float = 0
     else:
         rise = np.where(started, rise_K * -np.expm1(-np.clip(elapsed, 0.0, None) / time_constant_s), 0.0)
     if current_A is None or share_current_A is None:
-        if inlet_load_factor(1.0, 1.0, load_share) and load_share != 0:  # checks load_share
+        inlet_load_factor(1.0, 1.0, load_share)  # rejects a load_share outside [0, 1], naming it
+        if load_share != 0:
             raise InputError("current_A" if current_A is None else "share_current_A", None,
                              f"needed: {load_share:g} of the inlet rise follows the generator's load")
         return rise

@@ -154,7 +154,8 @@ class ManagedBlockageProxy:
         self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
         moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
         self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
-        if inlet_rise_of is None and inlet_load_factor(1.0, 1.0, inlet_load_share) and inlet_load_share != 0:
+        inlet_load_factor(1.0, 1.0, inlet_load_share)  # rejects a share outside [0, 1], naming it
+        if inlet_rise_of is None and inlet_load_share != 0:
             fault_rise = ca.DM(inlet_rise(self.time_s, onset_s, inlet_rise_C, inlet_rise_tau_s)).T
 
             def inlet_rise_of(time_s, gen1_current):
