@@ -29,6 +29,10 @@ from ..mission import DEFAULT_GENERATOR, DEFAULT_RATED_CURRENT_A, Mission
 
 #: Tolerance on the limit when checking a prediction, K.
 LIMIT_TOLERANCE_K = 1e-6
+#: A plan is feasible when its predicted peak is within this of the planning limit, K
+#: (:func:`evaluate`; the re-plan within the lowest reachable peak,
+#: :func:`~genthermal.schedule.replanning.plan_with`, judges its plans with the same).
+FEASIBLE_TOLERANCE_K = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -524,7 +528,7 @@ class PlanResult:
 
 
 def evaluate(problem: PlanningProblem, schedule: Schedule, method: str, solve_s: float,
-             warnings=(), tolerance_K: float = 0.05) -> PlanResult:
+             warnings=(), tolerance_K: float = FEASIBLE_TOLERANCE_K) -> PlanResult:
     """Predict ``schedule`` on the design model and wrap it as a :class:`PlanResult`; feasible when
     the peak is within ``tolerance_K`` of the planning limit."""
     peak, g, k = predict(problem, schedule).peak()
