@@ -136,8 +136,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
     relaxed = _within_budget(problem, run(within_lowest, lowest.schedule))  # the min-max schedule is feasible there
-    # the scheduler's plan is flown when it keeps that limit by the tolerance every plan is judged
-    # with (evaluate): a strict test put the rest-heavy min-max schedule in place of the optimal
+    # the scheduler's plan is flown when its peak is within lowest peak + 0.1 K by the tolerance every
+    # plan is judged with (evaluate): a strict test put the rest-heavy min-max schedule in place of the optimal
     # scheduler's plan 0.01 K over it (blockage_large at 250 min: rest 50 s where the engineer's
     # heuristic, 0.01 K under it, rested 10 s on the same problem)
     if relaxed.peak_C > lowest.peak_C + 0.1 + FEASIBLE_TOLERANCE_K:  # worse than the min-max schedule: fly that
