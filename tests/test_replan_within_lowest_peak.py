@@ -52,7 +52,12 @@ def test_scheduler_plan_within_the_tolerance_of_the_relaxed_limit_is_flown(probl
             return _plan(n, 0.0, lowest_peak_C + 1.0, False, "engineer")
         # within the lowest reachable peak (+ 0.1 K): a short rest, over_K above that limit
         return _plan(n, SCHEDULER_REST_S, p.limit_C + over_K, over_K <= FEASIBLE_TOLERANCE_K, "engineer")
+    def costly_shed(p, off, limit_C, receiver_margin_K):  # keeping the margin by shedding costs more than resting
+        shed = _plan(n, 0.0, p.limit_C, False, "shed")
+        shed.details.update(shedding=[0], cost_min=1000.0)
+        return shed
     monkeypatch.setattr(replanning, "lowest_reachable_peak", min_max)
+    monkeypatch.setattr(replanning, "priced_shed_plan", costly_shed)
     monkeypatch.setattr(replanning, "engineer_plan", engineer)
     result = replanning.plan_with("engineer", problem, ManagerSettings(), system.generator_names, system.limit_C)
     assert result.schedule.added_rest_s == flown_rest_s
