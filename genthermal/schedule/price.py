@@ -27,6 +27,9 @@ import numpy as np
 #: limit, and then as little as they allow: one minute of rest is worth 1 mA·h, so 0.06 A·h not
 #: served costs as much as a 60-min rest.
 SHED_PRICE_MIN_PER_AH = 1000.0
+#: Costs closer than this are the same to the manager, min: one 10-s step of rest (the closed
+#: loop's step), so that rounding does not buy rest or shed load.
+PRICE_TOLERANCE_MIN = 10.0 / 60.0
 
 
 def not_served_Ah(segments, schedule) -> float:

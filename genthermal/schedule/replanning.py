@@ -60,8 +60,8 @@ from .optimal_nlp import flown_optimal_plan
 from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from .power_system import PowerSystem
-from .price import schedule_cost_min
-from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, PRICE_TOLERANCE_MIN, priced_shed_plan
+from .price import PRICE_TOLERANCE_MIN, schedule_cost_min
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,

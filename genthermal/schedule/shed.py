@@ -58,7 +58,7 @@ import numpy as np
 from .engineer import predicted_violators
 from .heuristic import SegmentResponse, future_room, receiver_room
 from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, rest_available_s
-from .price import schedule_cost_min
+from .price import PRICE_TOLERANCE_MIN, schedule_cost_min
 
 #: What the load manager does when even the lowest reachable peak is above θmax
 #: (``ManagerSettings.when_infeasible``, scenario ``generators.when_infeasible``): ``shed``, shed
@@ -74,9 +74,6 @@ NOT_SERVED_TOLERANCE_A = 1e-6
 #: project: a Gaussian innovation exceeds three of them in 0.13 % of the cycles (one-sided), so a
 #: healthy generator is rarely asked to shed for noise, and then for a fraction of a kelvin.
 UNEXPLAINED_RISE_SIGMAS = 3.0
-#: Costs closer than this are the same to :func:`priced_shed_plan`, min: one 10-s step of rest
-#: (the closed loop's step), so that rounding does not buy rest.
-PRICE_TOLERANCE_MIN = 10.0 / 60.0
 
 
 def unexplained_rise(innovation_K, innovation_std_K, sigmas: float = UNEXPLAINED_RISE_SIGMAS) -> np.ndarray:
