@@ -159,7 +159,7 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     problem = PlanningProblem(segments, generators, x0, np.array([100.0, 20.0]), 20.0, system.rest_current_A,
                               system.current_limit_A, system.limit_C, rise_backoff=0.3, rest_budget_s=600.0)
 
-    def receiver_on_the_limit(problem, off, receiver_margin_K, rest_s=0.0):
+    def receiver_on_the_limit(problem, off, receiver_margin_K, rest_s=0.0, rest_segment=0):
         return PlanResult(Schedule.nominal(2, len(problem.segments), off), False, system.limit_C + 3e-14, 1, 0, 0.0,
                           "shed", details={"shedding": [0]})
     monkeypatch.setattr(shed, "shed_plan", receiver_on_the_limit)

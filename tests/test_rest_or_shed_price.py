@@ -10,7 +10,8 @@ from genthermal.schedule import replanning
 from genthermal.schedule.manager_settings import ManagerSettings
 from genthermal.schedule.plan import PlanningProblem, PlanResult, Schedule, mission_segments
 from genthermal.schedule.power_system import PowerSystem
-from genthermal.schedule.price import SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, schedule_cost_min
+from genthermal.schedule.price import (SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, not_served_per_segment_Ah,
+                                      schedule_cost_min)
 from genthermal.schedule.shed import priced_shed_plan, shed_rest_candidates_s, shed_switching_off
 
 from flight_scenarios import SHORT
@@ -68,18 +69,18 @@ def test_the_shed_plan_rests_first_only_when_the_load_it_saves_is_worth_its_minu
     flat = shed_switching_off(problem, [False, False], system.limit_C, 2.5)
     assert not_served_Ah(problem.segments, flat.schedule) > 0.01  # with no rest, gen1 sheds in landing
     priced = priced_shed_plan(problem, [False, False], system.limit_C, 2.5)
-    costs = dict(priced.details["priced_rests_s"])
-    assert set(costs) == set(shed_rest_candidates_s(3600.0, problem.window_s))
-    for rest, cost in costs.items():  # every candidate priced as the plan it is
-        plan = shed_switching_off(problem, [False, False], system.limit_C, 2.5, rest_s=rest)
+    costs = {(k, rest): cost for k, rest, cost in priced.details["priced_rests"]}
+    assert set(costs) == {(0, rest) for rest in shed_rest_candidates_s(3600.0, problem.window_s)}
+    for (k, rest), cost in costs.items():  # every candidate priced as the plan it is
+        plan = shed_switching_off(problem, [False, False], system.limit_C, 2.5, rest_s=rest, rest_segment=k)
         assert cost == pytest.approx(schedule_cost_min(problem.segments, plan.schedule))
     assert priced.details["cost_min"] == pytest.approx(min(costs.values()), abs=10.0 / 60.0)
     # at 1000 min per A·h the rest that cools gen1 before landing is worth its minutes
     assert priced.schedule.added_rest_s > 0
-    assert priced.details["cost_min"] < costs[0.0]
+    assert priced.details["cost_min"] < costs[(0, 0.0)]
     # no budget left: no rest
     spent = priced_shed_plan(_hot_landing(system, rest_budget_s=0.0), [False, False], system.limit_C, 2.5)
-    assert spent.schedule.added_rest_s == 0.0 and spent.details["priced_rests_s"] == [(0.0, spent.details["cost_min"])]
+    assert spent.schedule.added_rest_s == 0.0 and spent.details["priced_rests"] == [(0, 0.0, spent.details["cost_min"])]
 
 
 def _margin_lost(system):
@@ -127,3 +128,21 @@ def test_margin_lost_flies_the_cheaper_of_resting_and_shedding(system, monkeypat
     best_effort = replanning.plan_with("engineer", problem, ManagerSettings(), system.generator_names, system.limit_C,
                                        when_infeasible="best_effort")
     assert best_effort.method == "engineer" and best_effort.schedule.added_rest_s == 1800.0
+
+
+def test_the_priced_rest_comes_right_before_the_shedding_when_that_is_cheaper(system):
+    # gen1 at 95 °C in the combat cruise, its inlet 31 K up: without rest it sheds only in landing
+    segments = mission_segments(system.mission)[1:]
+    generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
+    x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
+    x0[0] = 95.0
+    problem = PlanningProblem(segments, generators, x0, np.array([51.0, 20.0]), 20.0, system.rest_current_A,
+                              system.current_limit_A, system.limit_C - 2.5, max_rest_s=3600.0, rise_backoff=0.3,
+                              rest_budget_s=3600.0)
+    unrested = shed_switching_off(problem, [False, False], system.limit_C, 2.5)
+    short = not_served_per_segment_Ah(segments, unrested.schedule)
+    assert short[0] == 0.0 and short[1] > 0.1
+    priced = priced_shed_plan(problem, [False, False], system.limit_C, 2.5)
+    assert priced.schedule.rest_before_s[0] == 0.0 and priced.schedule.rest_before_s[1] > 0.0
+    now = min(cost for k, rest, cost in priced.details["priced_rests"] if k == 0)
+    assert priced.details["cost_min"] < now < schedule_cost_min(segments, unrested.schedule) + 1e-9

@@ -32,8 +32,8 @@ SHED_PRICE_MIN_PER_AH = 1000.0
 PRICE_TOLERANCE_MIN = 10.0 / 60.0
 
 
-def not_served_Ah(segments, schedule) -> float:
-    """Phase current a schedule leaves unserved, A·h (all generators, all segments).
+def not_served_per_segment_Ah(segments, schedule) -> np.ndarray:
+    """Phase current a schedule leaves unserved in each segment, A·h (all generators, >= 0).
 
     Parameters
     ----------
@@ -46,8 +46,8 @@ def not_served_Ah(segments, schedule) -> float:
 
     Returns
     -------
-    float
-        A·h (>= 0).
+    numpy.ndarray
+        (n_segments,) A·h.
     """
     displaced = np.asarray(schedule.displaced_A, dtype=float)
     if displaced.shape[1] != len(segments):
@@ -56,7 +56,13 @@ def not_served_Ah(segments, schedule) -> float:
     durations = np.array([s.duration_s for s in segments], dtype=float)
     nominal_As = np.array([sum(d * c for d, c in s.pieces) for s in segments], dtype=float)
     short_As = displaced[~off].sum(axis=0) * durations + np.count_nonzero(off) * nominal_As
-    return float(np.sum(np.clip(short_As, 0.0, None)) / 3600.0)
+    return np.clip(short_As, 0.0, None) / 3600.0
+
+
+def not_served_Ah(segments, schedule) -> float:
+    """Phase current a schedule leaves unserved, A·h (all generators and segments,
+    :func:`not_served_per_segment_Ah`)."""
+    return float(np.sum(not_served_per_segment_Ah(segments, schedule)))
 
 
 def cost_min(rest_s: float, not_served: float, price_min_per_Ah: float = SHED_PRICE_MIN_PER_AH) -> float:
