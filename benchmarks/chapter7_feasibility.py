@@ -1,6 +1,7 @@
 """Can one calibration meet every chapter-7 outcome of the thesis? Minimax feasibility study (JSON).
 
     python3 benchmarks/chapter7_feasibility.py [--json FILE] [--rounds N] [--quick]
+    python3 benchmarks/chapter7_feasibility.py --inlet-follows-load [--write] [--json FILE] [--rounds N]
 
 Frees every assumed value of the Genco RF201A's cooling and losses within its physical bounds, the
 large blockage's flow fraction (the orifice mapping) and convection exponent, and its inlet rise
@@ -13,6 +14,11 @@ rest before landing, both generators at most 111 °C, no current limit)
 violation of the other outcomes with the managed peaks capped) and two variants: the rig's 20-min
 rest and an inlet rise that follows gen1's load (7.3.3: it "is dependent upon both the fault and the
 load"). ``--quick``: the main study from the shipped calibration only, one round, no variants.
+
+``--inlet-follows-load`` runs the study with the load share of the inlet rise free (every start,
+no Pareto trace or variants); with ``--write`` its solution becomes the shipped calibration
+``genco_rf201a:chapter7`` (:data:`~genthermal.machines.chapter7.PARAMETER_FILE`: the seven machine
+values) and the blockage it fits is printed for the chapter-7 scenarios (``fault``).
 """
 
 from __future__ import annotations
@@ -24,8 +30,15 @@ import time
 from pathlib import Path
 
 from genthermal.machines import build_model
-from genthermal.machines.chapter7_feasibility import default_starts, pareto_trace, study
+import yaml
+
+from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE
+from genthermal.machines.chapter7_feasibility import (H_AIR_GAP_BOUNDS, MACHINE_NAMES, default_starts, pareto_trace,
+                                                      study)
 from genthermal.model_file import load_model
+
+#: Provenance of every value the study with a load-following inlet ships.
+SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/chapter7_feasibility.py, inlet follows load)"
 
 #: Caps on the managed peaks of the Pareto trace, °C (θmax itself and halfway to the thesis's 111).
 MANAGED_CAPS_C = (110.0, 110.5)
@@ -43,22 +56,61 @@ def _progress(label: str, result: dict, started: float) -> None:
           f"({result['worst_outcome']})", file=sys.stderr, flush=True)
 
 
+def scenario_fault(best: dict) -> dict:
+    """The large blockage of the chapter-7 scenarios as the study ``best`` fits it (fault keys of
+    :func:`genthermal.schedule.power_system.parse_fault`)."""
+    values = best["values"]
+    return {"generator": 1, "kind": "coolant_blockage", "onset_min": 66, "k_flow": round(values["k_flow"], 3),
+            "n_flow": round(values["n_flow"], 3), "inlet_rise_C": round(best["inlet_rise_K"], 2),
+            "inlet_rise_tau_min": round(best["inlet_tau_min"], 2),
+            "inlet_load_share": round(best["inlet_load_share"], 3)}
+
+
+def write_calibration(best: dict, path: Path) -> None:
+    """Write the machine values of the study ``best`` as the model file at ``path``, each with its
+    bounds in the provenance."""
+    bounds = {**FIT_BOUNDS, "h_air_gap": H_AIR_GAP_BOUNDS}
+    at_bound = set(best["at_bound"])
+    document = {"machine": "genco_rf201a", "variant": "nonlinear", "parameters": {
+        n: {"value": round(best["values"][n], 4), "provenance": "fitted",
+            "source": f"{SOURCE}: {bounds[n][3]}, bounds {bounds[n][0]:g}-{bounds[n][1]:g} {bounds[n][2]}"
+                      + (" (at its bound)" if n in at_bound else "")}
+        for n in MACHINE_NAMES}}
+    header = ("# Chapter-7 calibration of the Genco RF201A (genthermal.machines.chapter7_feasibility), written by\n"
+              "# benchmarks/chapter7_feasibility.py --inlet-follows-load --write. load_model('genco_rf201a:chapter7')\n"
+              "# reads it. The chapter-7 scenarios fly the blockage the same study fits:\n"
+              f"# {json.dumps(scenario_fault(best))}\n")
+    path.write_text(header + yaml.safe_dump(document, sort_keys=False))
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", help="also write the JSON here")
     parser.add_argument("--rounds", type=int, default=2, help="solves with the manager lags re-measured (default 2)")
     parser.add_argument("--quick", action="store_true", help="shipped start only, one round, no Pareto or variants")
+    parser.add_argument("--inlet-follows-load", action="store_true",
+                        help="the study with the inlet rise's load share free only (no Pareto trace or variants)")
+    parser.add_argument("--write", action="store_true",
+                        help="with --inlet-follows-load: ship its solution as genco_rf201a:chapter7")
     args = parser.parse_args(argv)
     if args.rounds < 1:
         parser.error(f"--rounds must be >= 1 (one solve, then one more per re-measured lag), got {args.rounds}")
+    if args.write and not args.inlet_follows_load:
+        parser.error("--write ships the study with the load-following inlet: give --inlet-follows-load")
     started = time.perf_counter()
     chapter7, default = load_model("genco_rf201a:chapter7"), build_model()
     starts = default_starts(chapter7, default)[:1] if args.quick else None
-    main_study = study(chapter7, default, rounds=1 if args.quick else args.rounds, starts=starts)
+    main_study = study(chapter7, default, rounds=1 if args.quick else args.rounds, starts=starts,
+                       inlet_follows_load=args.inlet_follows_load)
     _progress("main study", main_study["best"], started)
     report = {"study": {"starts": [_public(r) for r in main_study["starts"]], "best": _public(main_study["best"]),
                         "sharp": main_study["sharp"], "rounds": main_study["rounds"]}}
-    if not args.quick:
+    if args.inlet_follows_load:
+        report["study"]["scenario_fault"] = scenario_fault(main_study["best"])
+        if args.write:
+            write_calibration(main_study["best"], Path(__file__).resolve().parents[1] / "genthermal" / "machines"
+                              / PARAMETER_FILE)
+    if not args.quick and not args.inlet_follows_load:
         report["pareto"] = [_public(p) for p in pareto_trace(main_study["problem"], main_study["best"], MANAGED_CAPS_C,
                                                              OTHERS_CAPS_K)]
         for point in report["pareto"]:

@@ -1,4 +1,4 @@
-"""Fit the chapter-7 calibration and write the shipped parameter set (JSON summary on stdout).
+"""Fit the earlier least-squares chapter-7 calibration (JSON summary on stdout; ``--write`` ships it).
 
     python3 benchmarks/fit_chapter7.py [--json FILE] [--write] [--n-flow N] [--managed]
 
@@ -14,7 +14,10 @@ managed large blockage (:mod:`genthermal.machines.chapter7_managed`: displacemen
 K-conditions after the fault and a 10-min rest before landing keep both generators within θmax) to
 the fit; the proxies then conflict (README), so the shipped calibration is fitted without it.
 Whether any calibration meets every chapter-7 outcome within the thesis's tolerances, with all
-assumed values and the blockage's inlet free: ``benchmarks/chapter7_feasibility.py``.
+assumed values and the blockage's inlet free: ``benchmarks/chapter7_feasibility.py``; the shipped
+calibration is now that study's solution with the inlet following gen1's load
+(``benchmarks/chapter7_feasibility.py --inlet-follows-load --write``), so ``--write`` here would
+replace it with this fit's.
 """
 
 from __future__ import annotations

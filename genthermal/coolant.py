@@ -73,12 +73,74 @@ def outlet_flow_fraction(diameter_mm: float, healthy_diameter_mm: float = OUTLET
     return math.sqrt((1.0 + loss_share) / (1.0 + loss_share * ratio))
 
 
-def inlet_rise(time_s, onset_s: float, rise_K: float, time_constant_s: float = 0.0) -> np.ndarray:
+def inlet_load_factor(current_A, share_current_A, load_share):
+    r"""Factor (dimensionless) on a fault's inlet rise for the load the blocked generator carries.
+
+    .. math::
+        f = 1 + \alpha\left(\left(\frac{I}{I_{share}}\right)^2 - 1\right)
+          = 1 - \alpha + \alpha\left(\frac{I}{I_{share}}\right)^2,
+
+    :math:`I` the generator's phase current, :math:`I_{share}` the current it carries when the load
+    is shared out undisplaced (the mean phase current of the power system's generators; during a
+    rest, the rest current), :math:`\alpha` the share of the rise that follows the load. A blocked
+    outlet recirculates the generator's own heated air into its inlet, and that heat is its loss,
+    which grows as :math:`I^2`: thesis 7.3.3, the inlet temperature "is dependent upon both the fault
+    and the load and hence cannot be accurately described". :math:`\alpha = 0` is a rise fixed by
+    the fault alone (the factor is exactly 1); :math:`\alpha = 1` a rise wholly proportional to the
+    copper loss relative to the undisplaced share, so moving load off the blocked generator cools
+    its inlet. The rise the scenario states is the one at the undisplaced load (:math:`f = 1`).
+    The thesis gives no value of :math:`\alpha`; the chapter-7 calibration fits it
+    (:mod:`genthermal.machines.chapter7_feasibility`, ``genco_rf201a:chapter7``).
+
+    Works on numbers, numpy arrays and CasADi expressions alike (the feasibility study
+    differentiates through it); numeric arguments are checked.
+
+    Parameters
+    ----------
+    current_A : float, array_like or CasADi expression
+        Phase current of the blocked generator, A RMS, >= 0.
+    share_current_A : float, array_like or CasADi expression
+        Its undisplaced share of the load, A RMS, >= 0; where it is 0 every generator carries
+        nothing and the ratio is taken as 0.
+    load_share : float or CasADi expression
+        :math:`\alpha`, in [0, 1].
+
+    Returns
+    -------
+    float, numpy.ndarray or CasADi expression
+        :math:`f`, dimensionless.
+
+    Raises
+    ------
+    InputError
+        Naming ``inlet_load_share``, ``current_A`` or ``share_current_A`` and the bad value.
+    """
+    if isinstance(load_share, (int, float, np.floating, np.integer)):
+        if isinstance(load_share, bool) or not (math.isfinite(load_share) and 0.0 <= load_share <= 1.0):
+            raise InputError("inlet_load_share", load_share, "must be a share of the inlet rise in [0, 1]")
+        if load_share == 0.0:
+            return np.ones(np.shape(current_A)) if isinstance(current_A, (np.ndarray, list)) else 1.0
+    numeric = all(isinstance(v, (int, float, np.floating, np.integer, np.ndarray, list))
+                  for v in (current_A, share_current_A))
+    if not numeric:
+        return 1.0 + load_share * ((current_A / share_current_A) ** 2 - 1.0)
+    current, share = np.asarray(current_A, dtype=float), np.asarray(share_current_A, dtype=float)
+    for field, value in (("current_A", current), ("share_current_A", share)):
+        if not np.all(np.isfinite(value) & (value >= 0.0)):
+            raise InputError(field, value.tolist(), "must be phase currents >= 0 A RMS")
+    ratio = np.divide(current, share, out=np.zeros(np.broadcast(current, share).shape), where=share > 0)
+    return 1.0 + load_share * (ratio ** 2 - 1.0)
+
+
+def inlet_rise(time_s, onset_s: float, rise_K: float, time_constant_s: float = 0.0, load_share: float = 0.0,
+               current_A=None, share_current_A=None) -> np.ndarray:
     r"""Rise of the coolant inlet temperature after a fault, K, at times ``time_s`` (s).
 
-    :math:`\Delta T\,(1 - e^{-(t - t_0)/\tau})` from the onset :math:`t_0` on, 0 before; a step for
+    :math:`\Delta T\,(1 - e^{-(t - t_0)/\tau})\,f` from the onset :math:`t_0` on, 0 before; a step for
     :math:`\tau = 0`. A blocked outlet warms the air the rig draws in gradually (thesis Fig 7.4 shows
-    the rise after the 10 mm plate, without its time constant).
+    the rise after the 10 mm plate, without its time constant). :math:`f` is the load factor of
+    :func:`inlet_load_factor` for a ``load_share`` above 0 (then ``current_A`` and
+    ``share_current_A`` at ``time_s`` are needed), else 1: the rise of the fault alone.
 
     Parameters
     ----------
@@ -87,14 +149,26 @@ def inlet_rise(time_s, onset_s: float, rise_K: float, time_constant_s: float = 0
     onset_s : float
         Fault onset, s.
     rise_K : float
-        Final rise, K.
+        Final rise at the undisplaced load, K.
     time_constant_s : float
         :math:`\tau` >= 0, s.
+    load_share : float
+        :math:`\alpha` in [0, 1] (:func:`inlet_load_factor`); 0 (default): independent of the load.
+    current_A, share_current_A : array_like, optional
+        The generator's phase current and its undisplaced share at ``time_s``, A RMS.
     """
     if not (math.isfinite(time_constant_s) and time_constant_s >= 0):
         raise InputError("inlet_rise_tau", time_constant_s, "must be a time constant >= 0 s")
     elapsed = np.asarray(time_s, dtype=float) - onset_s
     started = elapsed >= -1e-9
     if time_constant_s == 0:
-        return np.where(started, rise_K, 0.0)
-    return np.where(started, rise_K * -np.expm1(-np.clip(elapsed, 0.0, None) / time_constant_s), 0.0)
+        rise = np.where(started, rise_K, 0.0)
+    else:
+        rise = np.where(started, rise_K * -np.expm1(-np.clip(elapsed, 0.0, None) / time_constant_s), 0.0)
+    if current_A is None or share_current_A is None:
+        inlet_load_factor(1.0, 1.0, load_share)  # rejects a load_share outside [0, 1], naming it
+        if load_share != 0:
+            raise InputError("current_A" if current_A is None else "share_current_A", None,
+                             f"needed: {load_share:g} of the inlet rise follows the generator's load")
+        return rise
+    return rise * inlet_load_factor(current_A, share_current_A, load_share)

@@ -51,7 +51,9 @@ orifice relation's for an open-outlet loss share of 0.5 to 0.003) and convection
 ``inlet_follows_load`` also the share :math:`\alpha` of the rise that follows gen1's load (7.3.3:
 the inlet temperature "is dependent upon both the fault and the load"): rise
 :math:`\Delta T\,(1 - e^{-(t-t_0)/\tau})\,(1 - \alpha + \alpha (I_1/I_{nom})^2)`, with
-:math:`I_1` the current gen1 carries after displacement (its heat recirculated into the inlet).
+:math:`I_1` the current gen1 carries after displacement (its heat recirculated into the inlet) and
+:math:`I_{nom}` its undisplaced share; the factor is :func:`genthermal.coolant.inlet_load_factor`,
+the one a scenario's fault with ``inlet_load_share`` flies.
 
 The plant of the chapter-7 scenarios is the model itself (7.3.2: "two copies of the simulation
 model"); the healthy generator's inlet does not rise (7.3.2: it "will be unaffected for the
@@ -70,6 +72,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from ..coolant import inlet_load_factor
 from ..diagnose.trajectory import ParametricSimulator, Scaling
 from ..errors import InputError
 from ..mission import load_mission
@@ -188,9 +191,13 @@ class FeasibilityProblem:
         return self.rise_K * started * (1 - ca.exp(-ca.DM(elapsed).T / (60.0 * self.tau_min)))
 
     def _gen1_inlet_rise(self, time_s: np.ndarray, gen1_current):
-        """Inlet rise of the managed gen1: the fault's, scaled by its load share's current ratio."""
+        """Inlet rise of the managed gen1: the fault's, times the load factor of
+        :func:`genthermal.coolant.inlet_load_factor` (the one the power system flies) of gen1's
+        current against its undisplaced share, the timeline's nominal current (displacement moves
+        current from gen1 to gen2, so that is the two generators' mean, as
+        :meth:`~genthermal.schedule.power_system.PowerSystem.inlet_C` takes it)."""
         nominal = ca.DM(self.managed_nominal_current(time_s)).T
-        return self._inlet_rise(time_s) * (1 - self.share + self.share * (gen1_current / nominal) ** 2)
+        return self._inlet_rise(time_s) * inlet_load_factor(gen1_current, nominal, self.share)
 
     def managed_nominal_current(self, time_s: np.ndarray) -> np.ndarray:
         """Phase current of the managed timeline (sampled as ``time_s``) before any displacement, A."""
@@ -332,7 +339,7 @@ def default_starts(chapter7: ThermalModel, default: ThermalModel) -> tuple[Start
     bounds = {**FIT_BOUNDS, "h_air_gap": H_AIR_GAP_BOUNDS}
     blockage = {n: fault.values[n] for n in BLOCKAGE_NAMES}
     return (Start("shipped chapter7", {**{n: chapter7.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
-                  fault.inlet_rise_C, fault.inlet_rise_tau_s / 60.0),
+                  fault.inlet_rise_C, fault.inlet_rise_tau_s / 60.0, fault.inlet_load_share),
             Start("default (ch. 3-5)", {**{n: default.parameters.value(n) for n in MACHINE_NAMES}, **blockage},
                   inlet_tau_min=20.0),
             Start("centre of the bounds", {n: math.sqrt(bounds[n][0] * bounds[n][1]) for n in MACHINE_NAMES + BLOCKAGE_NAMES},

@@ -30,7 +30,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..coolant import inlet_rise
+from ..coolant import inlet_load_factor, inlet_rise
 from ..diagnose.trajectory import ParametricSimulator
 from ..errors import InputError
 from ..mission import load_mission
@@ -113,11 +113,18 @@ class ManagedBlockageProxy:
         ``inlet_rise_of(time_s, gen1_current)`` → the inlet rise of gen1 (1, n) as a CasADi expression
         (e.g. of a fitted amplitude and time constant, or of the current gen1 carries after
         displacement), replacing ``inlet_rise_C`` and ``inlet_rise_tau_s``.
+    inlet_load_share : float
+        Share of gen1's inlet rise that follows its load, in [0, 1]
+        (:func:`genthermal.coolant.inlet_load_factor` of gen1's current against the undisplaced
+        one); 0 (default): the fault's rise alone. Not with ``inlet_rise_of``.
     """
 
     def __init__(self, model: ThermalModel, names, dt_s: float, k_flow: float | None, inlet_rise_C: float,
-                 inlet_rise_tau_s: float, onset_s: float, rest_s: float = REST_BEFORE_LANDING_S, inlet_rise_of=None):
+                 inlet_rise_tau_s: float, onset_s: float, rest_s: float = REST_BEFORE_LANDING_S, inlet_rise_of=None,
+                 inlet_load_share: float = 0.0):
         self.names = list(names)
+        if inlet_load_share != 0 and inlet_rise_of is not None:
+            raise InputError("inlet_load_share", inlet_load_share, "give it or inlet_rise_of, not both")
         line = managed_timeline(dt_s, rest_s)
         self.time_s, self.masks = line["time_s"], line["masks"]
         self.nominal_current_A = line["current_A"]
@@ -147,6 +154,12 @@ class ManagedBlockageProxy:
         self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
         moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
         self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
+        inlet_load_factor(1.0, 1.0, inlet_load_share)  # rejects a share outside [0, 1], naming it
+        if inlet_rise_of is None and inlet_load_share != 0:
+            fault_rise = ca.DM(inlet_rise(self.time_s, onset_s, inlet_rise_C, inlet_rise_tau_s)).T
+
+            def inlet_rise_of(time_s, gen1_current):
+                return fault_rise * inlet_load_factor(gen1_current, ca.DM(current).T, inlet_load_share)
         if inlet_rise_of is not None:
             gen1_current = ca.DM(current).T - ca.mtimes(ca.DM(self.masks).T, self.displaced).T
             row = np.zeros((frame.shape[0], 1))
@@ -184,7 +197,7 @@ class ManagedBlockageProxy:
 
 def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_rise_C: float,
                       inlet_rise_tau_s: float, onset_s: float, dt_s: float = 30.0,
-                      softmax_K: float = 0.1) -> dict:
+                      softmax_K: float = 0.1, inlet_load_share: float = 0.0) -> dict:
     """The displaced currents that give the managed-blockage proxy of ``plant`` (blockage values
     fixed) its lowest worst peak, by IPOPT over the four currents (minimise the bound :math:`w` on
     every K-condition's smooth peak of both generators): what the thesis's outcome asks of the
@@ -202,13 +215,15 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
         Fault onset, s.
     dt_s, softmax_K : float
         Sample period (s) and smoothness of the peaks (K).
+    inlet_load_share : float
+        Share of gen1's inlet rise that follows its load (:func:`genthermal.coolant.inlet_load_factor`).
 
     Returns
     -------
     dict
         ``conditions`` (condition, displaced_A, gen1_peak_C, gen2_peak_C), ``worst_peak_C`` (the
         lowest reachable highest smooth peak of either generator, °C), ``worst_excess_K`` (over
-        :data:`LIMIT_C`), ``converged``.
+        :data:`LIMIT_C`), ``receiver_max_current_A`` (the most gen2 carries, A), ``converged``.
     """
     from .chapter7 import blockable  # chapter7 imports this module
 
@@ -217,7 +232,8 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
     if not (isinstance(n_flow, (int, float)) and 0.0 <= n_flow <= 1.5):
         raise InputError("n_flow", n_flow, "must be a convection exponent in [0, 1.5] (the effect's range)")
     model = blockable(plant)
-    proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s)
+    proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s,
+                                 inlet_load_share=inlet_load_share)
     peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
     every = ca.vertcat(peaks["gen1"], peaks["gen2"])
     d, bound = proxy.displaced, ca.MX.sym("worst")
@@ -233,4 +249,6 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
     worst = float(max(gen1.max(), gen2.max()))
     return {"conditions": [{"condition": c[0], "displaced_A": float(v), "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
                            for c, v, a, b in zip(CONDITIONS, displaced, gen1, gen2)],
-            "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C, "converged": bool(solver.stats()["success"])}
+            "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C,
+            "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.masks.T @ displaced)),
+            "converged": bool(solver.stats()["success"])}

@@ -97,7 +97,9 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     model = system.plant_model(g, system.faults_known_at(t0))
     _, switches = system.plant_switches(g)
     later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
-    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t), system.mission.T_ambient_C,
+    # the frame's last row repeats the final input; so do the currents a load-following inlet rise reads
+    currents = np.hstack([timeline.currents_A, timeline.currents_A[:, -1:]])
+    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t, currents), system.mission.T_ambient_C,
                              system.mission.power_factor, system.rated_current_A,
                              model.spec.interface.generator)
     run = simulate(model, frame, x0=x0, switches=later)
@@ -105,21 +107,25 @@ def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
     return run[list(model.output_names)].to_numpy()[1:].T, states[-1]
 
 
-def true_inputs(system: PowerSystem, input_names, times) -> dict:
+def true_inputs(system: PowerSystem, input_names, times, currents_A=None) -> dict:
     """The true values of the measured inputs ``input_names`` (coolant inlet, ambient) of every
-    generator at ``times`` (s): input name → (n_gen, n) °C."""
+    generator at ``times`` (s): input name → (n_gen, n) °C. ``currents_A`` (n_gen, n): the phase
+    currents flown at ``times``, A, which an inlet rise that follows the load reads
+    (:meth:`PowerSystem.inlet_C`; None: the undisplaced load)."""
     generator = system.planning_model.spec.interface.generator
     times = np.asarray(times, dtype=float)
-    values = {generator.coolant_input: np.array([system.inlet_C(g, times) for g in range(system.n_generators)]),
+    values = {generator.coolant_input: np.array([system.inlet_C(g, times, currents_A)
+                                                 for g in range(system.n_generators)]),
               generator.ambient_input: np.full((system.n_generators, times.size), system.mission.T_ambient_C)}
     return {name: values[name] for name in input_names if name in values}
 
 
-def _filter_inputs(system: PowerSystem, inputs_C: dict, times) -> tuple:
+def _filter_inputs(system: PowerSystem, inputs_C: dict, times, currents_A=None) -> tuple:
     """Per generator, the inlet (n,) and ambient (n,) temperatures its filter is driven with, °C: the
-    readings in ``inputs_C`` (:func:`true_inputs` keys), the true values for an input not read."""
+    readings in ``inputs_C`` (:func:`true_inputs` keys), the true values for an input not read
+    (with the phase currents ``currents_A`` flown at ``times``)."""
     generator = system.planning_model.spec.interface.generator
-    true = true_inputs(system, (generator.coolant_input, generator.ambient_input), times)
+    true = true_inputs(system, (generator.coolant_input, generator.ambient_input), times, currents_A)
     inlet = inputs_C.get(generator.coolant_input, true[generator.coolant_input])
     ambient = inputs_C.get(generator.ambient_input, true[generator.ambient_input])
     return inlet, ambient
@@ -177,13 +183,16 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators,
                               planning_margin_K(system, settings))
 
-    def read_inputs(times):
-        """The inputs as the manager reads them at ``times`` (s): injected faults, claimed ones substituted."""
-        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(system, input_names, times)))
+    def read_inputs(times, currents_A):
+        """The inputs as the manager reads them at ``times`` (s), the generators carrying ``currents_A``
+        (n_gen, n) A: injected faults, claimed ones substituted."""
+        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(system, input_names, times,
+                                                                                       currents_A)))
     trusted = TrustedHeatFlows(system.n_generators)
     recorder = FlightRecorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
     measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
+    carried_A = None  # (n_gen, 1) the currents of the last step flown: the inlet read when planning
     while segments:
         if settings.cpu_limit_s is not None and time.process_time() - started > settings.cpu_limit_s:
             raise FlightTimeout(t, cycles, time.process_time() - started, settings.cpu_limit_s)
@@ -219,7 +228,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         problem = planning_problem(system, settings, segments, [e.x for e in estimators], t,
                            [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
                            np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s, flown,
-                           inputs_watch.for_plan(read_inputs(np.array([t]))), rise)
+                           inputs_watch.for_plan(read_inputs(np.array([t]), carried_A)), rise)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
@@ -234,8 +243,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         applied = timeline.head(n)
         outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
-        inputs_read = read_inputs(step_times)
-        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times)
+        inputs_read = read_inputs(step_times, applied.currents_A)
+        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times,
+                                          applied.currents_A)
         for g, estimator in enumerate(estimators):
             outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
@@ -247,6 +257,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
         measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
         recorder.add(segments, timeline, n, outputs, t)
+        carried_A = applied.currents_A[:, -1:]
         rested_s += float(np.count_nonzero(applied.resting)) * dt
         running = np.flatnonzero(~applied.resting)
         resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt

@@ -263,7 +263,7 @@ class FaultMonitor:
             coolant = self.system.planning_model.spec.interface.generator.coolant_input
             for g in range(self.system.n_generators):
                 inlet = (self._inputs[-1][coolant][g] if coolant in self._inputs[-1]
-                         else self.system.inlet_C(g, self._time[-1]))
+                         else self.system.inlet_C(g, self._time[-1], currents_A))
                 self.innovation_test.predict(g, currents_A[g], inlet)
 
     def replace_input(self, g: int, name: str, from_s: float, replacement) -> None:
@@ -288,13 +288,14 @@ class FaultMonitor:
     def frame(self, g: int) -> pd.DataFrame:
         """Generator ``g``'s record so far in the measurement schema."""
         time_s = np.concatenate(self._time) + self.dt_s
-        current = np.concatenate(self._currents, axis=1)[g]
+        currents = np.concatenate(self._currents, axis=1)
+        current = currents[g]
         measured = np.concatenate(self._measured, axis=2)[g]
         interface = self.system.planning_model.spec.interface
         excitation = interface.generator.exciter_law(current, self.system.mission.power_factor,
                                                      self.system.rated_current_A)
         generator = interface.generator
-        inlet = self._recorded_input(g, generator.coolant_input, self.system.inlet_C(g, time_s - self.dt_s))
+        inlet = self._recorded_input(g, generator.coolant_input, self.system.inlet_C(g, time_s - self.dt_s, currents))
         ambient = self._recorded_input(g, generator.ambient_input,
                                        np.full(time_s.shape, self.system.mission.T_ambient_C))
         return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)

@@ -32,7 +32,7 @@ def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_a
         for g in range(system.n_generators):
             generator = system.design_generator(g, faults_at(t))
             E, G = generator.step(timeline.dt_s)
-            u = generator.input(timeline.currents_A[g, i], float(system.inlet_C(g, t)), system.mission.T_ambient_C)
+            u = generator.input(timeline.currents_A[g, i], float(system.inlet_C(g, t, timeline.currents_A[:, i])), system.mission.T_ambient_C)
             states[g] = E @ states[g] + G @ generator.forcing(u)
             outputs[g, :, i] = generator.outputs(states[g], u)
     return outputs, states
@@ -65,7 +65,7 @@ class FlownOpenLoop:
             t = t0 + i * timeline.dt_s
             for g in range(system.n_generators):
                 ekf = self.filter(g, t)
-                u = system.design_generator(g).input(timeline.currents_A[g, i], float(system.inlet_C(g, t)),
+                u = system.design_generator(g).input(timeline.currents_A[g, i], float(system.inlet_C(g, t, timeline.currents_A[:, i])),
                                                      system.mission.T_ambient_C)
                 states[g] = np.asarray(ekf.state_step(states[g], u)).ravel()
                 outputs[g, :, i] = ekf.H @ states[g] + ekf.e

@@ -29,6 +29,8 @@ validated here)::
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
       - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 31,
          inlet_rise_tau_min: 40}   # the inlet approaches +31 K with a 40-min time constant
+      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 26,
+         inlet_load_share: 1}      # the rise follows gen1's load: (I1/I_share)^2 of it (coolant.inlet_load_factor)
       - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
       - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
       - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
@@ -90,9 +92,10 @@ def _infeasible_response(value, field: str = "generators.when_infeasible") -> st
 
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent", "margin_K",
                    "filter", "plant_mismatch", "machine", "when_infeasible")
-_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow", "inlet_rise_C", "inlet_rise_tau_min"),
-               "inlet_rise": ("inlet_rise_C", "inlet_rise_tau_min"),
-               "effect": ("effect", "values", "inlet_rise_C", "inlet_rise_tau_min")}
+_INLET_KEYS = ("inlet_rise_C", "inlet_rise_tau_min", "inlet_load_share")
+_FAULT_KEYS = {"coolant_blockage": ("k_flow", "outlet_diameter_mm", "n_flow") + _INLET_KEYS,
+               "inlet_rise": _INLET_KEYS,
+               "effect": ("effect", "values") + _INLET_KEYS}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -116,6 +119,9 @@ class Fault:
         Parameter values of ``effect`` (``{"k_flow": 0.2}``).
     inlet_rise_tau_s : float
         Time constant of the inlet rise, s (0: a step; :func:`genthermal.coolant.inlet_rise`).
+    inlet_load_share : float
+        Share of the inlet rise that follows the generator's load, in [0, 1]
+        (:func:`genthermal.coolant.inlet_load_factor`; 0: the rise of the fault alone).
     """
 
     generator: int
@@ -125,12 +131,15 @@ class Fault:
     effect: str | None = None
     values: Mapping[str, float] = dataclasses.field(default_factory=dict)
     inlet_rise_tau_s: float = 0.0
+    inlet_load_share: float = 0.0
 
     def describe(self, names: tuple[str, ...]) -> str:
         """One line: what happens to which generator when."""
         what = ", ".join(f"{k}={v:g}" for k, v in self.values.items())
         effect = f"{self.effect}({what})" if self.effect else ""
         rise = f"inlet +{self.inlet_rise_C:g} K" if self.inlet_rise_C else ""
+        if rise and self.inlet_load_share:
+            rise += f" ({self.inlet_load_share:g} of it following the load)"
         return f"{names[self.generator]}: {self.kind} at {self.onset_s / 60:g} min " + \
             " and ".join(part for part in (effect, rise) if part)
 
@@ -176,9 +185,10 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
     onset_s = 60.0 * _number(entry, "onset_min", path, 0.0, 1e5, "min")
     rise = _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K", default=0.0)
     tau_s = 60.0 * _number(entry, "inlet_rise_tau_min", path, 0.0, 600.0, "min", default=0.0)
+    share = _number(entry, "inlet_load_share", path, 0.0, 1.0, "(share of the rise following the load)", default=0.0)
     if kind == "inlet_rise":
         return Fault(generator, onset_s, kind, _number(entry, "inlet_rise_C", path, -50.0, 100.0, "K"),
-                     inlet_rise_tau_s=tau_s)
+                     inlet_rise_tau_s=tau_s, inlet_load_share=share)
     if kind == "coolant_blockage":
         if ("k_flow" in entry) == ("outlet_diameter_mm" in entry):
             raise InputError(f"{path}.k_flow", entry.get("k_flow"),
@@ -190,7 +200,7 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
         values = {"k_flow": k_flow}
         if "n_flow" in entry:  # exponent of the internal convection, h ∝ flow^n (effect default 0.8)
             values["n_flow"] = _number(entry, "n_flow", path, 0.0, 1.5, "(convection exponent)")
-        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values, tau_s)
+        return Fault(generator, onset_s, kind, rise, "coolant_flow_reduction", values, tau_s, share)
     try:
         effect = get_effect(entry.get("effect"))
     except InputError as error:
@@ -205,7 +215,7 @@ def parse_fault(entry: Any, names: tuple[str, ...], path: str) -> Fault:
             raise InputError(f"{path}.values.{name}", value, f"unknown; {effect.name} takes {', '.join(bounds)}")
         checked[name] = _number(values, name, f"{path}.values", bounds[name].lower, bounds[name].upper,
                                 bounds[name].unit)
-    return Fault(generator, onset_s, kind, rise, effect.name, checked, tau_s)
+    return Fault(generator, onset_s, kind, rise, effect.name, checked, tau_s, share)
 
 
 class AffineGenerator:
@@ -525,14 +535,38 @@ class PowerSystem:
         """Indices of the faults whose onset is at or before ``t_s``."""
         return tuple(i for i, f in enumerate(self.faults) if f.onset_s <= t_s + 1e-9)
 
-    def inlet_C(self, generator: int, t_s) -> np.ndarray:
+    def inlet_C(self, generator: int, t_s, currents_A=None) -> np.ndarray:
         """Coolant inlet temperature of ``generator`` at times ``t_s`` (°C): mission value plus the
-        rises of the faults that have started."""
+        rises of the faults that have started.
+
+        Parameters
+        ----------
+        generator : int
+            Index of the generator.
+        t_s : float or array_like
+            Times, s since the mission start.
+        currents_A : array_like, optional
+            (n_generators, n) phase currents of every generator at ``t_s``, A RMS: a fault's rise
+            with an ``inlet_load_share`` follows the generator's current against its undisplaced
+            share, the mean over the generators (:func:`genthermal.coolant.inlet_load_factor`).
+            None: every generator carries its equal share (the undisplaced load), so every rise is
+            the fault's stated one.
+        """
         t = np.asarray(t_s, dtype=float)
         inlet = np.full(t.shape, self.mission.T_inlet_C)
+        if currents_A is not None:
+            currents = np.asarray(currents_A, dtype=float)
+            if currents.shape != (self.n_generators,) + t.shape:
+                raise InputError("currents_A", list(currents.shape), f"must have the shape "
+                                 f"{(self.n_generators,) + t.shape}: the phase current of every generator at "
+                                 "each time of t_s")
+            own, share = currents[generator], currents.mean(axis=0)
+        else:
+            own = share = np.ones(t.shape)  # every generator at its share: the factor is exactly 1
         for fault in self.faults:
             if fault.generator == generator:
-                inlet = inlet + inlet_rise(t, fault.onset_s, fault.inlet_rise_C, fault.inlet_rise_tau_s)
+                inlet = inlet + inlet_rise(t, fault.onset_s, fault.inlet_rise_C, fault.inlet_rise_tau_s,
+                                           fault.inlet_load_share, own, share)
         return inlet
 
     # --- models -----------------------------------------------------------------------------
