@@ -12,8 +12,9 @@ writes the whole grid's JSON back before reporting on it.
 
 Prints two markdown tables: one row per scheduler (cases flown to the end, breach-free share,
 longest breach, median and max detection delay, false alarms), then the figures of the optimal
-scheduler against the best baseline (heuristic or engineer, whichever rests less in that case)
-and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
+scheduler against the best baseline (heuristic or engineer, whichever rests less in that case;
+and, at the manager's price of rest min + 1000 min per A·h not served, whichever costs less),
+the rest ratio over the cases where no scheduler sheds load, and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
 best baseline), each with what the flight reports about it. Draws, per case and scheduler, the
 time above θmax and the added rest of the optimal scheduler over the best baseline's.
 """
@@ -62,29 +63,54 @@ def scheduler_table(report: dict) -> str:
     return "\n".join(lines)
 
 
-def rest_lines(report: dict) -> list[str]:
-    """The optimal scheduler's added rest against the best baseline's."""
+def _ratio_text(ratio) -> str:
+    return "–" if ratio is None else f"{ratio:.2f}"
+
+
+def comparison(report: dict) -> dict | None:
+    """The report's ``rest_vs_best_baseline``; recomputed from its cases when the JSON predates the
+    comparison at the manager's price (:mod:`genthermal.schedule.baseline_comparison`)."""
     rest = report.get("rest_vs_best_baseline")
+    if rest and "mean_cost_ratio" not in rest:
+        from genthermal.schedule.baseline_comparison import rest_versus_best_baseline
+
+        rest = rest_versus_best_baseline(report["cases"])
+    return rest
+
+
+def rest_lines(report: dict) -> list[str]:
+    """The optimal scheduler's added rest against the best baseline's, over all faulty cases and
+    over those where nobody sheds, and its cost at the manager's price against the best baseline's."""
+    rest = comparison(report)
     if not rest:
         return ["(the sweep did not fly heuristic, engineer and optimal)"]
     resting = [c for c in rest["per_case"] if c["best_baseline_rest_s"] > 0 or c["optimal_rest_s"] > 0]
-    ratio = rest["mean_ratio"]
+    calm = rest["without_shedding"]
     return [f"Faulty cases flown to the end by all three: {len(rest['per_case'])}; with added rest by any: "
             f"{len(resting)}. Added rest over those cases: optimal {rest['optimal_total_rest_s'] / 60:.1f} min, "
             f"best baseline {rest['best_baseline_total_rest_s'] / 60:.1f} min (ratio "
-            f"{'–' if ratio is None else f'{ratio:.2f}'}; target ≤ 0.8). Cases where the optimal scheduler rests "
+            f"{_ratio_text(rest['mean_ratio'])}; target ≤ 0.8). Cases where the optimal scheduler rests "
             f"more than the best baseline: {len(rest['cases_optimal_rests_more'])} "
-            f"({', '.join(rest['cases_optimal_rests_more']) or 'none'})."]
+            f"({', '.join(rest['cases_optimal_rests_more']) or 'none'}).",
+            f"Over the {calm['cases']} cases where no scheduler sheds load: optimal "
+            f"{calm['optimal_total_rest_s'] / 60:.1f} min, best baseline {calm['best_baseline_total_rest_s'] / 60:.1f} "
+            f"min (ratio {_ratio_text(calm['mean_ratio'])}).",
+            f"At the manager's price (rest min + 1000 min per A·h not served), over all of them: optimal "
+            f"{rest['optimal_total_cost_min']:.1f} min, best baseline by that cost "
+            f"{rest['best_baseline_total_cost_min']:.1f} min (ratio {_ratio_text(rest['mean_cost_ratio'])}). Cases "
+            f"where the optimal scheduler costs more: {len(rest['cases_optimal_costs_more'])} "
+            f"({', '.join(rest['cases_optimal_costs_more']) or 'none'})."]
 
 
 def rest_table(report: dict) -> str:
     """One row per faulty case where anyone rests or leaves load unserved: the optimal
     scheduler's rest and load not served, the best baseline's and the hindsight plan's."""
-    rest = report.get("rest_vs_best_baseline") or {}
+    rest = comparison(report) or {}
     rows = [c for c in rest.get("per_case", []) if c["optimal_rest_s"] > 0 or c["best_baseline_rest_s"] > 0
             or c.get("optimal_not_served_Ah") or c.get("best_baseline_not_served_Ah")]
     lines = ["| case | optimal rest, min | best baseline rest, min | hindsight rest, min "
-             "| not served optimal / baseline / hindsight, A·h |", "|---|---|---|---|---|"]
+             "| not served optimal / baseline / hindsight, A·h | cost optimal / best baseline by cost, min "
+             "| cost ratio |", "|---|---|---|---|---|---|---|"]
 
     def amount(value, digits=2):
         return "–" if value is None else f"{value:.{digits}f}"
@@ -93,7 +119,9 @@ def rest_table(report: dict) -> str:
         lines.append(f"| {c['case']} | {c['optimal_rest_s'] / 60:.1f} | {c['best_baseline_rest_s'] / 60:.1f} "
                      f"({c['best_baseline']}) | {'–' if hindsight is None else f'{hindsight / 60:.1f}'} | "
                      f"{amount(c.get('optimal_not_served_Ah'))} / {amount(c.get('best_baseline_not_served_Ah'))} / "
-                     f"{amount(c.get('hindsight_not_served_Ah'))} |")
+                     f"{amount(c.get('hindsight_not_served_Ah'))} | {c['optimal_cost_min']:.1f} / "
+                     f"{c['best_baseline_cost_min']:.1f} ({c['best_baseline_by_cost']}) | "
+                     f"{_ratio_text(c['cost_vs_best_baseline'])} |")
     return "\n".join(lines)
 
 

@@ -149,7 +149,7 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     """The chapter-7 scenarios plan to θmax itself (margin 0): a receiver then takes load up to θmax,
     where its predicted peak lands a few 1e-14 K above it (measured in the large-blockage flight:
     110.00000000000003 °C). That is not "too hot even carrying nothing": it stays on."""
-    from genthermal.schedule import replanning
+    from genthermal.schedule import replanning, shed
     from genthermal.schedule.plan import PlanResult
 
     system = _system(tmp_path, HOT_AT_REST)
@@ -159,10 +159,10 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     problem = PlanningProblem(segments, generators, x0, np.array([100.0, 20.0]), 20.0, system.rest_current_A,
                               system.current_limit_A, system.limit_C, rise_backoff=0.3, rest_budget_s=600.0)
 
-    def receiver_on_the_limit(problem, off, receiver_margin_K):
+    def receiver_on_the_limit(problem, off, receiver_margin_K, rest_s=0.0, rest_segment=0):
         return PlanResult(Schedule.nominal(2, len(problem.segments), off), False, system.limit_C + 3e-14, 1, 0, 0.0,
                           "shed", details={"shedding": [0]})
-    monkeypatch.setattr(replanning, "shed_plan", receiver_on_the_limit)
+    monkeypatch.setattr(shed, "shed_plan", receiver_on_the_limit)
     result = replanning._shed(problem, np.zeros(2, bool), np.zeros(2, bool), system.generator_names,
                                 system.limit_C, "", 0.0)
     assert not result.schedule.switched_off.any()

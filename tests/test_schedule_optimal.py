@@ -132,7 +132,7 @@ def test_the_optimal_scheduler_keeps_the_plan_with_the_least_rest_of_its_candida
 
 
 def test_a_previous_plan_that_sheds_load_is_no_candidate(tiny):
-    from genthermal.schedule.optimal import least_rest, optimal_plan, serves_all_load
+    from genthermal.schedule.optimal import least_cost, optimal_plan, serves_all_load
     from genthermal.schedule.plan import evaluate
 
     shedding = Schedule(np.array([[2.0, 2.0], [0.0, 0.0]]), np.zeros(2))  # gen1's 2 A go to nobody
@@ -144,7 +144,13 @@ def test_a_previous_plan_that_sheds_load_is_no_candidate(tiny):
     quick = evaluate(tiny, Schedule(plan.displaced_A, plan.rest_before_s + [60.0, 59.5]), "half a second less", 0.0)
     quicker = evaluate(tiny, Schedule(plan.displaced_A, plan.rest_before_s + [60.0, 0.0]), "a minute less", 0.0)
     assert cool.feasible and quick.feasible and quicker.feasible
-    assert least_rest([cool, quick]) is cool  # less than MIN_REST_S less is no saving
-    assert least_rest([cool, None, quicker]) is quicker
+    segments = tiny.segments
+    assert least_cost([cool, quick], segments) is cool  # less than MIN_REST_S less is no saving
+    assert least_cost([cool, None, quicker], segments) is quicker
+    # two minutes less rest bought with 0.1 A of gen1's load not served costs more at the manager's price
+    sheds = evaluate(tiny, Schedule(plan.displaced_A + np.array([[0.1, 0.1], [0.0, 0.0]]), plan.rest_before_s),
+                     "sheds 0.1 A", 0.0)
+    assert sheds.feasible and sheds.schedule.added_rest_s < cool.schedule.added_rest_s - 100.0
+    assert least_cost([cool, sheds], segments) is cool
     with pytest.raises(ValueError, match="feasible"):
-        least_rest([None])
+        least_cost([None], segments)

@@ -43,7 +43,10 @@ def test_summary_keys_and_the_best_baseline_ratio():
     assert rest["per_case"][0] == {"case": "a", "optimal_rest_s": 150.0, "best_baseline": "engineer",
                                    "best_baseline_rest_s": 300.0, "ratio": pytest.approx(0.5),  # not the thesis heuristic
                                    "optimal_not_served_Ah": 0.0, "best_baseline_not_served_Ah": 0.0,
-                                   "hindsight_rest_s": None, "hindsight_not_served_Ah": None}
+                                   "hindsight_rest_s": None, "hindsight_not_served_Ah": None,
+                                   "optimal_cost_min": 2.5, "best_baseline_by_cost": "engineer",
+                                   "best_baseline_cost_min": 5.0, "cost_vs_best_baseline": pytest.approx(0.5),
+                                   "sheds": False}
     assert rest["per_case"][1]["ratio"] is None and rest["cases_optimal_rests_more"] == ["c"]
     assert rest["mean_ratio"] == pytest.approx(270 / 300)
     assert summary["detect_delay_s"]["median"] == 450.0 and summary["detect_delay_s"]["max"] == 600.0
@@ -70,6 +73,37 @@ def test_rest_is_the_time_rested_and_one_step_more_is_more(monkeypatch):
     assert (x["best_baseline_not_served_Ah"], x["hindsight_rest_s"], x["hindsight_not_served_Ah"]) == (0.5, 30.0, 0.1)
     assert y["optimal_rest_s"] == y["best_baseline_rest_s"] == 0.0  # 14 s of rounding, no re-plan: no rest
     assert rest["cases_optimal_rests_more"] == ["x"]
+
+
+def test_cost_at_the_managers_price_when_one_scheduler_sheds_and_another_rests():
+    """Case s: the heuristic rests 65 min and leaves 0.69 A·h unserved, the engineer rests 100 min
+    and leaves 0.65 A·h, the optimal scheduler as the engineer: by rest the heuristic is the best
+    baseline (ratio 100/65), by the price (rest min + 1000 min per A·h) the engineer (755 against
+    750 min: the 35 more minutes save 0.04 A·h). Case q: nobody sheds; only there the rest ratio
+    without shedding counts."""
+    def flown(rested_min, not_served_Ah):
+        return {**run(0, 60.0 * rested_min), "rested_s": 60.0 * rested_min, "replans": 5,
+                "shed": {"not_served_Ah": {"gen1": not_served_Ah, "gen2": 0.0}}}
+    records = [{"name": "s", "faulty": True, "runs": {"heuristic": flown(65, 0.69), "engineer": flown(100, 0.65),
+                                                      "optimal": flown(100, 0.65)}},
+               {"name": "q", "faulty": True, "runs": {"heuristic": flown(20, 0.0), "engineer": flown(10, 0.0),
+                                                      "optimal": flown(4, 0.0)}}]
+    rest = summarise(records, ("heuristic", "engineer", "optimal"))["rest_vs_best_baseline"]
+    s, q = rest["per_case"]
+    assert (s["best_baseline"], s["ratio"]) == ("heuristic", pytest.approx(100 / 65))
+    assert s["best_baseline_by_cost"] == "engineer" and s["sheds"]
+    assert s["optimal_cost_min"] == pytest.approx(750.0) and s["best_baseline_cost_min"] == pytest.approx(750.0)
+    assert s["cost_vs_best_baseline"] == pytest.approx(1.0)
+    assert rest["cases_optimal_rests_more"] == ["s"] and rest["cases_optimal_costs_more"] == []
+    assert rest["mean_ratio"] == pytest.approx(104 / 75)  # the issue's key: rest only
+    assert rest["without_shedding"] == {"cases": 1, "mean_ratio": pytest.approx(0.4),
+                                        "optimal_total_rest_s": 240.0, "best_baseline_total_rest_s": 600.0}
+    assert rest["mean_cost_ratio"] == pytest.approx(754 / 760)
+    # the optimal flight shedding 0.01 A·h more to rest 5 min less costs more
+    records[0]["runs"]["optimal"] = flown(95, 0.66)
+    rest = summarise(records, ("heuristic", "engineer", "optimal"))["rest_vs_best_baseline"]
+    assert rest["cases_optimal_costs_more"] == ["s"] and rest["cases_optimal_rests_more"] == ["s"]
+    assert rest["per_case"][0]["cost_vs_best_baseline"] == pytest.approx(755 / 750)
 
 
 def test_hindsight_records_join_their_case():
@@ -219,7 +253,9 @@ def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys):
     assert [c["name"] for c in merged["cases"]] == ["case0:a", "case1:b"] and merged["cases"][0]["runs"]["optimal"]["added_rest_s"] == 200
     assert merged["robustness"]["breach_s"]["optimal"] == 0 and merged["rest_vs_best_baseline"]["mean_ratio"] == pytest.approx(200 / 300)
     assert merged["provenance"]["command"] == "whole" and merged["provenance"]["merged"][0]["cases"] == ["case0:a"]
-    assert "| case0:a | 3.3 | 5.0 (engineer) | – |" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "| case0:a | 3.3 | 5.0 (engineer) | – | 0.00 / 0.00 / – | 3.3 / 5.0 (engineer) | 0.67 |" in out
+    assert "Over the 2 cases where no scheduler sheds load: optimal 3.3 min, best baseline 5.0 min (ratio 0.67)" in out
     stranger = tmp_path / "stranger.json"
     stranger.write_text(json.dumps(grid([{**new_a, "name": "case9:z"}])))
     assert report_module.main([str(whole), "--merge", str(stranger), "--png", str(tmp_path / "g.png")]) == 2

@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from .heuristic import SegmentResponse, receiver_room
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, predict, rest_available_s
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,10 +79,10 @@ def _segment_decision(problem: PlanningProblem, k: int, x: np.ndarray, rest_s: f
     return feasible, d, responses
 
 
-def _shortest_rest(problem: PlanningProblem, k: int, x: np.ndarray, step_s: float, shedding):
-    """Shortest rest on the grid of ``step_s`` up to ``problem.max_rest_s`` that makes segment
-    ``k`` feasible: ``(rest_s, displaced, responses, feasible)``; the longest rest if none does."""
-    n_max = int(np.floor(problem.max_rest_s / step_s + 1e-9))
+def _shortest_rest(problem: PlanningProblem, k: int, x: np.ndarray, step_s: float, shedding, available_s: float):
+    """Shortest rest on the grid of ``step_s`` up to ``available_s`` that makes segment ``k``
+    feasible: ``(rest_s, displaced, responses, feasible)``; the longest rest if none does."""
+    n_max = max(int(np.floor(available_s / step_s + 1e-9)), 0)
     decided = {}
 
     def decide(n):
@@ -90,8 +90,8 @@ def _shortest_rest(problem: PlanningProblem, k: int, x: np.ndarray, step_s: floa
             decided[n] = _segment_decision(problem, k, x, n * step_s, shedding)
         return decided[n]
 
-    if decide(0)[0]:
-        return (0.0, *decide(0)[1:], True)
+    if decide(0)[0] or n_max == 0:
+        return (0.0, *decide(0)[1:], decide(0)[0])
     low, high = 0, 1
     while high < n_max and not decide(high)[0]:
         low, high = high, min(2 * high, n_max)
@@ -124,10 +124,11 @@ def engineer_plan(problem: PlanningProblem, settings: EngineerSettings = Enginee
     warnings = []
     shedding = predicted_violators(problem)
     for k in range(n_seg):
-        rest, d, responses, feasible = _shortest_rest(problem, k, x, settings.rest_step_s, shedding)
+        available = rest_available_s(problem, k, float(np.sum(rests[:k])))
+        rest, d, responses, feasible = _shortest_rest(problem, k, x, settings.rest_step_s, shedding, available)
         if not feasible:
             warnings.append(f"segment {k} ({problem.segments[k].label}): no rest up to "
-                            f"{problem.max_rest_s / 60:g} min keeps it within {problem.limit_C:g} °C")
+                            f"{available / 60:g} min keeps it within {problem.limit_C:g} °C")
         displaced[:, k], rests[k] = d, rest
         x = np.array([responses[g].x_end0 + d[g] * responses[g].x_end_d for g in range(n_gen)])
     return evaluate(problem, Schedule(displaced, rests), "engineer", time.perf_counter() - started, warnings)

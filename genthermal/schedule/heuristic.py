@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, predict,
-                   robust_outputs)
+                   rest_available_s, robust_outputs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -172,8 +172,7 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
         # right before the first segment) and what is left of the flight's budget after the earlier
         # segments' rests; a displacement planned after a rest the budget then cuts would load the
         # receivers for a rest they never get
-        available = min(problem.max_rest_s - (problem.rest_taken_s if k == 0 else 0.0),
-                        problem.rest_budget_s - float(np.sum(rests[:k])))
+        available = rest_available_s(problem, k, float(np.sum(rests[:k])))
         rest = 0.0
         while True:
             responses = [SegmentResponse(problem, g, k, x[g], rest) for g in range(n_gen)]

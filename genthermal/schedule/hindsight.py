@@ -12,7 +12,7 @@ plant's inlet of each generator is held at its value after the onset (the sweep'
 steps, ``inlet_rise_tau_s`` 0).
 
 When no schedule serving all load keeps θmax within the rest budget, the plan may leave load
-unserved at :data:`~genthermal.schedule.optimal_nlp.SHED_WEIGHT_MIN_PER_AH` minutes of rest per
+unserved at :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` minutes of rest per
 A·h, the closed loop's own trade of rest for load not served. The result is what the closed loop
 should be compared with: its added rest and load not served.
 

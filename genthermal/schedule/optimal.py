@@ -35,6 +35,7 @@ from .heuristic import heuristic_plan
 from .optimal_nlp import NonlinearSettings, flown_optimal_plan
 from .plan import PlanningProblem, PlanResult, Schedule, evaluate
 from .shed import NOT_SERVED_TOLERANCE_A
+from .price import schedule_cost_min
 
 
 #: Rests shorter than this (s) are interior-point residue and dropped.
@@ -263,8 +264,9 @@ def optimal_plan(problem: PlanningProblem, settings: OptimalSettings = OptimalSe
     Returns
     -------
     PlanResult
-        The feasible plan with the least rest of IPOPT's schedule, ``initial``, the heuristic's
-        and the engineer's heuristic's, all judged on ``problem`` (:func:`least_rest`; ``method``
+        The feasible plan that costs least (:func:`least_cost`: rest, and load not served at the
+        manager's price) of IPOPT's schedule, ``initial``, the heuristic's
+        and the engineer's heuristic's, all judged on ``problem`` (``method``
         ``optimal``, ``details["chosen_from"]`` naming the plan when it is not IPOPT's; when IPOPT
         failed, ``optimal->`` that plan's origin and a warning). When none of the candidates is
         feasible: the heuristic's plan, ``method`` ``optimal->heuristic``, with a warning. With
@@ -287,7 +289,7 @@ def optimal_plan(problem: PlanningProblem, settings: OptimalSettings = OptimalSe
     transcription = _Transcription(problem, settings, minimax=False)
     schedule, success, status = transcription.solve(transcription.initial_guess(initial or heuristic.schedule))
     result = evaluate(problem, schedule, "optimal", time.perf_counter() - started)
-    best = least_rest([result if success and result.feasible else None] + guesses)
+    best = least_cost([result if success and result.feasible else None] + guesses, problem.segments)
     best.solve_s = time.perf_counter() - started
     if best is not result:  # IPOPT failed, or its local optimum rests more than another plan on this model
         if not success:
@@ -306,26 +308,34 @@ def serves_all_load(problem: PlanningProblem, schedule: Schedule | None) -> bool
                                                               <= NOT_SERVED_TOLERANCE_A))
 
 
-def least_rest(candidates) -> PlanResult:
-    """The feasible plan of ``candidates`` (PlanResult or None, in order of preference) with the
-    least added rest; a later one replaces an earlier one only when it rests at least
-    :data:`MIN_REST_S` less (IPOPT's interior-point residue is no saving).
+def least_cost(candidates, segments) -> PlanResult:
+    """The feasible plan of ``candidates`` (PlanResult or None, in order of preference) that costs
+    the manager least over ``segments``: added rest (min) plus
+    :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` per A·h not served
+    (:func:`~genthermal.schedule.price.schedule_cost_min`); a later one replaces an earlier one only
+    when it costs at least :data:`MIN_REST_S` of rest less (IPOPT's interior-point residue is no
+    saving).
 
-    A safeguard of the local optimiser: IPOPT's optimum of the non-convex transcription (the free
-    rest lengths enter the exponential decay) depends on its initial guess, so a baseline's plan
-    judged on the same problem (:func:`~genthermal.schedule.plan.evaluate`) may rest less. Measured
-    on the robustness grid's case 28, where the optimal flight rests one 10-s step more than the
-    engineer's: at each of its six re-plans IPOPT's plan rested less (0-443 s) than the engineer's
-    (130-1450 s); the difference is the closed loop's, not one plan's.
+    The optimal scheduler's rule against its baselines: the engineer's heuristic's plan and the
+    heuristic's, judged on the same problem and belief, are candidates, so the plan flown never
+    costs more than theirs, that is, never rests more than the engineer's would unless it leaves
+    less load unserved (the affine scheduler's candidates all serve the whole load, so there it
+    never rests more). A safeguard of the local optimiser too: IPOPT's optimum of the non-convex
+    transcription (the free rest lengths enter the exponential decay) depends on its initial guess,
+    so a baseline's plan judged on the same problem (:func:`~genthermal.schedule.plan.evaluate`) may
+    rest less. Measured on the robustness grid's case 28, where the optimal flight rests one 10-s
+    step more than the engineer's: at each of its six re-plans IPOPT's plan rested less (0-443 s)
+    than the engineer's (130-1450 s); the difference is the closed loop's, not one plan's.
     """
     feasible = [c for c in candidates if c is not None and c.feasible]
     if not feasible:
-        raise ValueError("least_rest needs at least one feasible plan")
-    best = feasible[0]
-    for candidate in feasible[1:]:
-        if candidate.schedule.added_rest_s < best.schedule.added_rest_s - MIN_REST_S:
-            best = candidate
-    return best
+        raise ValueError("least_cost needs at least one feasible plan")
+    costs = [schedule_cost_min(segments, c.schedule) for c in feasible]
+    best = 0
+    for i in range(1, len(feasible)):
+        if costs[i] < costs[best] - MIN_REST_S / 60.0:
+            best = i
+    return feasible[best]
 
 
 def lowest_reachable_peak(problem: PlanningProblem, settings: OptimalSettings = OptimalSettings()) -> PlanResult:

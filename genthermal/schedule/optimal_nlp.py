@@ -32,7 +32,7 @@ of it, if that prediction exceeds θmax.
 
 Two variants share the transcription: the min-max of the backed-off temperature (the lowest
 reachable peak), and **shedding**, where :math:`\sum_g d_{g,k} \ge 0` and the load not served
-costs :data:`SHED_WEIGHT_MIN_PER_AH` minutes of rest per A·h, for when no rest within the budget
+costs :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` minutes of rest per A·h, for when no rest within the budget
 and no displacement keeps θmax.
 """
 
@@ -48,6 +48,7 @@ from ..discretise import ModalDecay, check_step_accuracy, phi_matrices, step_exp
 from ..errors import InputError
 from .heuristic import heuristic_plan
 from .plan import PlanningProblem, PlanResult, Schedule, predict
+from .price import SHED_PRICE_MIN_PER_AH, schedule_cost_min
 
 #: Rests shorter than this (s) are interior-point residue and dropped.
 MIN_REST_S = 1.0
@@ -175,10 +176,6 @@ class _RestModel:
         return x_ss + ca.DM(self.decay.V) @ (ca.exp(rates) * (ca.DM(self.decay.V_inv) @ (x - x_ss)))
 
 
-#: Rest (min) that one A·h of phase current not served costs when the transcription may shed load:
-#: choice of this project, far above any rest the budget allows (a 4-h mission's budget is 60 min),
-#: so load is shed only where rest and displacement cannot keep θmax.
-SHED_WEIGHT_MIN_PER_AH = 1000.0
 #: The NLP's horizon is padded to a multiple of this many segments (empty segments at the end), so
 #: that one solver serves every re-plan of a flight: the mission shrinks by a segment per cycle.
 HORIZON_BLOCK = 16
@@ -203,7 +200,7 @@ class FlownTranscription:
         Minimise the highest backed-off temperature instead (the lowest reachable peak).
     shed : bool
         Let the generators carry less than the demand in total (:math:`\sum_g d_{g,k} \ge 0`, the
-        difference not served) at :data:`SHED_WEIGHT_MIN_PER_AH` per A·h.
+        difference not served) at :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` per A·h.
     """
 
     def __init__(self, problem: PlanningProblem, settings: NonlinearSettings, minimax: bool = False,
@@ -334,7 +331,7 @@ class FlownTranscription:
         penalty = settings.displacement_weight * ca.sum2(ca.sum1(D ** 2) * (durations / 3600.0).T)
         objective = peak + 1e-3 * ca.sum1(R) if self.minimax else ca.sum1(R) + penalty / 60.0
         if self.shed:  # A·h not served
-            objective = objective + SHED_WEIGHT_MIN_PER_AH * ca.mtimes(ca.sum1(D), durations / 3600.0)
+            objective = objective + SHED_PRICE_MIN_PER_AH * ca.mtimes(ca.sum1(D), durations / 3600.0)
         options = {"print_time": False, "expand": settings.expand,
                    "ipopt": {"print_level": 0, "sb": "yes", "max_iter": settings.max_iter, "tol": 1e-6,
                              "acceptable_tol": 1e-4, "mu_init": settings.mu_init}}
@@ -459,10 +456,9 @@ def _guess(problem: PlanningProblem, settings: NonlinearSettings, initial: Sched
 
 
 def _cost_min(result: PlanResult, segments) -> float:
-    """Rest (min) plus :data:`SHED_WEIGHT_MIN_PER_AH` per A·h not served."""
-    durations = np.array([s.duration_s for s in segments])
-    not_served_Ah = float(np.sum(np.clip(result.schedule.displaced_A.sum(axis=0), 0.0, None) * durations) / 3600.0)
-    return result.schedule.added_rest_s / 60.0 + SHED_WEIGHT_MIN_PER_AH * not_served_Ah
+    """The manager's cost of ``result``'s schedule: rest (min) plus
+    :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` per A·h not served."""
+    return schedule_cost_min(segments, result.schedule)
 
 
 def _better(candidate: PlanResult, incumbent: PlanResult | None, minimax: bool, segments=()) -> bool:

@@ -29,6 +29,10 @@ from ..mission import DEFAULT_GENERATOR, DEFAULT_RATED_CURRENT_A, Mission
 
 #: Tolerance on the limit when checking a prediction, K.
 LIMIT_TOLERANCE_K = 1e-6
+#: A plan is feasible when its predicted peak is within this of the planning limit, K
+#: (:func:`evaluate`; the re-plan within the lowest reachable peak,
+#: :func:`~genthermal.schedule.replanning.plan_with`, judges its plans with the same).
+FEASIBLE_TOLERANCE_K = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -354,7 +358,8 @@ class PlanningProblem:
     limit_C : float
         Planning limit (θmax minus the back-off margin), °C.
     max_rest_s : float
-        Longest rest before one segment, s.
+        Longest rest before one segment, s; for the first segment the rest already flown right
+        before it (``rest_taken_s``) counts against it (:func:`rest_available_s`).
     dt_s : float
         Prediction grid, s (the design model step).
     rise_backoff : float
@@ -416,6 +421,16 @@ class PlanningProblem:
     def inputs(self, g: int, current_A) -> np.ndarray:
         """Input vectors of generator ``g`` for phase currents ``current_A``."""
         return self.generators[g].input(current_A, self.inlet_C[g], self.ambient_C)
+
+
+def rest_available_s(problem: PlanningProblem, k: int, earlier_rest_s: float = 0.0) -> float:
+    """Rest segment ``k`` of ``problem`` may still add, s (>= 0): the longest rest before one
+    action, less for the first segment the rest already flown right before it
+    (``rest_taken_s``), and what is left of the flight's rest budget after ``earlier_rest_s`` (s)
+    planned before the earlier segments. The rest already flown is counted once: the budget
+    left (``rest_budget_s``) has it taken off already."""
+    longest = problem.max_rest_s - (problem.rest_taken_s if k == 0 else 0.0)
+    return max(min(longest, problem.rest_budget_s - earlier_rest_s), 0.0)
 
 
 @dataclasses.dataclass
@@ -532,7 +547,7 @@ class PlanResult:
 
 
 def evaluate(problem: PlanningProblem, schedule: Schedule, method: str, solve_s: float,
-             warnings=(), tolerance_K: float = 0.05) -> PlanResult:
+             warnings=(), tolerance_K: float = FEASIBLE_TOLERANCE_K) -> PlanResult:
     """Predict ``schedule`` on the design model and wrap it as a :class:`PlanResult`; feasible when
     the peak is within ``tolerance_K`` of the planning limit."""
     peak, g, k = predict(problem, schedule).peak()

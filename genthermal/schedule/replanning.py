@@ -19,6 +19,24 @@ manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario'
 
 Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
 
+**Rest or shed, at the manager's price.** Every scheduler shares this fallback, and it chooses
+between resting and shedding by one price (:mod:`genthermal.schedule.price`): a plan costs its
+rest in minutes plus :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` (1000) minutes per
+A·h of load not served. It does not rest until the budget is spent:
+
+* when load must be shed (the lowest reachable peak above θmax, or above the planning limit while
+  the manager already sheds), the shed plan is flown after the rest before it that costs least
+  (:func:`~genthermal.schedule.shed.priced_shed_plan`): a rest only where the load it keeps
+  served is worth more than its minutes;
+* when θmax can be kept but the margin cannot (``with shed``, on the design model), the manager
+  compares the schedule within the lowest reachable peak (all load served, usually resting until
+  the budget is spent) with that priced shed plan, which keeps the margin, and flies the cheaper.
+  At 1000 min per A·h, shedding wins only where it leaves less than 1 mA·h unserved per minute
+  of rest it saves (a 60-min rest against 0.06 A·h).
+
+The nonlinear planner prices the same way inside its transcription when it sheds
+(:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``).
+
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`~genthermal.schedule.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
 is left of it, so a flight ends within its mission time plus the budget, after at most
@@ -39,9 +57,11 @@ from .manager_settings import ManagerSettings, planning_margin_K
 from .milp import milp_plan
 from .optimal import lowest_reachable_peak, optimal_plan
 from .optimal_nlp import flown_optimal_plan
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments, split_segments
+from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
+                   rest_available_s, split_segments)
 from .power_system import PowerSystem
-from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, shed_plan
+from .price import PRICE_TOLERANCE_MIN, schedule_cost_min
+from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
 
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
@@ -135,8 +155,27 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
     relaxed = _within_budget(problem, run(within_lowest, lowest.schedule))  # the min-max schedule is feasible there
-    if relaxed.peak_C > lowest.peak_C + 0.1:  # the scheduler does worse than the min-max schedule: fly that
+    # the scheduler's plan is flown when its peak is within lowest peak + 0.1 K by the tolerance every
+    # plan is judged with (evaluate): a strict test put the rest-heavy min-max schedule in place of the optimal
+    # scheduler's plan 0.01 K over it (blockage_large at 250 min: rest 50 s where the engineer's
+    # heuristic, 0.01 K under it, rested 10 s on the same problem)
+    if relaxed.peak_C > lowest.peak_C + 0.1 + FEASIBLE_TOLERANCE_K:  # worse than the min-max schedule: fly that
         relaxed = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(relaxed.warnings))
+    if response_mode == "shed" and problem.flown is None:
+        # the manager's price (genthermal.schedule.price): the margin kept by shedding load after
+        # the rest worth its minutes, when that costs less than the rest the lowest-peak schedule needs
+        nobody = np.zeros(problem.n_generators, dtype=bool)
+        shed = _shed(problem, nobody, nobody, names, limit_C, where, settings.margin_K, within_margin=True)
+        relaxed_cost = schedule_cost_min(problem.segments, relaxed.schedule)
+        shed_cost = shed.details["cost_min"] if shed.peak_C <= limit_C + LIMIT_TOLERANCE_K else np.inf
+        if shed_cost < relaxed_cost - PRICE_TOLERANCE_MIN:
+            shed.solve_s += result.solve_s + lowest.solve_s + relaxed.solve_s
+            shed.details.update(found, lowest_peak_schedule_cost_min=relaxed_cost)
+            shed.warnings[-1] += (f"; cheaper at the manager's price than the lowest-peak schedule's "
+                                  f"{relaxed.schedule.added_rest_s / 60:.1f}-min rest")
+            return shed
+        relaxed.details.update(cost_min=relaxed_cost, shed_alternative_cost_min=None if np.isinf(shed_cost) else shed_cost)
+        relaxed.solve_s += shed.solve_s
     response = (f"flying the lowest-peak schedule: rest {relaxed.schedule.added_rest_s / 60:.1f} min, move "
                 f"{relaxed.schedule.displaced_Ah(problem.segments):.2f} A·h to the other generators")
     if relaxed.peak_C > limit_C:
@@ -224,24 +263,19 @@ def _within_budget(problem: PlanningProblem, result: PlanResult) -> PlanResult:
 
 
 def first_rest_max_s(problem: PlanningProblem) -> float:
-    """Rest still allowed before the first segment, s."""
-    return max(problem.max_rest_s - problem.rest_taken_s, 0.0)
+    """Rest still allowed before the first segment, s (:func:`~.plan.rest_available_s`)."""
+    return rest_available_s(problem, 0)
 
 
 def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names, limit_C: float,
           where: str, receiver_margin_K: float, within_margin: bool = False) -> PlanResult:
     """Shed load with ``off`` switched off (``already`` were off before) and, while the plan still
-    breaches θmax on a generator still on, switch that one off too; the
-    :func:`~.shed.shed_plan` result (receivers within ``receiver_margin_K`` more), never
-    ``feasible``. ``within_margin``: θmax can be kept but the planning limit cannot (the messages
+    breaches θmax on a generator still on, switch that one off too, after the rest the manager's
+    price chooses; the :func:`~.shed.priced_shed_plan` result (receivers within
+    ``receiver_margin_K`` more), never ``feasible``. ``within_margin``: θmax can be kept but the planning limit cannot (the messages
     say so)."""
-    off = off.copy()
-    result = shed_plan(problem, off, receiver_margin_K)
-    # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
-    # θmax, and a strict comparison switched the healthy receiver off for a 3e-14 K excess
-    while result.peak_C > limit_C + LIMIT_TOLERANCE_K and not off[result.peak_generator]:
-        off[result.peak_generator] = True
-        result = shed_plan(problem, off, receiver_margin_K)
+    result = priced_shed_plan(problem, off, limit_C, receiver_margin_K)
+    off = result.schedule.switched_off
     newly = [names[g] for g in np.flatnonzero(off & ~already)]
     shedding = [names[g] for g in result.details["shedding"]]
     if where:
@@ -249,6 +283,9 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
         response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no "
                     f"displacement keeps it within {bound}; each generator carries at most what keeps "
                     "it within the planning limit, the others take what their limits allow, the rest is not served"
+                    + (f"; rest {result.schedule.added_rest_s / 60:.1f} min first, at the manager's price "
+                       f"({result.details['cost_min']:.1f} min with the load not served)"
+                       if result.schedule.added_rest_s > 0 else "")
                     + (f"; switch off {', '.join(newly)} (too hot even carrying nothing)" if newly else ""))
         headline = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C"
                     if within_margin else f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C")
@@ -281,11 +318,16 @@ def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x
     ambient = float(np.median(inputs_C[generator.ambient_input][:, 0])) if generator.ambient_input in inputs_C \
         else system.mission.T_ambient_C
     budget = max(float(rest_budget_s), 0.0)
+    # the longest rest before one action, the rest under way included: the budget left has that
+    # rest taken off already, so bounding by the budget alone and then subtracting the rest under
+    # way counted it twice (blockage_large, engineer: 30 min rested before landing with 30 of the
+    # 60-min budget left, no more rest allowed; the manager shed gen1's load instead)
+    longest_rest = min(settings.max_rest_s, budget + float(rest_taken_s))
     limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
         (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
                            ambient, system.rest_current_A, system.current_limit_A,
-                           limit, min(settings.max_rest_s, budget), settings.dt_s,
+                           limit, longest_rest, settings.dt_s,
                            rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown,
                            None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 

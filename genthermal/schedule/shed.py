@@ -57,7 +57,8 @@ import numpy as np
 
 from .engineer import predicted_violators
 from .heuristic import SegmentResponse, future_room, receiver_room
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, evaluate, rest_available_s
+from .price import PRICE_TOLERANCE_MIN, not_served_per_segment_Ah, schedule_cost_min
 
 #: What the load manager does when even the lowest reachable peak is above θmax
 #: (``ManagerSettings.when_infeasible``, scenario ``generators.when_infeasible``): ``shed``, shed
@@ -103,7 +104,8 @@ def unexplained_rise(innovation_K, innovation_std_K, sigmas: float = UNEXPLAINED
     return np.where(np.isfinite(excess), np.clip(excess, 0.0, None), 0.0)
 
 
-def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float = 0.0, precool: bool = True) -> PlanResult:
+def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float = 0.0, precool: bool = True,
+              rest_s: float = 0.0, rest_segment: int = 0) -> PlanResult:
     """Plan the generators still on when ``switched_off`` ones carry nothing (module docstring).
 
     Parameters
@@ -120,16 +122,25 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
         others, besides what they must shed, as much of their load as the others can take, and
         take none (module docstring); False: each sheds only the least that keeps it within the
         limit in each segment.
+    rest_s : float
+        Rest before segment ``rest_segment``, s (>= 0; :func:`priced_shed_plan` chooses both):
+        the generators cool at the rest current first and then shed what they still must.
+    rest_segment : int
+        Index of the segment the rest comes before (default the first).
 
     Returns
     -------
     PlanResult
-        ``method`` ``shed``; no rests; ``feasible`` when every generator still on stays within
+        ``method`` ``shed``; rest ``rest_s`` before segment ``rest_segment``, none elsewhere; ``feasible`` when every generator still on stays within
         the planning limit (the ones switched off cool at 0 A); ``details["shedding"]``: indices
         of the generators switched off or shedding load of their own.
     """
     started = time.perf_counter()
     off = np.array(switched_off, dtype=bool)
+    if not (np.isfinite(rest_s) and rest_s >= 0):
+        raise ValueError(f"rest_s = {rest_s!r}: must be a rest in s >= 0")
+    if not 0 <= rest_segment < max(len(problem.segments), 1):
+        raise ValueError(f"rest_segment = {rest_segment!r}: must index one of the {len(problem.segments)} segments")
     if off.shape != (problem.n_generators,):
         raise ValueError(f"switched_off has shape {off.shape}; expected ({problem.n_generators},)")
     on = [g for g in range(problem.n_generators) if not off[g]]
@@ -141,7 +152,7 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
     precooling = violators if len(violators) < len(on) else set()  # someone must be left to take the load
     for k, segment in enumerate(problem.segments):
         low, high = problem.displacement_bounds(k)
-        responses = {g: SegmentResponse(problem, g, k, x[g], 0.0) for g in on}
+        responses = {g: SegmentResponse(problem, g, k, x[g], rest_s if k == rest_segment else 0.0) for g in on}
         if k == 0 and problem.unexplained_rise_K is not None:
             for g in on:
                 _add_next_cycle_rise(responses[g], problem, problem.unexplained_rise_K[g])
@@ -163,9 +174,94 @@ def shed_plan(problem: PlanningProblem, switched_off, receiver_margin_K: float =
             displaced[g, k] = must_shed[g] + given - received
         x = np.array([responses[g].x_end0 + displaced[g, k] * responses[g].x_end_d if g in responses else x[g]
                       for g in range(problem.n_generators)])
-    schedule = Schedule(displaced, np.zeros(n_seg), off)
+    rests = np.zeros(n_seg)
+    rests[rest_segment] = rest_s
+    schedule = Schedule(displaced, rests, off)
     result = evaluate(problem, schedule, "shed", time.perf_counter() - started)
     result.details["shedding"] = sorted(set(np.flatnonzero(off)) | shedding)
+    return result
+
+
+def shed_switching_off(problem: PlanningProblem, switched_off, limit_C: float, receiver_margin_K: float = 0.0,
+                       rest_s: float = 0.0, rest_segment: int = 0) -> PlanResult:
+    """:func:`shed_plan` with ``switched_off`` generators off and, while the plan still breaches
+    ``limit_C`` (θmax, °C) on a generator still on, that one switched off too; ``schedule.switched_off``
+    says which are off in the end."""
+    off = np.array(switched_off, dtype=bool)
+    result = shed_plan(problem, off, receiver_margin_K, rest_s=rest_s, rest_segment=rest_segment)
+    # a receiver filled to the planning limit sits on it to rounding: with no margin that limit is
+    # θmax, and a strict comparison switched the healthy receiver off for a 3e-14 K excess
+    while result.peak_C > limit_C + LIMIT_TOLERANCE_K and not off[result.peak_generator]:
+        off[result.peak_generator] = True
+        result = shed_plan(problem, off, receiver_margin_K, rest_s=rest_s, rest_segment=rest_segment)
+    return result
+
+
+def shed_rest_candidates_s(available_s: float, step_s: float) -> np.ndarray:
+    """Rests before a shed plan that :func:`priced_shed_plan` prices, s: none, ``step_s`` doubling
+    (1, 2, 4, ... steps) below ``available_s``, and ``available_s`` itself (the longest rest the
+    budget allows)."""
+    if not (np.isfinite(step_s) and step_s > 0):
+        raise ValueError(f"step_s = {step_s!r}: must be a rest step in s > 0")
+    available = max(float(available_s), 0.0)
+    rests = [0.0]
+    rest = step_s
+    while rest < available - 1e-6:
+        rests.append(rest)
+        rest *= 2.0
+    if available > 1e-6:
+        rests.append(available)
+    return np.array(rests)
+
+
+def priced_shed_plan(problem: PlanningProblem, switched_off, limit_C: float, receiver_margin_K: float = 0.0,
+                     rest_step_s: float | None = None) -> PlanResult:
+    """The shed plan (:func:`shed_switching_off`) after the rest that costs the manager least: rest
+    (min) plus :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` per A·h not served
+    (:func:`~genthermal.schedule.price.schedule_cost_min`).
+
+    Priced are the rests of :func:`shed_rest_candidates_s` within what the flight may still rest
+    (:func:`~genthermal.schedule.plan.rest_available_s`) before the first segment and before the
+    first segment where the plan without rest leaves load unserved: a rest right before the
+    shedding cools the generator where it must shed, where one now has decayed by then. A rest is
+    flown only when the load it saves from going unserved is worth more than its minutes; of two
+    plans costing the same the one with less rest is kept. The closed loop re-plans every cycle
+    while it sheds, so a rest planned before a later segment is priced again as it comes.
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+    switched_off : array-like of bool
+        (n_generators,) generators already off.
+    limit_C : float
+        θmax, °C: a generator still above it in the plan is switched off.
+    receiver_margin_K : float
+        As for :func:`shed_plan`, K.
+    rest_step_s : float, optional
+        Shortest rest priced, s; default the management cycle (``problem.window_s``).
+
+    Returns
+    -------
+    PlanResult
+        The cheapest plan, ``details["cost_min"]`` its cost and ``details["priced_rests"]`` the
+        plans compared: segment index, rest (s) and cost (min).
+    """
+    step = problem.window_s if rest_step_s is None else rest_step_s
+    unrested = shed_switching_off(problem, switched_off, limit_C, receiver_margin_K)
+    short = np.flatnonzero(not_served_per_segment_Ah(problem.segments, unrested.schedule) > 0)
+    segments = sorted({0} | ({int(short[0])} if short.size else set()))
+    best = (schedule_cost_min(problem.segments, unrested.schedule), unrested)
+    priced = [(0, 0.0, best[0])]
+    for k in segments:
+        for rest in shed_rest_candidates_s(rest_available_s(problem, k), step)[1:]:
+            result = shed_switching_off(problem, switched_off, limit_C, receiver_margin_K, rest_s=float(rest),
+                                        rest_segment=k)
+            cost = schedule_cost_min(problem.segments, result.schedule)
+            priced.append((k, float(rest), cost))
+            if cost < best[0] - PRICE_TOLERANCE_MIN:
+                best = (cost, result)
+    cost, result = best
+    result.details.update(cost_min=cost, priced_rests=priced)
     return result
 
 

@@ -36,8 +36,13 @@ Keys of :func:`summarise` (benchmark JSON):
                                      scheduler rests more than the best baseline (any more: rests are
                                      whole steps). Rest is ``rested_s``, the time flown in the minimum
                                      power mode (records without it: ``added_rest_s`` below
-                                     :data:`REST_RESOLUTION_S` taken as none, 0 for a flight that never
-                                     re-planned)
+                                     :data:`~.baseline_comparison.REST_RESOLUTION_S` taken as none, 0 for a
+                                     flight that never re-planned). Beside it, at the manager's price
+                                     (rest min + 1000 min per A·h not served): per case ``optimal_cost_min``,
+                                     ``best_baseline_by_cost`` and its cost, ``cost_vs_best_baseline``;
+                                     ``mean_cost_ratio``, ``cases_optimal_costs_more``; and the rest ratio
+                                     over the cases where no scheduler sheds, ``without_shedding``
+                                     (:mod:`~genthermal.schedule.baseline_comparison`)
 ``detect_delay_s``                   median and max over the faulty flights detected, how many were
                                      detected, and the faulty flights not detected (case, scheduler)
 ``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
@@ -55,6 +60,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..mission import Mission
+from .baseline_comparison import rest_versus_best_baseline
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss", "healthy")
@@ -63,10 +69,6 @@ FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_los
 #: the manager re-plans and sheds every cycle) take one to two minutes of processor time; ten
 #: times that still marks a flight that does not end.
 DEFAULT_FLIGHT_CPU_LIMIT_S = 900.0
-#: In records without ``rested_s`` (older sweeps), added rests (mission time minus nominal
-#: duration) closer than this to zero are the rounding of the actions' durations to the 10-s step
-#: of the closed loop, not rest, s.
-REST_RESOLUTION_S = 10.0
 
 
 def random_actions(rng: np.random.Generator, hours: float) -> list:
@@ -308,48 +310,6 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
 
 def _ok(run: dict) -> bool:
     return run.get("status", "ok") == "ok"
-
-
-def _rest(run: dict) -> float:
-    """Rest of a flight, s: ``rested_s``; in older records, none for a flight that never re-planned
-    (it flew the nominal schedule) and ``added_rest_s`` with rounding below one step taken as none."""
-    if run.get("rested_s") is not None:
-        return float(run["rested_s"])
-    if run.get("replans") == 0:
-        return 0.0
-    rest = float(run["added_rest_s"])
-    return rest if rest >= REST_RESOLUTION_S else 0.0
-
-
-def _not_served_Ah(run: dict) -> float:
-    """Load a flight left unserved, A·h (all generators)."""
-    return float(sum(((run.get("shed") or {}).get("not_served_Ah") or {}).values()))
-
-
-def rest_versus_best_baseline(records: list) -> dict:
-    """The ``rest_vs_best_baseline`` key (module docstring) over the faulty cases whose optimal,
-    heuristic and engineer flights all finished."""
-    per_case, optimal_total, best_total = [], 0.0, 0.0
-    for r in records:
-        runs = r["runs"]
-        if not r["faulty"] or not all(_ok(runs[s]) for s in ("heuristic", "engineer", "optimal")):
-            continue
-        best = min(("heuristic", "engineer"), key=lambda s: _rest(runs[s]))
-        optimal, baseline = _rest(runs["optimal"]), _rest(runs[best])
-        optimal_total, best_total = optimal_total + optimal, best_total + baseline
-        ratio = optimal / baseline if baseline > 0 else None
-        hindsight = r.get("hindsight") or {}
-        per_case.append({"case": r["name"], "optimal_rest_s": optimal, "best_baseline": best,
-                         "best_baseline_rest_s": baseline, "ratio": ratio,
-                         "optimal_not_served_Ah": _not_served_Ah(runs["optimal"]),
-                         "best_baseline_not_served_Ah": _not_served_Ah(runs[best]),
-                         "hindsight_rest_s": hindsight.get("rest_s"),
-                         "hindsight_not_served_Ah": hindsight.get("not_served_Ah")})
-    return {"per_case": per_case,
-            "mean_ratio": (optimal_total / best_total) if best_total > 0 else None,
-            "optimal_total_rest_s": optimal_total, "best_baseline_total_rest_s": best_total,
-            "cases_optimal_rests_more": [c["case"] for c in per_case
-                                         if c["optimal_rest_s"] > c["best_baseline_rest_s"]]}
 
 
 def summarise(records: list, schedulers) -> dict:
