@@ -12,7 +12,7 @@ from genthermal.schedule.manager_settings import ManagerSettings
 from genthermal.schedule.replanning import plan_with
 from genthermal.schedule.flown import FlownPlanning, update_steps
 from genthermal.schedule.optimal import OptimalSettings, optimal_plan
-from genthermal.schedule.optimal_nlp import flown_optimal_plan
+from genthermal.schedule.optimal_nlp import FlownTranscription, NonlinearSettings, flown_optimal_plan
 from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, build_timeline, predict, split_segments
 from genthermal.schedule.power_system import AffineGenerator
 
@@ -246,3 +246,25 @@ def test_control_intervals_are_whole_steps_and_keep_the_mission_length():
     assert np.isclose(lengths.sum(), segment.duration_s)
     assert [s.levels[0][1] for s in split] == [5.831] + [4.9] * 10
     assert build_timeline(split, Schedule.nominal(1, len(split)), 1.9, 10.0).n_steps == 324
+
+
+@pytest.mark.parametrize("shed", [False, True])
+def test_padded_horizon_poses_no_more_equalities_than_variables(believed, design_model, shed):
+    """Padding segments fix their displacements and rests; their load-balance rows then have no free
+    variable and must not be posed as equalities (0 = 0). Counted as CasADi counts them (fixed
+    variables and equality rows), the NLP has at most as many equalities as variables; before, a
+    2-segment problem padded to 16 posed 14 redundant rows and CasADi warned it was overconstrained."""
+    models, filters = believed
+    generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
+                  AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
+    segments = [Segment(4, "5 cruise", 300.0, ((0.0, 4.9),)), Segment(7, "7 landing", 300.0, ((0.0, 5.0),))]
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0, CONVERGED * filters[0].P0))
+    transcription = FlownTranscription(problem, NonlinearSettings(), shed=shed)
+    assert transcription.N_seg > len(segments)  # the case is padded
+    lbw, ubw, lbg, ubg = transcription._bounds(np.zeros((2, len(filters[0].model.output_names), len(segments))))
+    equalities = int(np.sum(lbw == ubw) + np.sum(lbg == ubg))
+    assert equalities <= lbw.size
+    balance = slice(transcription.n_equalities_expected - transcription.N_seg, transcription.n_equalities_expected)
+    assert np.all(np.isinf(ubg[balance][len(segments):]))  # padding: free rows
+    assert np.all(lbg[balance][:len(segments)] == 0.0)  # real segments: balanced (or shed: >= 0)
