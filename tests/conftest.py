@@ -16,3 +16,12 @@ def plant_model():
 def design_model(plant_model):
     """Linear design model (thesis 5.2) derived from the same network."""
     return linear_design_model(plant_model)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    """Close the figures a test opened: plotting functions return their figure to the caller, and
+    pyplot keeps every one alive until it is closed (more than 20 made matplotlib warn)."""
+    yield
+    import matplotlib.pyplot as plt
+    plt.close("all")
