@@ -1,5 +1,7 @@
 """Shared fixtures: the thesis generator models are built once per test session."""
 
+import sys
+
 import pytest
 
 from genthermal.design import linear_design_model
@@ -23,5 +25,6 @@ def _close_figures():
     """Close the figures a test opened: plotting functions return their figure to the caller, and
     pyplot keeps every one alive until it is closed (more than 20 made matplotlib warn)."""
     yield
-    import matplotlib.pyplot as plt
-    plt.close("all")
+    pyplot = sys.modules.get("matplotlib.pyplot")  # only if the test (or the code it ran) used it
+    if pyplot is not None:
+        pyplot.close("all")
