@@ -375,14 +375,14 @@ class FlownTranscription:
         budget = problem.rest_budget_s / 60.0 if np.isfinite(problem.rest_budget_s) else np.inf
         lbg = np.concatenate([np.zeros(self.n_equalities_expected), np.full(upper.size, -np.inf), [-np.inf]])
         ubg = np.concatenate([np.zeros(self.n_equalities_expected), upper, [budget]])
-        balance = slice(self.n_equalities_expected - N_seg, self.n_equalities_expected)
+        balance = np.arange(self.n_equalities_expected - N_seg, self.n_equalities_expected)
         if self.shed:  # the load balance rows: sum_g d >= 0
             ubg[balance] = np.inf
         # A segment whose displacements are all fixed (padding, or no room to move load) has a load
         # balance row with no free variable (0 = 0): left as an equality it is a redundant, degenerate
         # constraint that IPOPT must carry and that makes CasADi count more equalities than variables.
-        fixed = np.array([low == high for low, high in bounds])
-        lbg[balance][fixed], ubg[balance][fixed] = -np.inf, np.inf
+        fixed = balance[[low == high for low, high in bounds]]
+        lbg[fixed], ubg[fixed] = -np.inf, np.inf
         return lbw, ubw, lbg, ubg
 
     @property
