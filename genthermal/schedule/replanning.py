@@ -60,7 +60,7 @@ from .optimal_nlp import flown_optimal_plan
 from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from .power_system import PowerSystem
-from .price import PRICE_TOLERANCE_MIN, schedule_cost_min
+from .price import PRICE_TOLERANCE_MIN, not_served_Ah, schedule_cost_min
 from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
 
 
@@ -219,9 +219,8 @@ def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, n
     short = not_served > NOT_SERVED_TOLERANCE_A
     shedding = [names[g] for g in range(problem.n_generators)
                 if np.any((result.schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A) & short)]
-    durations = np.array([s.duration_s for s in problem.segments])
-    not_served_Ah = float(np.sum(np.clip(not_served, 0.0, None) * durations) / 3600.0)
-    response = (f"shed load of {', '.join(shedding) or 'nobody'}: {not_served_Ah:.2f} A·h not served, the least "
+    response = (f"shed load of {', '.join(shedding) or 'nobody'}: "
+                f"{not_served_Ah(problem.segments, result.schedule):.2f} A·h not served, the least "
                 f"that keeps every generator within θmax {limit_C:g} °C on the flown model with its back-off, after rest "
                 f"{result.schedule.added_rest_s / 60:.1f} min and displacement")
     result.method, result.feasible = "shed", False
