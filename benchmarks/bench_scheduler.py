@@ -25,7 +25,7 @@ Prints a markdown table, writes the JSON (``scenarios``, ``summary``,
 
 The optimal scheduler's claim is measured against the stronger baseline of each scenario (issue 9:
 the thesis heuristic or the engineer's heuristic, whichever rests less):
-``scenario_rest_vs_best_baseline`` is :func:`genthermal.schedule.sweep.rest_versus_best_baseline`
+``scenario_rest_vs_best_baseline`` is :func:`genthermal.schedule.baseline_comparison.rest_versus_best_baseline`
 over the 30 scenarios (all faulty; rest is the time flown in the minimum power mode, the robustness
 grid's measure) and ``rest_ratio_optimal_over_best_baseline`` its ``mean_ratio`` (total optimal
 rest / total best-baseline rest; None when no baseline rests). ``rest_ratio_optimal_over_heuristic``
@@ -50,7 +50,7 @@ from genthermal.schedule.closed_loop import fly
 from genthermal.schedule.manager_settings import SCHEDULERS, ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sweep import rest_versus_best_baseline
+from genthermal.schedule.baseline_comparison import rest_versus_best_baseline
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
