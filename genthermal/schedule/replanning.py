@@ -19,7 +19,7 @@ manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario'
 
 Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
 
-**Rest or shed, at the manager's price.** Every scheduler shares this fallback, and it chooses
+**Rest or shed, at the manager's price.** Every scheduler has this fallback, and it chooses
 between resting and shedding by one price (:mod:`genthermal.schedule.price`): a plan costs its
 rest in minutes plus :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` (1000) minutes per
 A·h of load not served. It does not rest until the budget is spent:
@@ -35,7 +35,12 @@ A·h of load not served. It does not rest until the budget is spent:
   of rest it saves (a 60-min rest against 0.06 A·h).
 
 The nonlinear planner prices the same way inside its transcription when it sheds
-(:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``).
+(:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``). The optimal scheduler
+planning on the design model does too when load must be shed (``flown_shed``,
+``ManagerSettings.own_shed``): it plans rest, displacement and load not served together on the
+flown model and flies that plan instead of the shared one when it keeps θmax with the filters'
+back-off and costs less at the same price (:mod:`~genthermal.schedule.optimal_shed`); the
+baselines keep the shared plan.
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`~genthermal.schedule.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
