@@ -118,3 +118,25 @@ def test_bad_inputs_name_field_and_value(forced_to_shed):
                           PlanResult(Schedule.nominal(2, 2), False, 0.0, 0, 0, 0.0, "shed"), flown, THETA_MAX_C)
     with pytest.raises(InputError, match="own_shed = 'yes'"):
         ManagerSettings(own_shed="yes")
+
+
+def test_closed_loop_on_a_plant_hot_at_rest_sheds_less_with_the_own_plan(tmp_path):
+    """The plant of tests/test_closed_loop_shed.py whose gen1 is above θmax (85 °C) even at rest:
+    with the shared shed plan the optimal flight rests 15 min and leaves 1.10 A·h unserved (1116 min
+    at the manager's price, as the baselines); with its own plan on the flown model 15 min and
+    0.36 A·h (370 min), and neither generator goes above θmax."""
+    from test_closed_loop_shed import HOT_AT_REST, _system
+
+    from genthermal.schedule.closed_loop import fly
+    from genthermal.schedule.report import flight_summary
+
+    def cost(summary):
+        return summary["rested_s"] / 60.0 + 1000.0 * sum(summary["shed"]["not_served_Ah"].values())
+    shared = flight_summary(fly(_system(tmp_path, HOT_AT_REST), "optimal", ManagerSettings(own_shed=False)))
+    result = fly(_system(tmp_path, HOT_AT_REST), "optimal", ManagerSettings())
+    own = flight_summary(result)
+    assert any(plan.get("shed_plan_flown") == "own" for plan in result.plans)
+    assert cost(own) < 0.5 * cost(shared)
+    assert own["breach_s"] == 0.0 and own["rested_s"] <= shared["rested_s"]
+    limit = result.system.limit_C
+    assert max(own["max_T_winding"].values()) <= limit and max(own["max_T_iron"].values()) <= limit
