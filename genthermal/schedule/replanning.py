@@ -62,7 +62,7 @@ from .manager_settings import ManagerSettings, planning_margin_K
 from .milp import milp_plan
 from .optimal import lowest_reachable_peak, optimal_plan
 from .optimal_nlp import flown_optimal_plan
-from .optimal_shed import cheaper_shed_plan
+from .optimal_shed import cheaper_shed_plan, on_flown_model
 from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from .power_system import PowerSystem
@@ -257,7 +257,7 @@ def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, sha
         shared.details.update(comparison)
         shared.solve_s += comparison["own_shed_solve_s"]
         return shared
-    chosen = _within_budget(problem, chosen)
+    chosen = _within_budget(on_flown_model(problem, flown, limit_C), chosen)  # judged on its own model if cut
     schedule = chosen.schedule
     not_served = schedule.displaced_A.sum(axis=0)
     short = not_served > NOT_SERVED_TOLERANCE_A
