@@ -51,7 +51,11 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
     event = summary["shed"]["events"][0]
     assert event["shedding"] == ["gen1"] and event["time_s"] >= 600.0  # not before the onset
     assert event["lowest_reachable_peak_C"] > system.limit_C and "shed load of gen1" in event["response"]
-    assert summary["shed"]["not_served_Ah"]["gen1"] > 0.5 and summary["shed"]["first_s"] >= event["time_s"]
+    # the shared shed plan (the baselines') leaves 1.10 A·h of gen1's load unserved; the optimal
+    # scheduler's own plan on the flown model 0.36 (tests/test_optimal_own_shed.py)
+    least_not_served_Ah = 0.2 if scheduler == "optimal" else 0.5
+    assert summary["shed"]["not_served_Ah"]["gen1"] > least_not_served_Ah
+    assert summary["shed"]["first_s"] >= event["time_s"]
     assert any("shed load of gen1" in response for response in summary["manager_response"])
     # the healthy generator takes load but never goes over θmax; nothing is above θmax
     assert summary["max_T_winding"]["gen2"] <= system.limit_C and summary["max_T_iron"]["gen2"] <= system.limit_C

@@ -191,6 +191,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     trusted = TrustedHeatFlows(system.n_generators)
     recorder = FlightRecorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
+    own_shed = settings.sheds_on_flown_model(scheduler)  # the optimal scheduler's own shed plan (optimal_shed)
     measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     carried_A = None  # (n_gen, 1) the currents of the last step flown: the inlet read when planning
     while segments:
@@ -219,22 +220,24 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 estimator.use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
                 if detectors is not estimators:
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
-        flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators],
-                              [e.P for e in estimators], settings.confidence_sigmas) if settings.nonlinear else None
+        flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators], [e.P for e in estimators],
+                              settings.confidence_sigmas) if settings.nonlinear or own_shed else None
         trusts = [watch.trusts_heat_flows(g, t) for g in range(system.n_generators)]
         # a sensor the watch does not trust may be what the innovation shows: no rise from it
         rise = np.array([unexplained_rise(e.innovation, e.innovation_std) if trusts[g] else np.zeros(2)
                          for g, e in enumerate(estimators)])
         problem = planning_problem(system, settings, segments, [e.x for e in estimators], t,
                            [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
-                           np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s, flown,
+                           np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s,
+                           flown if settings.nonlinear else None,
                            inputs_watch.for_plan(read_inputs(np.array([t]), carried_A)), rise)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off,
-                               when_infeasible=infeasible_response(system, settings), shedding=shedding)
+                               when_infeasible=infeasible_response(system, settings), shedding=shedding,
+                               flown_shed=flown if own_shed else None)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)

@@ -91,6 +91,13 @@ class ManagerSettings:
         displacement and rest free per management cycle.
     confidence_sigmas : float
         Standard deviations of the predicted temperature kept below θmax by the nonlinear planner.
+    own_shed : bool
+        The optimal scheduler planning on the design model (``planner_model`` ``affine``) with the
+        extended Kalman filter: when it must shed load, it also plans rest, displacement and load
+        not served together on the flown model and flies the cheaper of that and the shared shed
+        plan at the manager's price (:mod:`~genthermal.schedule.optimal_shed`; default True).
+        False: it flies the shared shed plan, as the baselines do. With ``filter`` ``kf`` there is
+        no flown model and the shared plan is flown.
     heuristic, engineer, optimal, milp
         Settings of each scheduler.
     cpu_limit_s : float or None
@@ -119,6 +126,7 @@ class ManagerSettings:
     filter: str = "ekf"
     planner_model: str = "affine"
     confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
+    own_shed: bool = True
     detection: DetectionSettings = DetectionSettings()
     sensor_watch: SensorWatchSettings = SensorWatchSettings()
     input_watch: InputWatchSettings = InputWatchSettings()
@@ -145,11 +153,18 @@ class ManagerSettings:
         if not (np.isfinite(self.confidence_sigmas) and self.confidence_sigmas >= 0):
             raise InputError("confidence_sigmas", self.confidence_sigmas,
                              "must be a number of standard deviations >= 0")
+        if not isinstance(self.own_shed, bool):
+            raise InputError("own_shed", self.own_shed, "must be True or False")
 
     @property
     def nonlinear(self) -> bool:
         """True when planning on the flown (nonlinear) model."""
         return self.planner_model == "nonlinear"
+
+    def sheds_on_flown_model(self, scheduler: str) -> bool:
+        """True when ``scheduler`` plans its own shed plan on the flown model (``own_shed``): the
+        optimal scheduler on the design model with the extended Kalman filter."""
+        return self.own_shed and scheduler == "optimal" and not self.nonlinear and self.filter == "ekf"
 
     def rest_budget_for(self, mission_duration_s: float) -> float:
         """The flight's rest budget, s, for a mission of ``mission_duration_s`` (s)."""

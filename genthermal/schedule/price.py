@@ -12,8 +12,10 @@ nominal charge :math:`I_{g,k}\\tau_k`). The same price is the objective of the n
 when it may shed (:mod:`~genthermal.schedule.optimal_nlp`), of the hindsight plan
 (:mod:`~genthermal.schedule.hindsight`), of the manager's choice between resting and shedding
 when no plan within the rest budget keeps the limit (:func:`~genthermal.schedule.replanning.plan_with`,
-:func:`~genthermal.schedule.shed.priced_shed_plan`), and of the robustness grid's comparison of
-the schedulers (``cost_vs_best_baseline``, :mod:`~genthermal.schedule.sweep`).
+:func:`~genthermal.schedule.shed.priced_shed_plan`), of the optimal scheduler's choice between that
+shed plan and its own on the flown model (:mod:`~genthermal.schedule.optimal_shed`), and of the
+robustness grid's comparison of the schedulers (``cost_vs_best_baseline``,
+:mod:`~genthermal.schedule.sweep`).
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario'
 
 Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
 
-**Rest or shed, at the manager's price.** Every scheduler shares this fallback, and it chooses
+**Rest or shed, at the manager's price.** Every scheduler has this fallback, and it chooses
 between resting and shedding by one price (:mod:`genthermal.schedule.price`): a plan costs its
 rest in minutes plus :data:`~genthermal.schedule.price.SHED_PRICE_MIN_PER_AH` (1000) minutes per
 A·h of load not served. It does not rest until the budget is spent:
@@ -35,7 +35,12 @@ A·h of load not served. It does not rest until the budget is spent:
   of rest it saves (a 60-min rest against 0.06 A·h).
 
 The nonlinear planner prices the same way inside its transcription when it sheds
-(:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``).
+(:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``). The optimal scheduler
+planning on the design model does too when load must be shed (``flown_shed``,
+``ManagerSettings.own_shed``): it plans rest, displacement and load not served together on the
+flown model and flies that plan instead of the shared one when it keeps θmax with the filters'
+back-off and costs less at the same price (:mod:`~genthermal.schedule.optimal_shed`); the
+baselines keep the shared plan.
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`~genthermal.schedule.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
@@ -57,6 +62,7 @@ from .manager_settings import ManagerSettings, planning_margin_K
 from .milp import milp_plan
 from .optimal import lowest_reachable_peak, optimal_plan
 from .optimal_nlp import flown_optimal_plan
+from .optimal_shed import cheaper_shed_plan, on_flown_model
 from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from .power_system import PowerSystem
@@ -66,7 +72,7 @@ from .shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
 
 def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
               previous=None, switched_off=None, when_infeasible: str | None = None,
-              shedding: bool = False) -> PlanResult:
+              shedding: bool = False, flown_shed: FlownPlanning | None = None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
 
     Parameters
@@ -95,6 +101,11 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         schedules flown after the shedding, 0.2-0.6 K into the margin, moved gen2's landing load onto
         the healthy generators, which the plant's 25 % weaker cooling took to 110.5 °C (20 s
         above θmax).
+    flown_shed : FlownPlanning, optional
+        The filters the manager flies, for the optimal scheduler planning on the design model: when
+        it must shed load it also plans its own shed plan on the flown model and flies the cheaper
+        of that and the shared one (:mod:`~genthermal.schedule.optimal_shed`). None (default, and
+        for the baselines): the shared shed plan.
 
     Returns
     -------
@@ -144,8 +155,12 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
                 shed.solve_s += result.solve_s + lowest.solve_s
                 shed.details.update(found)
                 return shed
-        shed = _shed(on_design_model(problem, settings, limit_C), nobody, nobody, names, limit_C, where, settings.margin_K,
+        design = on_design_model(problem, settings, limit_C)
+        shed = _shed(design, nobody, nobody, names, limit_C, where, settings.margin_K,
                      within_margin=lowest.peak_C <= limit_C)
+        if scheduler == "optimal" and flown_shed is not None and problem.flown is None:
+            shed = _own_or_shared_shed(design, settings, shed, flown_shed, names, limit_C, where,
+                                       within_margin=lowest.peak_C <= limit_C, previous=previous)
         shed.solve_s += result.solve_s + lowest.solve_s
         shed.details.update(found)
         return shed
@@ -227,6 +242,43 @@ def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, n
     result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
     result.details.update(response=response, planned_peak_C=result.peak_C, shedding=shedding, switched_off=[])
     return result
+
+
+def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, shared: PlanResult,
+                        flown: FlownPlanning, names, limit_C: float, where: str,
+                        within_margin: bool = False, previous=None) -> PlanResult:
+    """The optimal scheduler's shed plan: its own on the flown model ``flown`` (rest, displacement
+    and load not served planned together, :func:`~genthermal.schedule.optimal_shed.own_shed_plan`)
+    when its prediction with the back-off keeps θmax and it costs less at the manager's price, else
+    the shared ``shared`` (:func:`~genthermal.schedule.optimal_shed.cheaper_shed_plan`); never
+    ``feasible``. ``details`` carry the comparison either way."""
+    chosen, comparison = cheaper_shed_plan(problem, shared, flown, limit_C, settings.optimal.nonlinear, previous)
+    if chosen is shared:
+        shared.details.update(comparison)
+        shared.solve_s += comparison["own_shed_solve_s"]
+        return shared
+    chosen = _within_budget(on_flown_model(problem, flown, limit_C), chosen)  # judged on its own model if cut
+    schedule = chosen.schedule
+    not_served = schedule.displaced_A.sum(axis=0)
+    short = not_served > NOT_SERVED_TOLERANCE_A
+    shedding = [names[g] for g in range(problem.n_generators) if np.any((schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A)
+                                                                        & short)]
+    bound = f"the planning limit {problem.limit_C:.1f} °C" if within_margin else f"θmax {limit_C:g} °C"
+    response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no displacement "
+                f"keeps it within {bound}; the optimal scheduler's own plan on the flown model: rest "
+                f"{schedule.added_rest_s / 60:.1f} min, {not_served_Ah(problem.segments, schedule):.2f} A·h not "
+                f"served ({comparison['own_shed_cost_min']:.1f} min at the manager's price, the shared shed plan "
+                f"{comparison['shared_shed_cost_min']:.1f} min), every generator within θmax {limit_C:g} °C with "
+                f"the filters' back-off (predicted peak {chosen.peak_C:.1f} °C; "
+                f"{comparison['own_shed_design_peak_C']:.1f} °C on the design model)")
+    headline = (f"margin not kept: no schedule stays within the planning limit {problem.limit_C:.1f} °C"
+                if within_margin else f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C")
+    chosen.method, chosen.feasible = "shed", False
+    chosen.solve_s += shared.solve_s
+    chosen.warnings.append(f"{headline}; {where}; {response}")
+    chosen.details.update(comparison, response=response, planned_peak_C=chosen.peak_C, shedding=shedding,
+                          switched_off=[])
+    return chosen
 
 
 def on_design_model(problem: PlanningProblem, settings: ManagerSettings, limit_C: float) -> PlanningProblem:
