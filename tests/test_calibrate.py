@@ -79,3 +79,17 @@ def test_cli_calibrate_writes_a_model_file(rig, tmp_path, capsys):
     document = yaml.safe_load(out.read_text())
     assert document["parameters"]["R0"]["provenance"] == "fitted"
     assert main(["compare", "--model", str(out), str(tmp_path / "rig.csv")]) == 0
+
+
+def test_scaled_bound_round_trip_stays_within_the_physical_bounds():
+    """A linear scaling's bound maps back onto the bound, not an ulp outside it: 0.0135 + 0.075 ·
+    ((0 − 0.0135)/0.075) is −1.7e-18 in floating point, and an effect refuses a negative exponent
+    (a flight crashed on an ``n_flow`` fitted to its bound 0)."""
+    from genthermal.diagnose.trajectory import Scaling
+
+    scaling = Scaling("linear", 0.013524645605433084, 0.075, 0.0, 1.5)
+    low, high = scaling.bounds()
+    assert 0.013524645605433084 + 0.075 * low < 0.0  # the round-off the clip is for
+    assert scaling.value(low) == 0.0
+    assert scaling.value(high) == 1.5
+    assert scaling.value(0.0) == 0.013524645605433084

@@ -285,10 +285,14 @@ class Scaling:
     upper: float
 
     def value(self, z):
-        """Physical value of the decision variable ``z`` (float or casadi expression)."""
-        if self.kind == "log":
-            return self.reference * (ca.exp(z) if isinstance(z, (ca.MX, ca.SX)) else math.exp(z))
-        return self.reference + self.scale * z
+        """Physical value of the decision variable ``z`` (float or casadi expression); a float is
+        kept within [lower, upper]: the round trip of a bound, ``reference + scale·(lower −
+        reference)/scale``, can land an ulp outside it (an ``n_flow`` fitted to its bound 0 came back
+        −4e-19, which the effect refuses)."""
+        if isinstance(z, (ca.MX, ca.SX)):
+            return self.reference * ca.exp(z) if self.kind == "log" else self.reference + self.scale * z
+        value = self.reference * math.exp(z) if self.kind == "log" else self.reference + self.scale * z
+        return min(max(value, self.lower), self.upper)
 
     def decision(self, value: float) -> float:
         """Scaled decision variable of ``value``."""
