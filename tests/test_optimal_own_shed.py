@@ -73,11 +73,13 @@ def test_without_own_shedding_the_optimal_scheduler_flies_the_shared_plan(forced
     for settings, flown_shed in ((ManagerSettings(own_shed=False), None), (ManagerSettings(), None)):
         optimal = plan_with("optimal", problem, settings, NAMES, THETA_MAX_C, flown_shed=flown_shed)
         np.testing.assert_allclose(optimal.schedule.displaced_A, shared.schedule.displaced_A)
-    assert not ManagerSettings(own_shed=False).sheds_on_flown_model("optimal")
-    assert ManagerSettings().sheds_on_flown_model("optimal")
-    assert not ManagerSettings().sheds_on_flown_model("engineer")
-    assert not ManagerSettings(planner_model="nonlinear").sheds_on_flown_model("optimal")  # plans there already
-    assert not ManagerSettings(filter="kf").sheds_on_flown_model("optimal")  # no flown model to plan on
+    assert not ManagerSettings(own_shed=False).sheds_on_flown_model("optimal", "ekf")
+    assert ManagerSettings().sheds_on_flown_model("optimal", "ekf")
+    assert not ManagerSettings().sheds_on_flown_model("engineer", "ekf")
+    assert not ManagerSettings(planner_model="nonlinear").sheds_on_flown_model("optimal", "ekf")  # plans there already
+    # no flown model to plan on with the linear filter, the settings' or a scenario's (generators.filter: kf)
+    assert not ManagerSettings(filter="kf").sheds_on_flown_model("optimal", "kf")
+    assert not ManagerSettings().sheds_on_flown_model("optimal", "kf")
 
 
 def test_shared_plan_is_kept_when_the_own_plan_is_not_cheaper(forced_to_shed):

@@ -191,7 +191,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     trusted = TrustedHeatFlows(system.n_generators)
     recorder = FlightRecorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
-    own_shed = settings.sheds_on_flown_model(scheduler)  # the optimal scheduler's own shed plan (optimal_shed)
+    own_shed = settings.sheds_on_flown_model(scheduler, flight_filter(system, settings))  # optimal_shed
     measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     carried_A = None  # (n_gen, 1) the currents of the last step flown: the inlet read when planning
     while segments:

@@ -161,10 +161,12 @@ class ManagerSettings:
         """True when planning on the flown (nonlinear) model."""
         return self.planner_model == "nonlinear"
 
-    def sheds_on_flown_model(self, scheduler: str) -> bool:
+    def sheds_on_flown_model(self, scheduler: str, filter_flown: str) -> bool:
         """True when ``scheduler`` plans its own shed plan on the flown model (``own_shed``): the
-        optimal scheduler on the design model with the extended Kalman filter."""
-        return self.own_shed and scheduler == "optimal" and not self.nonlinear and self.filter == "ekf"
+        optimal scheduler on the design model with the extended Kalman filter. ``filter_flown`` is the
+        filter the flight runs (:func:`flight_filter`: a scenario's ``generators.filter`` overrides
+        ``filter``; with the thesis's linear filter there is no flown model to plan on)."""
+        return self.own_shed and scheduler == "optimal" and not self.nonlinear and filter_flown == "ekf"
 
     def rest_budget_for(self, mission_duration_s: float) -> float:
         """The flight's rest budget, s, for a mission of ``mission_duration_s`` (s)."""
