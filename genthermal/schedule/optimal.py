@@ -2,13 +2,10 @@ r"""Optimal load schedule by direct transcription in CasADi, solved by IPOPT wit
 
 Decision variables: per segment :math:`k` the displaced current :math:`d_{g,k}` of every generator
 (A) and the rest :math:`r_k` before it (continuous, free time), and the design-model state of every
-generator at every grid point. Problem (thesis eq. 7.5 with a tie-breaker that keeps the windings
-cool where the rest does not depend on it, :mod:`genthermal.schedule.headroom`, and an optional
-load-displacement penalty, weight :math:`w` 0 by default):
+generator at every grid point. Problem (thesis eq. 7.5 with a small load-displacement penalty):
 
 .. math::
-    \min_{d, r, x}\; \sum_k r_k + \frac{w_h}{60}\,\overline{\rho^2}
-    + w \sum_{g,k} \frac{T_k}{3600}\, d_{g,k}^2
+    \min_{d, r, x}\; \sum_k r_k + w \sum_{g,k} \frac{T_k}{3600}\, d_{g,k}^2
     \quad\text{s.t.}\quad
     \theta^{w}_g(t_i) \le \theta_{lim},\; \theta^{fe}_g(t_i) \le \theta_{lim}\;\forall g, i,\quad
     \sum_g d_{g,k} = 0,\quad 0 \le I_{ini,k}(t) - d_{g,k} \le I_{limit},\quad 0 \le r_k \le r_{max}.
@@ -21,10 +18,7 @@ and also with the rise back-off :math:`(1+\kappa)\theta - \kappa\theta_{start}\l
 (``problem.rise_backoff``). A rest is split into ``rest_substeps`` intervals of free length
 :math:`h = r_k/M` (time scaling), each the exact solution at constant input,
 :math:`x^+ = x_{ss} + Ve^{\Lambda h}V^{-1}(x - x_{ss})`. :math:`\theta_{lim}` is the planning limit
-(θmax minus the back-off margin), :math:`\overline{\rho^2}` the mean squared rise above the ambient
-as a fraction of the limit's (:mod:`~genthermal.schedule.headroom`). The heuristic provides the
-initial guess and the fallback. In a flight the segments are control intervals of one management
-cycle (``OptimalSettings.per_control_interval``), so :math:`d` and :math:`r` are free per interval.
+(θmax minus the back-off margin). The heuristic provides the initial guess and the fallback.
 """
 
 from __future__ import annotations
@@ -37,7 +31,6 @@ import numpy as np
 import scipy.sparse
 
 from .engineer import engineer_plan
-from .headroom import DEFAULT_HEADROOM_WEIGHT_S, headroom_scale
 from .heuristic import heuristic_plan
 from .optimal_nlp import NonlinearSettings, flown_optimal_plan
 from .plan import PlanningProblem, PlanResult, Schedule, evaluate
@@ -62,41 +55,20 @@ class OptimalSettings:
     rest_substeps : int
         Grid intervals per rest.
     displacement_weight : float
-        :math:`w`, s of mission time per A²·h of displaced current squared; default 0. The least
-        displacement among equal missions was the tie-breaker up to here (weight 1): it held the faulty
-        winding at the planning limit wherever the rest did not depend on it, and the plant's
-        surprises cost rest later (:mod:`genthermal.schedule.headroom`).
-    headroom_weight_s : float
-        :math:`w_h`, the most seconds of rest the headroom tie-breaker is worth
-        (:mod:`genthermal.schedule.headroom`; default
-        :data:`~genthermal.schedule.headroom.DEFAULT_HEADROOM_WEIGHT_S`, 0.5 s, below
-        :data:`MIN_REST_S`: it never buys rest).
+        :math:`w`, s of mission time per A²·h of displaced current squared (small: displacement
+        adds no mission time, the penalty only picks the least displacement among equal missions).
     max_iter : int
         IPOPT iteration limit.
     nonlinear : NonlinearSettings
         The transcription on the flown model, used when the problem carries it (``problem.flown``,
         :mod:`genthermal.schedule.optimal_nlp`).
-    per_control_interval : bool
-        True (default): a flight or an open-loop plan of the optimal scheduler on the design model
-        cuts the mission into control intervals of one management cycle
-        (:func:`~genthermal.schedule.replanning.flight_segments`), so that it displaces load and
-        may rest per interval, as the nonlinear planner always does; False: one displacement per
-        action and rests before actions only (the thesis's eq. 7.5). One displacement per action
-        is bounded by the receiver's hottest moment in the action: on ``bench_scheduler.py``'s
-        fig_7_7@100min/k0.25+31 the healthy generator, hot from the combat, could take only
-        1.17 A of the cruise after it, the faulty one ran 82 °C through the cruise instead of 75 °C,
-        and the flight rested 2100 s before landing against the engineer's heuristic's 800 s
-        (which re-plans within the action and moves 2.1 A once the receiver has cooled); per
-        interval it rests 80 s.
     """
 
     check_s: float = 60.0
     rest_substeps: int = 3
-    displacement_weight: float = 0.0
+    displacement_weight: float = 1.0
     max_iter: int = 300
     nonlinear: NonlinearSettings = NonlinearSettings()
-    per_control_interval: bool = True
-    headroom_weight_s: float = DEFAULT_HEADROOM_WEIGHT_S
 
 
 def sparse_dm(matrix) -> ca.DM:
@@ -189,8 +161,7 @@ class _Transcription:
         d_all = ca.reshape(w[:n_gen * n_seg], n_gen, n_seg)
         penalty = settings.displacement_weight * ca.sum2(ca.sum1(d_all ** 2) * ca.DM(durations / 3600.0).T)
         rest_minutes = ca.sum1(w[n_gen * n_seg:n_gen * n_seg + n_seg])
-        objective = w[-1] + 1e-3 * rest_minutes if minimax else \
-            rest_minutes + penalty / 60.0 + settings.headroom_weight_s / 60.0 * self._mean_square_rise(w)
+        objective = w[-1] + 1e-3 * rest_minutes if minimax else rest_minutes + penalty / 60.0
         parts = ca.Function("parts", [w], [self.nonlinear, objective])
         self.w = ca.MX.sym("w", self.n_w)
         g_nonlinear, self.f = parts(self.w)
@@ -202,24 +173,6 @@ class _Transcription:
         longest_rest[0] = max(problem.max_rest_s - problem.rest_taken_s, 0.0) / 60.0  # a rest under way counts
         self.ubw = np.concatenate([np.repeat([b[1] for b in bounds], n_gen), longest_rest,
                                    np.full(n_gen * nx * self.n_nodes, 500.0), [500.0] * int(minimax)])
-
-    def _mean_square_rise(self, w) -> ca.SX:
-        r"""Mean over generators, outputs and running time of
-        :math:`((\theta - \theta_{amb})/(\theta_{lim} - \theta_{amb}))^2` at the running grid
-        nodes (each weighted by its interval's length), 0..1 while every temperature is between the
-        ambient and the planning limit."""
-        problem, terms, total_s = self.problem, [], 0.0
-        reference_C, span_K = headroom_scale(problem)
-        for g, generator in enumerate(problem.generators):
-            for i, (k, h, current) in enumerate(self.intervals):
-                if current is None:
-                    continue
-                u = problem.inputs(g, current)
-                y = ca.mtimes(ca.DM(generator.Cy), w[self.x_index(g, i)]) + ca.DM(generator.Dy @ u + generator.ey) \
-                    - ca.DM(generator.Dy @ generator.e_I) * w[self.d_index(g, k)]
-                terms.append(h * ca.sumsqr((y - reference_C) / span_K) / y.numel())
-                total_s += h
-        return sum(terms) / total_s if terms else ca.SX(0)
 
     def d_index(self, g: int, k: int) -> int:
         """Index of :math:`d_{g,k}` in the decision vector."""

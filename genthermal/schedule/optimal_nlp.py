@@ -12,12 +12,11 @@ Decision variables, per segment :math:`k` (the closed loop cuts the mission into
 of one management cycle, :func:`~genthermal.schedule.plan.split_segments`, so this is per
 interval, landing included): the displaced current :math:`d_{g,k}` (A), the rest :math:`r_k`
 before the segment (min, free), and the multiple-shooting states after each rest and each
-interval. Problem (thesis eq. 7.5 with the tie-breakers of :mod:`genthermal.schedule.optimal`:
-the headroom term :math:`\overline{\rho^2}` of :mod:`genthermal.schedule.headroom`, here over the
-outputs after every substep, and the load-displacement penalty, :math:`w` 0 by default):
+interval. Problem (thesis eq. 7.5 with the load-displacement penalty of
+:mod:`genthermal.schedule.optimal`):
 
 .. math::
-    \min\; \sum_k r_k + \frac{w_h}{60}\,\overline{\rho^2} + \frac{w}{60} \sum_{g,k} \frac{T_k}{3600} d_{g,k}^2
+    \min\; \sum_k r_k + \frac{w}{60} \sum_{g,k} \frac{T_k}{3600} d_{g,k}^2
     \quad\text{s.t.}\quad \theta_{g}(t) + b_{g,k} \le \theta_{max}\;\forall g, t,\quad
     \sum_g d_{g,k} = 0,\quad 0 \le I_k - d_{g,k} \le I_{limit},\quad \sum_k r_k \le r_{budget}.
 
@@ -47,7 +46,6 @@ import numpy as np
 
 from ..discretise import ModalDecay, check_step_accuracy, phi_matrices, step_expression
 from ..errors import InputError
-from .headroom import DEFAULT_HEADROOM_WEIGHT_S, headroom_scale
 from .heuristic import heuristic_plan
 from .plan import PlanningProblem, PlanResult, Schedule, predict
 from .price import SHED_PRICE_MIN_PER_AH, schedule_cost_min
@@ -69,10 +67,7 @@ class NonlinearSettings:
         Temperature checks per rest.
     displacement_weight : float
         :math:`w`, s of mission time per A²·h of displaced current squared (as the affine
-        transcription's, default 0).
-    headroom_weight_s : float
-        :math:`w_h`, the most seconds of rest the headroom tie-breaker is worth (as the affine
-        transcription's, :mod:`genthermal.schedule.headroom`).
+        transcription's).
     guess_margin_K : float
         Margin of the heuristic plan on the design model that is the initial guess when there is
         no previous plan, K (the affine planner's default, 2.5 K).
@@ -93,8 +88,7 @@ class NonlinearSettings:
 
     substep_s: float = 60.0
     rest_checks: int = 3
-    displacement_weight: float = 0.0
-    headroom_weight_s: float = DEFAULT_HEADROOM_WEIGHT_S
+    displacement_weight: float = 1.0
     guess_margin_K: float = 2.5
     backoff_passes: int = 3
     max_iter: int = 200
@@ -277,8 +271,7 @@ class FlownTranscription:
         flown = self.problem.flown
         structure = None if self.n_int == self.n_seg else tuple(self.segment_of)
         return (tuple(id(f) for f in flown.filters), getattr(self, "N_seg", 0), structure, self.n_sub,
-                self.settings.rest_checks, self.minimax, self.settings.displacement_weight,
-                self.settings.headroom_weight_s, self.settings.expand,
+                self.settings.rest_checks, self.minimax, self.settings.displacement_weight, self.settings.expand,
                 self.settings.max_iter, self.settings.mu_init, self.shed)
 
     def _cache(self) -> dict:
@@ -298,14 +291,13 @@ class FlownTranscription:
         n_gen, N_seg, N_int, nx = self.n_gen, self.N_seg, self.N_int, self.nx
         w_sizes, p_sizes = self._w_sizes(), self._p_sizes()
         w = ca.MX.sym("w", int(sum(w_sizes)))
-        p = ca.MX.sym("p", int(n_gen * sum(p_sizes) + N_seg + 2))
+        p = ca.MX.sym("p", int(n_gen * sum(p_sizes) + N_seg))
         wo = np.concatenate([[0], np.cumsum(w_sizes)])
         D = ca.reshape(w[wo[0]:wo[1]], n_gen, N_seg)
         R = w[wo[1]:wo[2]]
         peak = w[wo[4]] if self.minimax else None
-        durations = p[n_gen * sum(p_sizes):n_gen * sum(p_sizes) + N_seg]
-        reference_C, span_K = p[-2], p[-1]  # of the headroom term (genthermal.schedule.headroom)
-        equalities, inequalities, rises = [], [], []
+        durations = p[n_gen * sum(p_sizes):]
+        equalities, inequalities = [], []
         for g, ekf in enumerate(flown.filters):
             po = g * sum(p_sizes) + np.concatenate([[0], np.cumsum(p_sizes)])
             x0, dist, u_zero, eI, x_ss, V, V_inv, eig, currents, h, E, G1, G2 = (
@@ -331,17 +323,13 @@ class FlownTranscription:
                            ca.reshape(G1, nx * nx, N_int), ca.reshape(G2, nx * nx, N_int))
             equalities.append(ca.vec(XI - x_end))
             inequalities.append(Y)
-            substep_s = ca.vec(ca.repmat(h.T, self.n_sub, 1)).T  # each output's substep length
-            rises.append(ca.sum2(ca.sum1(((Y - reference_C) / span_K) ** 2) * substep_s) / Y.size1()
-                         / (n_gen * self.n_sub * ca.sum1(h)))
         self.n_equalities = sum(e.numel() for e in equalities) + N_seg
         temperatures = ca.vertcat(*[ca.vec(i) for i in inequalities])
         if self.minimax:
             temperatures = temperatures - peak
         g_all = ca.vertcat(*equalities, ca.sum1(D).T, temperatures, ca.sum1(R))
         penalty = settings.displacement_weight * ca.sum2(ca.sum1(D ** 2) * (durations / 3600.0).T)
-        objective = peak + 1e-3 * ca.sum1(R) if self.minimax else \
-            ca.sum1(R) + penalty / 60.0 + settings.headroom_weight_s / 60.0 * sum(rises)
+        objective = peak + 1e-3 * ca.sum1(R) if self.minimax else ca.sum1(R) + penalty / 60.0
         if self.shed:  # A·h not served
             objective = objective + SHED_PRICE_MIN_PER_AH * ca.mtimes(ca.sum1(D), durations / 3600.0)
         options = {"print_time": False, "expand": settings.expand,
@@ -360,7 +348,7 @@ class FlownTranscription:
                        rest.decay.V.ravel(order="F"), rest.decay.V_inv.ravel(order="F"), rest.decay.eigenvalues,
                        self.currents, self.lengths / self.n_sub, *(m.ravel(order="F") for m in self.phis[g])]
         durations = np.array([s.duration_s for s in problem.segments] + [0.0] * (self.N_seg - self.n_seg))
-        return np.concatenate(values + [durations, headroom_scale(problem)])
+        return np.concatenate(values + [durations])
 
     def _bounds(self, backoff_K: np.ndarray):
         """``(lbw, ubw, lbg, ubg)`` for the back-off ``backoff_K`` (n_gen, n_outputs, n_seg), K."""

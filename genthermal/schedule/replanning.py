@@ -383,11 +383,8 @@ def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x
                            None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 
 
-def flight_segments(system: PowerSystem, settings: ManagerSettings, scheduler: str = "heuristic") -> tuple:
-    """The mission's segments that ``scheduler`` plans on: one per action, or cut into control
-    intervals of one cycle (:func:`~.plan.split_segments`) for the nonlinear planner and for the
-    optimal scheduler with ``settings.optimal.per_control_interval``."""
+def flight_segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
+    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle."""
     segments = mission_segments(system.mission)
-    per_interval = settings.nonlinear or (scheduler == "optimal" and settings.optimal.per_control_interval)
-    return split_segments(segments, settings.cycle_s, settings.dt_s) if per_interval else segments
+    return split_segments(segments, settings.cycle_s, settings.dt_s) if settings.nonlinear else segments
 
