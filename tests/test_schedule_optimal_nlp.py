@@ -268,3 +268,35 @@ def test_padded_horizon_poses_no_more_equalities_than_variables(believed, design
     balance = slice(transcription.n_equalities_expected - transcription.N_seg, transcription.n_equalities_expected)
     assert np.all(np.isinf(ubg[balance][len(segments):]))  # padding: free rows
     assert np.all(lbg[balance][:len(segments)] == 0.0)  # real segments: balanced (or shed: >= 0)
+
+
+def test_solver_cache_keeps_only_the_most_recently_used_structures(believed, design_model, monkeypatch):
+    """Each structure's solver is cached on the filters, but only the most recent
+    ``MAX_CACHED_SOLVERS``: a long flight whose re-plans kept changing the structure built one
+    solver per re-plan and held them all (a grid worker passed 10 GB). A structure used again is
+    kept, the least recently used one goes, and an evicted one is rebuilt when needed."""
+    import genthermal.schedule.optimal_nlp as optimal_nlp
+
+    models, _ = believed
+    filters = [ExtendedKalmanFilter(m, 10.0) for m in models]  # a cache of their own
+    generators = [AffineGenerator(design_model), AffineGenerator(design_model)]
+    x0 = [np.full(models[0].n_states, 85.0), np.full(models[1].n_states, 60.0)]
+    segments = [Segment(4, "5 cruise", 300.0, ((0.0, 4.9),)), Segment(7, "7 landing", 300.0, ((0.0, 5.0),))]
+    problem = _problem(generators, x0, segments, 110.0, _flown(filters, x0))
+    builds = []
+    monkeypatch.setattr(optimal_nlp, "MAX_CACHED_SOLVERS", 3)
+    monkeypatch.setattr(FlownTranscription, "_build", lambda self: builds.append(self._key()) or object())
+
+    def solver(max_iter):  # max_iter is part of the structure's key
+        return FlownTranscription(problem, NonlinearSettings(max_iter=max_iter))._solver()
+
+    first = solver(100)
+    for max_iter in (101, 102):
+        solver(max_iter)
+    assert solver(100) is first and len(builds) == 3  # used again: not rebuilt, now the most recent
+    solver(103)  # evicts 101, the least recently used
+    cache = filters[0].__dict__["_planning_solvers"]
+    assert len(cache) == 3
+    assert solver(100) is first and len(builds) == 4
+    solver(101)
+    assert len(builds) == 5 and len(cache) == 3  # 101 was evicted: built again

@@ -53,6 +53,11 @@ from .price import SHED_PRICE_MIN_PER_AH, schedule_cost_min
 #: Rests shorter than this (s) are interior-point residue and dropped.
 MIN_REST_S = 1.0
 
+#: Solvers kept per filter set (:meth:`FlownTranscription._solver`): the structures a flight is
+#: using now (plans serving all load and shed plans, the padded horizons of a few re-plans), not
+#: every one it ever built. A choice of this project.
+MAX_CACHED_SOLVERS = 8
+
 
 @dataclasses.dataclass(frozen=True)
 class NonlinearSettings:
@@ -279,10 +284,17 @@ class FlownTranscription:
         return self.problem.flown.filters[0].__dict__.setdefault("_planning_solvers", {})
 
     def _solver(self):
-        """The cached solver for this structure (built on first use)."""
+        """The cached solver for this structure (built on first use). The cache keeps the
+        :data:`MAX_CACHED_SOLVERS` most recently used: a flight whose re-plans keep changing the
+        structure (the shed plans of a long mission) built one solver per re-plan and held them all,
+        and a robustness-grid worker passed 10 GB."""
         cache = self._cache()
         key = self._key()
-        if key not in cache:
+        if key in cache:
+            cache[key] = cache.pop(key)  # most recently used last
+        else:
+            while len(cache) >= MAX_CACHED_SOLVERS:
+                cache.pop(next(iter(cache)))
             cache[key] = (self._build(), list(self.problem.flown.filters))  # the filters keep their ids
         return cache[key][0]
 
