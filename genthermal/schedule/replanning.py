@@ -230,10 +230,7 @@ def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, n
     if not result.feasible:  # its own prediction, with its back-off, above θmax
         return None
     result = _within_budget(problem, result)
-    not_served = result.schedule.displaced_A.sum(axis=0)
-    short = not_served > NOT_SERVED_TOLERANCE_A
-    shedding = [names[g] for g in range(problem.n_generators)
-                if np.any((result.schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A) & short)]
+    shedding = _shedding_names(result.schedule, names)
     response = (f"shed load of {', '.join(shedding) or 'nobody'}: "
                 f"{not_served_Ah(problem.segments, result.schedule):.2f} A·h not served, the least "
                 f"that keeps every generator within θmax {limit_C:g} °C on the flown model with its back-off, after rest "
@@ -242,6 +239,15 @@ def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, n
     result.warnings.append(f"infeasible: no schedule keeps θ ≤ {limit_C:g} °C; {where}; {response}")
     result.details.update(response=response, planned_peak_C=result.peak_C, shedding=shedding, switched_off=[])
     return result
+
+
+def _shedding_names(schedule, names) -> list:
+    """Names of the generators whose load ``schedule`` leaves partly unserved: a generator
+    displacing load in a segment where the generators' displacements do not sum to zero (more than
+    :data:`~genthermal.schedule.shed.NOT_SERVED_TOLERANCE_A`)."""
+    short = schedule.displaced_A.sum(axis=0) > NOT_SERVED_TOLERANCE_A
+    return [name for name, displaced in zip(names, schedule.displaced_A)
+            if np.any((displaced > NOT_SERVED_TOLERANCE_A) & short)]
 
 
 def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, shared: PlanResult,
@@ -259,10 +265,7 @@ def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, sha
         return shared
     chosen = _within_budget(on_flown_model(problem, flown, limit_C), chosen)  # judged on its own model if cut
     schedule = chosen.schedule
-    not_served = schedule.displaced_A.sum(axis=0)
-    short = not_served > NOT_SERVED_TOLERANCE_A
-    shedding = [names[g] for g in range(problem.n_generators) if np.any((schedule.displaced_A[g] > NOT_SERVED_TOLERANCE_A)
-                                                                        & short)]
+    shedding = _shedding_names(schedule, names)
     bound = f"the planning limit {problem.limit_C:.1f} °C" if within_margin else f"θmax {limit_C:g} °C"
     response = (f"shed load of {', '.join(shedding) or 'nobody'}: no rest within the rest budget and no displacement "
                 f"keeps it within {bound}; the optimal scheduler's own plan on the flown model: rest "
