@@ -15,6 +15,8 @@ from typing import Iterator
 
 from tqdm import tqdm
 
+from .collector import collector_in_this_thread
+
 #: Seconds between refreshes of a :func:`working` display.
 REFRESH_S = 0.5
 
@@ -62,7 +64,8 @@ def working(description: str) -> Iterator[None]:
     thread = threading.Thread(target=refresh, daemon=True)
     thread.start()
     try:
-        yield
+        with collector_in_this_thread():  # the refresh thread allocates: no collection there
+            yield
     finally:
         stop.set()
         thread.join()

@@ -58,6 +58,7 @@ import traceback
 
 import numpy as np
 
+from ..collector import collector_in_this_thread
 from ..errors import InputError
 from ..mission import Mission
 from .baseline_comparison import rest_versus_best_baseline
@@ -130,10 +131,14 @@ def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLI
     without a re-plan, the remaining schedulers that plan on the same model (:func:`planner_model_of`:
     the re-plan test predicts on it) get its record (module docstring) with ``same_flight_as``
     naming its scheduler, ``wall_s`` and ``cpu_s`` 0. With ``hindsight`` and a faulty case, one more
-    record, scheduler :data:`HINDSIGHT`: :func:`hindsight_record`."""
+    record, scheduler :data:`HINDSIGHT`: :func:`hindsight_record`.
+
+    A Dask worker runs this beside its event loop's thread, so each flight runs with the cyclic
+    garbage collector kept in this thread (:func:`~genthermal.collector.collector_in_this_thread`)."""
     flights, shared = [], {}
     if hindsight and document["faults"]:
-        flights.append(hindsight_record(document))
+        with collector_in_this_thread():
+            flights.append(hindsight_record(document))
     for scheduler in schedulers:
         model = planner_model_of(scheduler, optimal_planner_model)
         if model in shared:
@@ -141,7 +146,8 @@ def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLI
             flights.append({**shared[model], "scheduler": scheduler, "summary": summary,
                             "same_flight_as": shared[model]["scheduler"], "wall_s": 0.0, "cpu_s": 0.0})
             continue
-        flight = fly_flight(document, scheduler, cpu_limit_s, model)
+        with collector_in_this_thread():
+            flight = fly_flight(document, scheduler, cpu_limit_s, model)
         flights.append(flight)
         if flight["status"] == "ok" and flight["summary"]["replans"] == 0:
             shared[model] = flight
@@ -278,13 +284,20 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
 
     if optimal_planner_model not in PLANNER_MODELS:
         raise InputError("optimal_planner_model", optimal_planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
+    import dask.config
     from distributed import Client, LocalCluster, as_completed
     from distributed.utils import TimeoutError as DaskTimeoutError
     from tqdm import tqdm
 
     documents = list(documents)
-    local = None if cluster else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                              dashboard_address=None)
+    local = None
+    if not cluster:
+        # No spilling and no pausing (the nanny still restarts a worker at 95 % of its memory): a
+        # case's result is a few kB, and both make the worker's event loop call gc.collect() in its
+        # own thread while a flight runs CasADi (genthermal.collector). The nanny hands its config on.
+        with dask.config.set({"distributed.worker.memory.target": False, "distributed.worker.memory.spill": False,
+                              "distributed.worker.memory.pause": False}):
+            local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
     client = Client(cluster or local)
     flights = []
     try:
