@@ -2,7 +2,7 @@
 
     python3 benchmarks/chapter7_feasibility.py [--json FILE] [--rounds N] [--quick]
     python3 benchmarks/chapter7_feasibility.py --inlet-follows-load [--write] [--json FILE] [--rounds N]
-    python3 benchmarks/chapter7_feasibility.py --inlet-follows-load --rated-current [--json FILE] [--rounds N]
+    python3 benchmarks/chapter7_feasibility.py --inlet-follows-load --rated-current [--per-level] [--json FILE] [--rounds N]
 
 Frees every assumed value of the Genco RF201A's cooling and losses within its physical bounds, the
 large blockage's flow fraction (the orifice mapping) and convection exponent, and its inlet rise
@@ -24,8 +24,10 @@ values) and the blockage it fits is printed for the chapter-7 scenarios (``fault
 ``--rated-current`` holds the receiver to the mission's rated current (7 A) at every instant, the
 rated-current reading of "spare capacity" (7.3.3: "during landing there is very little spare
 capacity in either the faulty or healthy generators"): no displacement in a K-condition whose
-nominal load reaches 100 % (landing). With ``--write`` its solution ships with the provenance
-:data:`SOURCE_RATED`.
+nominal load reaches 100 % (landing). ``--per-level`` gives each K-condition's 5-min start-up level
+and its continuous level a displaced current of their own (as the heuristic plans them), so the
+receiver can take load in landing's continuous level. With ``--write`` its solution ships with the
+provenance :data:`SOURCE_RATED`.
 """
 
 from __future__ import annotations
@@ -103,6 +105,8 @@ def main(argv=None) -> None:
                         help="the study with the inlet rise's load share free only (no Pareto trace or variants)")
     parser.add_argument("--rated-current", action="store_true",
                         help="hold the receiver to the mission's rated current at every instant (rated-current reading)")
+    parser.add_argument("--per-level", action="store_true",
+                        help="one displaced current per level (5-min start-up, continuous) of each K-condition")
     parser.add_argument("--write", action="store_true",
                         help="with --inlet-follows-load: ship its solution as genco_rf201a:chapter7")
     args = parser.parse_args(argv)
@@ -115,7 +119,7 @@ def main(argv=None) -> None:
     receiver_limit_A = load_mission("thesis_fig_7_7").rated_current_A if args.rated_current else None
     starts = default_starts(chapter7, default)[:1] if args.quick else None
     main_study = study(chapter7, default, rounds=1 if args.quick else args.rounds, starts=starts,
-                       inlet_follows_load=args.inlet_follows_load, receiver_limit_A=receiver_limit_A)
+                       inlet_follows_load=args.inlet_follows_load, receiver_limit_A=receiver_limit_A, per_level=args.per_level)
     _progress("main study", main_study["best"], started)
     report = {"study": {"starts": [_public(r) for r in main_study["starts"]], "best": _public(main_study["best"]),
                         "sharp": main_study["sharp"], "rounds": main_study["rounds"]}}
@@ -124,7 +128,8 @@ def main(argv=None) -> None:
         if args.write:
             path = Path(__file__).resolve().parents[1] / "genthermal" / "machines" / PARAMETER_FILE
             if args.rated_current:
-                write_calibration(main_study["best"], path, SOURCE_RATED, "--inlet-follows-load --rated-current --write")
+                write_calibration(main_study["best"], path, SOURCE_RATED, "--inlet-follows-load --rated-current "
+                                  + ("--per-level " if args.per_level else "") + "--write")
             else:
                 write_calibration(main_study["best"], path)
     if not args.quick and not args.inlet_follows_load:
@@ -138,11 +143,11 @@ def main(argv=None) -> None:
         for label, options in (("rig rest 20 min", {"rest_s": 1200.0}),
                                ("inlet rise follows gen1's load", {"inlet_follows_load": True})):
             variant = study(chapter7, default, rounds=args.rounds, starts=best_start, receiver_limit_A=receiver_limit_A,
-                            **options)
+                            per_level=args.per_level, **options)
             report[label] = {"best": _public(variant["best"]), "sharp": variant["sharp"], "rounds": variant["rounds"]}
             _progress(label, variant["best"], started)
     best, sharp = main_study["best"], main_study["sharp"]
-    report["verdict"] = {"receiver_limit_A": receiver_limit_A, "min_worst_violation_K": best["worst_violation_K"], "worst_outcome": best["worst_outcome"],
+    report["verdict"] = {"receiver_limit_A": receiver_limit_A, "per_level": args.per_level, "min_worst_violation_K": best["worst_violation_K"], "worst_outcome": best["worst_outcome"],
                          "sharp_worst_violation_K": sharp["worst_violation_K"], "sharp_worst_outcome": sharp["worst_outcome"],
                          "feasible": sharp["worst_violation_K"] <= 0.0,
                          "conflicting": sorted(k for k, v in best["violations_K"].items()

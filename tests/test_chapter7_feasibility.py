@@ -238,3 +238,17 @@ def test_rated_reading_ships_with_its_own_provenance(tmp_path):
     assert set(parameters) == set(MACHINE_NAMES)
     assert all("rated-current reading" in p["source"] for p in parameters.values())
     assert "(at its bound)" in parameters["R0"]["source"] and "(at its bound)" not in parameters["P_iron"]["source"]
+
+
+def test_rated_reading_per_level_lets_the_receiver_take_load_only_in_landings_continuous_level(chapter7):
+    """Per level, the receiver held to 7 A has no room in landing's 5 min at 100 % and 7 A less
+    76.7 % in its continuous level; the start's displacement stays within the rating."""
+    held = FeasibilityProblem(chapter7, LAGS, dt_s=60.0, inlet_follows_load=True, receiver_limit_A=7.0, per_level=True)
+    upper = dict(zip(held.managed.displacement_names, held.displacement_upper_A()))
+    assert upper["landing_5min"] == 0.0 and upper["landing_continuous"] == pytest.approx(7.0 * (1 - 0.767))
+    assert upper["cruise_combat_5min"] == pytest.approx(7.0 * (1 - 0.867))
+    start = Start("shipped", {n: chapter7.parameters.value(n) for n in held.names if n in chapter7.parameters},
+                  31.0, SHIPPED_TAU_MIN, 1.0)
+    described = held.describe(held.bounds_and_start(start)[2])
+    assert described["receiver_max_current_A"] <= 7.0 + 1e-9
+    assert set(described["displaced_A"]) == set(held.managed.displacement_names)

@@ -91,3 +91,31 @@ def test_bad_inputs_name_their_field(chapter7):
         best_displacement(chapter7, 1.5, 0.5, 31.0, 0.0, ONSET_S)
     with pytest.raises(InputError, match="n_flow"):
         best_displacement(chapter7, 0.5, float("nan"), 31.0, 0.0, ONSET_S)
+
+
+def test_level_masks_split_each_condition_into_its_start_up_and_continuous_levels():
+    """Each K-condition's 5-min start-up level and its continuous level (Table 7.1) partition its
+    mask; landing's start-up level runs at 100 %, its continuous level at 76.7 %."""
+    from genthermal.machines.chapter7_managed import START_UP_S, level_masks
+
+    line = managed_timeline(60.0)
+    masks, names = level_masks(line)
+    assert names[-2:] == ("landing_5min", "landing_continuous") and masks.shape == (2 * len(CONDITIONS), line["time_s"].size)
+    assert np.array_equal(masks[0::2] + masks[1::2], line["masks"])
+    assert np.all(masks[0::2].sum(axis=1) * 60.0 == START_UP_S)
+    rated = load_mission("thesis_fig_7_7").rated_current_A
+    assert np.all(line["current_A"][masks[-2] > 0] == pytest.approx(rated))
+    assert np.all(line["current_A"][masks[-1] > 0] == pytest.approx(0.767 * rated))
+
+
+def test_per_level_displacement_moves_current_only_in_its_level(chapter7):
+    """With ``per_level`` a current displaced in landing's continuous level cools gen1's landing
+    and leaves every earlier condition as it was."""
+    proxy = ManagedBlockageProxy(blockable(chapter7), ["k_flow", "n_flow"], 60.0, None, 31.0, 41.5 * 60, ONSET_S,
+                                 per_level=True)
+    assert proxy.displaced.numel() == 2 * len(CONDITIONS)
+    peaks = proxy.peaks(ca.DM([0.53, 0.5]), 0.1)
+    evaluate = ca.Function("peaks", [proxy.displaced], [peaks["gen1"]])
+    none = np.asarray(evaluate(np.zeros(8))).ravel()
+    landing_continuous = np.asarray(evaluate(np.eye(8)[-1] * 1.5)).ravel()
+    assert np.allclose(landing_continuous[:-1], none[:-1]) and landing_continuous[-1] < none[-1]

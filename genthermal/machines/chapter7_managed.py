@@ -47,6 +47,8 @@ CONDITIONS = (("cruise", 66 * 60.0, 120 * 60.0), ("cruise_combat", 120 * 60.0, 1
               ("cruise_after", 180 * 60.0, 220 * 60.0), ("landing", 220 * 60.0, 240 * 60.0))
 #: Bounds of each displaced current, A: from none to the whole continuous cruise load of gen1.
 DISPLACEMENT_BOUNDS_A = (0.0, 4.0)
+#: Length of a K-condition's start-up level, s (thesis Table 7.1: "5 mins", then the continuous level).
+START_UP_S = 300.0
 #: Sharpness of the smooth excess, K: :math:`s \ln(1 + e^{x/s})` is within :math:`s \ln 2` = 0.07 K
 #: of :math:`\max(x, 0)`.
 EXCESS_SHARPNESS_K = 0.1
@@ -90,6 +92,25 @@ def managed_timeline(dt_s: float, rest_s: float = REST_BEFORE_LANDING_S) -> dict
             "rest": resting, "mission": mission}
 
 
+def level_masks(line: dict) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Each K-condition's mask of :func:`managed_timeline` split into its 5-min start-up level and its
+    continuous level (Table 7.1), so a displacement can differ between the two.
+
+    Returns
+    -------
+    masks : ndarray, shape (2 k, n)
+        Start-up then continuous level of each K-condition, in the order of :data:`CONDITIONS`.
+    names : tuple of str
+        ``"<condition>_5min"`` and ``"<condition>_continuous"`` for each row.
+    """
+    rows, names = [], []
+    for mask, (condition, start, _) in zip(line["masks"], CONDITIONS):
+        start_up = line["mission_time_s"] < start + START_UP_S - 1e-9
+        rows += [mask * start_up, mask * ~start_up]
+        names += [f"{condition}_5min", f"{condition}_continuous"]
+    return np.array(rows, dtype=float), tuple(names)
+
+
 class ManagedBlockageProxy:
     """The managed-blockage proxy (module docstring) as CasADi expressions.
 
@@ -117,16 +138,32 @@ class ManagedBlockageProxy:
         Share of gen1's inlet rise that follows its load, in [0, 1]
         (:func:`genthermal.coolant.inlet_load_factor` of gen1's current against the undisplaced
         one); 0 (default): the fault's rise alone. Not with ``inlet_rise_of``.
+    per_level : bool
+        One displaced current per level of each K-condition (its 5-min start-up level and its
+        continuous level, :func:`level_masks`) instead of one per K-condition (eq. 7.3, default).
+
+    Attributes
+    ----------
+    masks : ndarray, shape (4, n)
+        Where each K-condition runs (the windows of its peaks).
+    displacement_masks : ndarray, shape (m, n)
+        Where each displaced current of :attr:`displaced` applies (``masks``, or the levels).
+    displacement_names : tuple of str
+        Name of each displaced current.
     """
 
     def __init__(self, model: ThermalModel, names, dt_s: float, k_flow: float | None, inlet_rise_C: float,
                  inlet_rise_tau_s: float, onset_s: float, rest_s: float = REST_BEFORE_LANDING_S, inlet_rise_of=None,
-                 inlet_load_share: float = 0.0):
+                 inlet_load_share: float = 0.0, per_level: bool = False):
         self.names = list(names)
         if inlet_load_share != 0 and inlet_rise_of is not None:
             raise InputError("inlet_load_share", inlet_load_share, "give it or inlet_rise_of, not both")
         line = managed_timeline(dt_s, rest_s)
         self.time_s, self.masks = line["time_s"], line["masks"]
+        if per_level:
+            self.displacement_masks, self.displacement_names = level_masks(line)
+        else:
+            self.displacement_masks, self.displacement_names = self.masks, tuple(c[0] for c in CONDITIONS)
         self.nominal_current_A = line["current_A"]
         generator = model.spec.interface.generator
         mission = line["mission"]
@@ -151,8 +188,9 @@ class ManagedBlockageProxy:
         for name in generator.phase_inputs:
             per_amp[index(name)] = 1.0
         per_amp[index(generator.excitation_input)] = slope
-        self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
-        moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
+        self.displaced = ca.MX.sym("displaced", self.displacement_masks.shape[0])
+        moved_A = ca.mtimes(ca.DM(self.displacement_masks).T, self.displaced).T  # (1, n): current off gen1
+        moved = ca.DM(per_amp) * ca.repmat(moved_A, frame.shape[0], 1)
         self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
         inlet_load_factor(1.0, 1.0, inlet_load_share)  # rejects a share outside [0, 1], naming it
         if inlet_rise_of is None and inlet_load_share != 0:
@@ -161,7 +199,7 @@ class ManagedBlockageProxy:
             def inlet_rise_of(time_s, gen1_current):
                 return fault_rise * inlet_load_factor(gen1_current, ca.DM(current).T, inlet_load_share)
         if inlet_rise_of is not None:
-            gen1_current = ca.DM(current).T - ca.mtimes(ca.DM(self.masks).T, self.displaced).T
+            gen1_current = ca.DM(current).T - moved_A
             row = np.zeros((frame.shape[0], 1))
             row[index(generator.coolant_input)] = 1.0
             self.inputs["gen1"] = ca.DM(frame) - moved + ca.mtimes(ca.DM(row), inlet_rise_of(self.time_s, gen1_current))
@@ -250,5 +288,5 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
     return {"conditions": [{"condition": c[0], "displaced_A": float(v), "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
                            for c, v, a, b in zip(CONDITIONS, displaced, gen1, gen2)],
             "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C,
-            "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.masks.T @ displaced)),
+            "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.displacement_masks.T @ displaced)),
             "converged": bool(solver.stats()["success"])}
