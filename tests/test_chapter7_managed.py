@@ -119,3 +119,15 @@ def test_per_level_displacement_moves_current_only_in_its_level(chapter7):
     none = np.asarray(evaluate(np.zeros(8))).ravel()
     landing_continuous = np.asarray(evaluate(np.eye(8)[-1] * 1.5)).ravel()
     assert np.allclose(landing_continuous[:-1], none[:-1]) and landing_continuous[-1] < none[-1]
+
+
+def test_best_displacement_held_to_rated_current_never_exceeds_it(chapter7):
+    """Held to 7 A per level, the receiver's current stays within it at every sample and nothing
+    moves in landing's 5 min at 100 %; without the limit the same blockage sends gen2 past 7 A."""
+    kwargs = dict(k_flow=0.6, n_flow=0.5, inlet_rise_C=26.0, inlet_rise_tau_s=36 * 60.0, onset_s=ONSET_S, dt_s=60.0,
+                  inlet_load_share=1.0)
+    held = best_displacement(chapter7, per_level=True, receiver_limit_A=7.0, **kwargs)
+    assert held["receiver_max_current_A"] <= 7.0 + 1e-6
+    assert held["displaced_A"]["landing_5min"] <= 1e-6 and held["displaced_A"]["landing_continuous"] > 0.1
+    free = best_displacement(chapter7, **kwargs)
+    assert free["receiver_max_current_A"] > 7.0 and set(free["displaced_A"]) == {c[0] for c in CONDITIONS}

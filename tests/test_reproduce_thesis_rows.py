@@ -45,7 +45,7 @@ def test_inlet_4K_reason_reports_the_rated_reading(reproduce):
     """The reason names what the flight held to 7 A did and the rated-current study's least violation."""
     study = {"worst_violation_K": 3.21, "sharp_worst_violation_K": 3.25, "active": ["landing_4K", "managed_gen1_landing"]}
     row = reproduce.inlet_4K_row(_outcome({7: 0.05}, 0.0), _outcome({}, 5.0, 97.2), study)
-    assert "5-min rest before landing, 0.00 A displaced in it" in row["reason"] and "no load adjust" in row["reason"]
+    assert "5-min rest before landing, 0.00 A displaced in it" in row["reason"] and "without the load adjust" in row["reason"]
     assert "+3.21 K (+3.25 K on the samples' sharp peaks): no calibration meets them all" in row["reason"]
     assert "landing_4K, managed_gen1_landing" in row["reason"]
 

@@ -90,7 +90,8 @@ from ..mission import load_mission
 from ..model import ThermalModel
 from .chapter7 import (BLOCKAGE_INLET_RISE_C, BLOCKAGE_MINUTES, DT_S, FIT_BOUNDS, INLET_TAU_BOUNDS_MIN, ONSET_S,
                        PLANNING_LIMIT_C, PROXIES, SOFTMAX_K, Proxy, ProxySimulator, blockable, manager_lags)
-from .chapter7_managed import CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy
+from .chapter7_managed import (CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy,
+                               receiver_headroom_A)
 
 #: Highest winding temperature the thesis's managed blockage reached, °C (7.3.3: breaches of 110.7 and 111 °C).
 MANAGED_LIMIT_C = 111.0
@@ -113,34 +114,6 @@ SHARP_K = 0.002
 MACHINE_NAMES = ("h_top_air", "h_end_air", "R0", "h_air_gap", "P_iron", "h_ambient", "m_dot_fan")
 #: Blockage values free in the study.
 BLOCKAGE_NAMES = ("n_flow", "k_flow")
-
-
-def receiver_headroom_A(nominal_current_A: np.ndarray, masks: np.ndarray, limit_A: float) -> np.ndarray:
-    r"""Largest constant displacement per K-condition that keeps the receiver at or below ``limit_A``
-    at every sample, A (0 where the nominal current already reaches the limit).
-
-    Parameters
-    ----------
-    nominal_current_A : ndarray, shape (n,)
-        Undisplaced phase current of both generators at each sample, A.
-    masks : ndarray, shape (k, n)
-        1 where each K-condition's displacement applies, else 0.
-    limit_A : float
-        Highest phase current the receiver may carry, A (> 0).
-
-    Returns
-    -------
-    ndarray, shape (k,)
-        :math:`\max(0, I_{lim} - \max_{t \in k} I_{nom}(t))` per K-condition, A.
-    """
-    if not (isinstance(limit_A, (int, float)) and math.isfinite(limit_A) and limit_A > 0):
-        raise InputError("receiver_limit_A", limit_A, "must be a current > 0 A (the receiver's rated current)")
-    nominal = np.asarray(nominal_current_A, dtype=float)
-    masks = np.asarray(masks, dtype=float)
-    if masks.ndim != 2 or masks.shape[1] != nominal.size:
-        raise InputError("masks", masks.shape, f"must be (conditions, {nominal.size}), one row per K-condition")
-    highest = np.array([nominal[row > 0].max(initial=0.0) for row in masks])
-    return np.clip(float(limit_A) - highest, 0.0, None)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -27,6 +27,8 @@ current could not take.
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 
@@ -109,6 +111,34 @@ def level_masks(line: dict) -> tuple[np.ndarray, tuple[str, ...]]:
         rows += [mask * start_up, mask * ~start_up]
         names += [f"{condition}_5min", f"{condition}_continuous"]
     return np.array(rows, dtype=float), tuple(names)
+
+
+def receiver_headroom_A(nominal_current_A: np.ndarray, masks: np.ndarray, limit_A: float) -> np.ndarray:
+    r"""Largest constant displacement per K-condition that keeps the receiver at or below ``limit_A``
+    at every sample, A (0 where the nominal current already reaches the limit).
+
+    Parameters
+    ----------
+    nominal_current_A : ndarray, shape (n,)
+        Undisplaced phase current of both generators at each sample, A.
+    masks : ndarray, shape (k, n)
+        1 where each K-condition's displacement applies, else 0.
+    limit_A : float
+        Highest phase current the receiver may carry, A (> 0).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        :math:`\max(0, I_{lim} - \max_{t \in k} I_{nom}(t))` per K-condition, A.
+    """
+    if not (isinstance(limit_A, (int, float)) and math.isfinite(limit_A) and limit_A > 0):
+        raise InputError("receiver_limit_A", limit_A, "must be a current > 0 A (the receiver's rated current)")
+    nominal = np.asarray(nominal_current_A, dtype=float)
+    masks = np.asarray(masks, dtype=float)
+    if masks.ndim != 2 or masks.shape[1] != nominal.size:
+        raise InputError("masks", masks.shape, f"must be (conditions, {nominal.size}), one row per K-condition")
+    highest = np.array([nominal[row > 0].max(initial=0.0) for row in masks])
+    return np.clip(float(limit_A) - highest, 0.0, None)
 
 
 class ManagedBlockageProxy:
@@ -235,7 +265,8 @@ class ManagedBlockageProxy:
 
 def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_rise_C: float,
                       inlet_rise_tau_s: float, onset_s: float, dt_s: float = 30.0,
-                      softmax_K: float = 0.1, inlet_load_share: float = 0.0) -> dict:
+                      softmax_K: float = 0.1, inlet_load_share: float = 0.0, per_level: bool = False,
+                      receiver_limit_A: float | None = None) -> dict:
     """The displaced currents that give the managed-blockage proxy of ``plant`` (blockage values
     fixed) its lowest worst peak, by IPOPT over the four currents (minimise the bound :math:`w` on
     every K-condition's smooth peak of both generators): what the thesis's outcome asks of the
@@ -255,11 +286,18 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
         Sample period (s) and smoothness of the peaks (K).
     inlet_load_share : float
         Share of gen1's inlet rise that follows its load (:func:`genthermal.coolant.inlet_load_factor`).
+    per_level : bool
+        One displaced current per level (5-min start-up, continuous) of each K-condition
+        (:class:`ManagedBlockageProxy`); default one per K-condition (eq. 7.3).
+    receiver_limit_A : float or None
+        Highest current the receiver gen2 may carry at any instant, A (:func:`receiver_headroom_A`);
+        None (default): no limit, θmax alone.
 
     Returns
     -------
     dict
-        ``conditions`` (condition, displaced_A, gen1_peak_C, gen2_peak_C), ``worst_peak_C`` (the
+        ``conditions`` (condition, displaced_A: the largest of its currents, gen1_peak_C, gen2_peak_C),
+        ``displaced_A`` (name → A, one per displaced current), ``worst_peak_C`` (the
         lowest reachable highest smooth peak of either generator, °C), ``worst_excess_K`` (over
         :data:`LIMIT_C`), ``receiver_max_current_A`` (the most gen2 carries, A), ``converged``.
     """
@@ -271,22 +309,28 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
         raise InputError("n_flow", n_flow, "must be a convection exponent in [0, 1.5] (the effect's range)")
     model = blockable(plant)
     proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s,
-                                 inlet_load_share=inlet_load_share)
+                                 inlet_load_share=inlet_load_share, per_level=per_level)
+    n = proxy.displaced.numel()
+    upper = np.full(n, DISPLACEMENT_BOUNDS_A[1])
+    if receiver_limit_A is not None:
+        upper = np.minimum(upper, receiver_headroom_A(proxy.nominal_current_A, proxy.displacement_masks, receiver_limit_A))
     peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
     every = ca.vertcat(peaks["gen1"], peaks["gen2"])
     d, bound = proxy.displaced, ca.MX.sym("worst")
     solver = ca.nlpsol("managed_displacement", "ipopt",
                        {"x": ca.vertcat(d, bound), "f": bound + 1e-6 * ca.sumsqr(d), "g": every - bound},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-8})
-    n = len(CONDITIONS)
-    solution = solver(x0=[1.0] * n + [150.0], lbx=[DISPLACEMENT_BOUNDS_A[0]] * n + [-ca.inf],
-                      ubx=[DISPLACEMENT_BOUNDS_A[1]] * n + [ca.inf], ubg=0.0)
+    solution = solver(x0=np.minimum(1.0, upper).tolist() + [150.0], lbx=[DISPLACEMENT_BOUNDS_A[0]] * n + [-ca.inf],
+                      ubx=upper.tolist() + [ca.inf], ubg=0.0)
     x = np.asarray(solution["x"]).ravel()
     displaced = x[:n]
     gen1, gen2 = (np.asarray(v).ravel() for v in ca.Function("peaks", [d], [peaks["gen1"], peaks["gen2"]])(displaced))
     worst = float(max(gen1.max(), gen2.max()))
-    return {"conditions": [{"condition": c[0], "displaced_A": float(v), "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
-                           for c, v, a, b in zip(CONDITIONS, displaced, gen1, gen2)],
+    per_condition = [float(np.max(displaced[(proxy.displacement_masks[:, row > 0] > 0).any(axis=1)]))
+                     for row in proxy.masks]
+    return {"conditions": [{"condition": c[0], "displaced_A": v, "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
+                           for c, v, a, b in zip(CONDITIONS, per_condition, gen1, gen2)],
+            "displaced_A": {name: float(v) for name, v in zip(proxy.displacement_names, displaced)},
             "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C,
             "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.displacement_masks.T @ displaced)),
             "converged": bool(solver.stats()["success"])}
