@@ -400,13 +400,13 @@ def inlet_16K_row(flight, rated=None) -> dict:
         ([] if after else [f"the thesis's cruise after cruise/combat needs no displacement; here "
                            f"{actions[6]['shed_A']:.2f} A"]) + \
         ([] if rested else ["no rest before landing"]) + ([] if adjusted else ["no displacement in landing"])
-    rated_text = "" if rated is None else (
-        f"; held to the rated {RATED_CURRENT_A:g} A instead: {_actions_text(rated, 4)}, {_landing_text(rated)}")
+    rated_text = [] if rated is None else [
+        f"held to the rated {RATED_CURRENT_A:g} A instead: {_actions_text(rated, 4)}, {_landing_text(rated)}"]
     return entry("7.3.3, Figs 7.11-7.12", "inlet +16 K: displacement in cruise/combat (2 h), then rest before landing",
                  "displacement from 2 h in cruise/combat; short rest + displacement for landing",
                  _actions_text(flight, 4) + f"; peak {flight['peak_gen1_C']:.1f} °C (gen2 {flight['peak_gen2_C']:.1f} °C)",
                  "reproduced" if not missing else ("qualitative" if combat or actions[7]["rest_min"] > 0 else "contradicted"),
-                 "; ".join(missing) + rated_text)
+                 "; ".join(missing + rated_text))
 
 
 def chapter_7(default, chapter7, quick):

@@ -61,3 +61,9 @@ def test_inlet_16K_checks_every_part_of_the_thesis_outcome(reproduce, shed, rest
     row = reproduce.inlet_16K_row(_outcome(shed, rest))
     assert row["verdict"] == verdict
     assert (row["reason"] == "") == (verdict == "reproduced")
+
+
+def test_inlet_16K_reason_adds_the_rated_flight_as_one_clause(reproduce):
+    row = reproduce.inlet_16K_row(_outcome({5: 0.04, 7: 0.45}, 5.0), _outcome({5: 0.04}, 20.0))
+    assert row["verdict"] == "reproduced"
+    assert row["reason"].startswith("held to the rated 7 A instead:") and "20-min rest before landing" in row["reason"]
