@@ -22,7 +22,10 @@ own breaches (0.7 and 1 K) are what its manager's prediction errors cost on top.
 The healthy receiver is not held to the rated current here: the thesis bounds it by θmax alone
 (eqs. 7.2-7.4), and it displaces load in landing, whose first 5 min run at 100 % (7.3.3: "a short
 rest with some load displacement is required for landing"), which a receiver held to rated
-current could not take.
+current could not take. The rated-current reading of "very little spare capacity" is an option of
+:func:`best_displacement` and of the feasibility study (``receiver_limit_A``, with
+:func:`receiver_headroom_A`), and ``per_level`` gives each K-condition's 5-min start-up and
+continuous levels their own displaced current (:func:`level_masks`).
 """
 
 from __future__ import annotations
