@@ -2,6 +2,7 @@
 
     python3 benchmarks/chapter7_feasibility.py [--json FILE] [--rounds N] [--quick]
     python3 benchmarks/chapter7_feasibility.py --inlet-follows-load [--write] [--json FILE] [--rounds N]
+    python3 benchmarks/chapter7_feasibility.py --inlet-follows-load --rated-current [--per-level] [--json FILE] [--rounds N]
 
 Frees every assumed value of the Genco RF201A's cooling and losses within its physical bounds, the
 large blockage's flow fraction (the orifice mapping) and convection exponent, and its inlet rise
@@ -19,6 +20,14 @@ load"). ``--quick``: the main study from the shipped calibration only, one round
 no Pareto trace or variants); with ``--write`` its solution becomes the shipped calibration
 ``genco_rf201a:chapter7`` (:data:`~genthermal.machines.chapter7.PARAMETER_FILE`: the seven machine
 values) and the blockage it fits is printed for the chapter-7 scenarios (``fault``).
+
+``--rated-current`` holds the receiver to the mission's rated current (7 A) at every instant, the
+rated-current reading of "spare capacity" (7.3.3: "during landing there is very little spare
+capacity in either the faulty or healthy generators"): no displacement in a K-condition whose
+nominal load reaches 100 % (landing). ``--per-level`` gives each K-condition's 5-min start-up level
+and its continuous level a displaced current of their own (as the heuristic plans them), so the
+receiver can take load in landing's continuous level. With ``--write`` its solution ships with the
+provenance :data:`SOURCE_RATED`.
 """
 
 from __future__ import annotations
@@ -32,6 +41,7 @@ from pathlib import Path
 from genthermal.machines import build_model
 import yaml
 
+from genthermal.mission import load_mission
 from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE
 from genthermal.machines.chapter7_feasibility import (H_AIR_GAP_BOUNDS, MACHINE_NAMES, default_starts, pareto_trace,
                                                       study)
@@ -39,6 +49,9 @@ from genthermal.model_file import load_model
 
 #: Provenance of every value the study with a load-following inlet ships.
 SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/chapter7_feasibility.py, inlet follows load)"
+#: Provenance of the same study with the receiver held to its rated current (``--rated-current``).
+SOURCE_RATED = ("fitted to thesis ch. 7 outcomes, rated-current reading (benchmarks/chapter7_feasibility.py, "
+                "inlet follows load, receiver held to rated current)")
 
 #: Caps on the managed peaks of the Pareto trace, °C (θmax itself and halfway to the thesis's 111).
 MANAGED_CAPS_C = (110.0, 110.5)
@@ -66,18 +79,18 @@ def scenario_fault(best: dict) -> dict:
             "inlet_load_share": round(best["inlet_load_share"], 3)}
 
 
-def write_calibration(best: dict, path: Path) -> None:
+def write_calibration(best: dict, path: Path, source: str = SOURCE, command: str = "--inlet-follows-load --write") -> None:
     """Write the machine values of the study ``best`` as the model file at ``path``, each with its
-    bounds in the provenance."""
+    bounds and ``source`` in the provenance (``command``: the options that wrote it, for the header)."""
     bounds = {**FIT_BOUNDS, "h_air_gap": H_AIR_GAP_BOUNDS}
     at_bound = set(best["at_bound"])
     document = {"machine": "genco_rf201a", "variant": "nonlinear", "parameters": {
         n: {"value": round(best["values"][n], 4), "provenance": "fitted",
-            "source": f"{SOURCE}: {bounds[n][3]}, bounds {bounds[n][0]:g}-{bounds[n][1]:g} {bounds[n][2]}"
+            "source": f"{source}: {bounds[n][3]}, bounds {bounds[n][0]:g}-{bounds[n][1]:g} {bounds[n][2]}"
                       + (" (at its bound)" if n in at_bound else "")}
         for n in MACHINE_NAMES}}
     header = ("# Chapter-7 calibration of the Genco RF201A (genthermal.machines.chapter7_feasibility), written by\n"
-              "# benchmarks/chapter7_feasibility.py --inlet-follows-load --write. load_model('genco_rf201a:chapter7')\n"
+              f"# benchmarks/chapter7_feasibility.py {command}. load_model('genco_rf201a:chapter7')\n"
               "# reads it. The chapter-7 scenarios fly the blockage the same study fits:\n"
               f"# {json.dumps(scenario_fault(best))}\n")
     path.write_text(header + yaml.safe_dump(document, sort_keys=False))
@@ -90,6 +103,10 @@ def main(argv=None) -> None:
     parser.add_argument("--quick", action="store_true", help="shipped start only, one round, no Pareto or variants")
     parser.add_argument("--inlet-follows-load", action="store_true",
                         help="the study with the inlet rise's load share free only (no Pareto trace or variants)")
+    parser.add_argument("--rated-current", action="store_true",
+                        help="hold the receiver to the mission's rated current at every instant (rated-current reading)")
+    parser.add_argument("--per-level", action="store_true",
+                        help="one displaced current per level (5-min start-up, continuous) of each K-condition")
     parser.add_argument("--write", action="store_true",
                         help="with --inlet-follows-load: ship its solution as genco_rf201a:chapter7")
     args = parser.parse_args(argv)
@@ -99,17 +116,22 @@ def main(argv=None) -> None:
         parser.error("--write ships the study with the load-following inlet: give --inlet-follows-load")
     started = time.perf_counter()
     chapter7, default = load_model("genco_rf201a:chapter7"), build_model()
+    receiver_limit_A = load_mission("thesis_fig_7_7").rated_current_A if args.rated_current else None
     starts = default_starts(chapter7, default)[:1] if args.quick else None
     main_study = study(chapter7, default, rounds=1 if args.quick else args.rounds, starts=starts,
-                       inlet_follows_load=args.inlet_follows_load)
+                       inlet_follows_load=args.inlet_follows_load, receiver_limit_A=receiver_limit_A, per_level=args.per_level)
     _progress("main study", main_study["best"], started)
     report = {"study": {"starts": [_public(r) for r in main_study["starts"]], "best": _public(main_study["best"]),
                         "sharp": main_study["sharp"], "rounds": main_study["rounds"]}}
     if args.inlet_follows_load:
         report["study"]["scenario_fault"] = scenario_fault(main_study["best"])
         if args.write:
-            write_calibration(main_study["best"], Path(__file__).resolve().parents[1] / "genthermal" / "machines"
-                              / PARAMETER_FILE)
+            path = Path(__file__).resolve().parents[1] / "genthermal" / "machines" / PARAMETER_FILE
+            if args.rated_current:
+                write_calibration(main_study["best"], path, SOURCE_RATED, "--inlet-follows-load --rated-current "
+                                  + ("--per-level " if args.per_level else "") + "--write")
+            else:
+                write_calibration(main_study["best"], path)
     if not args.quick and not args.inlet_follows_load:
         report["pareto"] = [_public(p) for p in pareto_trace(main_study["problem"], main_study["best"], MANAGED_CAPS_C,
                                                              OTHERS_CAPS_K)]
@@ -120,11 +142,12 @@ def main(argv=None) -> None:
         best_start = [s for s in default_starts(chapter7, default) if s.label == main_study["best"]["start"]] or None
         for label, options in (("rig rest 20 min", {"rest_s": 1200.0}),
                                ("inlet rise follows gen1's load", {"inlet_follows_load": True})):
-            variant = study(chapter7, default, rounds=args.rounds, starts=best_start, **options)
+            variant = study(chapter7, default, rounds=args.rounds, starts=best_start, receiver_limit_A=receiver_limit_A,
+                            per_level=args.per_level, **options)
             report[label] = {"best": _public(variant["best"]), "sharp": variant["sharp"], "rounds": variant["rounds"]}
             _progress(label, variant["best"], started)
     best, sharp = main_study["best"], main_study["sharp"]
-    report["verdict"] = {"min_worst_violation_K": best["worst_violation_K"], "worst_outcome": best["worst_outcome"],
+    report["verdict"] = {"receiver_limit_A": receiver_limit_A, "per_level": args.per_level, "min_worst_violation_K": best["worst_violation_K"], "worst_outcome": best["worst_outcome"],
                          "sharp_worst_violation_K": sharp["worst_violation_K"], "sharp_worst_outcome": sharp["worst_outcome"],
                          "feasible": sharp["worst_violation_K"] <= 0.0,
                          "conflicting": sorted(k for k, v in best["violations_K"].items()

@@ -174,3 +174,81 @@ def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "--rounds must be >= 1" in err and "got 0" in err
+
+
+def test_receiver_headroom_is_the_rated_current_less_each_conditions_highest_load():
+    """A constant displacement per K-condition fits under the limit only up to the limit less the
+    condition's highest nominal current; none where the load reaches it, and a bad limit is named."""
+    from genthermal.machines.chapter7_feasibility import receiver_headroom_A
+
+    nominal = np.array([5.0, 6.0, 7.0, 4.0, 6.5])
+    masks = np.array([[1, 1, 0, 0, 0], [0, 0, 1, 1, 0], [0, 0, 0, 0, 1]], dtype=float)
+    assert receiver_headroom_A(nominal, masks, 7.0) == pytest.approx([1.0, 0.0, 0.5])
+    assert receiver_headroom_A(nominal, masks, 6.0) == pytest.approx([0.0, 0.0, 0.0])  # never negative
+    with pytest.raises(InputError, match="receiver_limit_A"):
+        receiver_headroom_A(nominal, masks, 0.0)
+    with pytest.raises(InputError, match="masks"):
+        receiver_headroom_A(nominal, masks[:, :3], 7.0)
+
+
+def test_rated_reading_holds_the_receiver_to_rated_current_at_every_instant(chapter7):
+    """With ``receiver_limit_A`` the receiver's current never exceeds it, at the start and at the
+    solution: no displacement in landing (its first 5 min run at 100 %), and the other conditions'
+    bounds are 7 A less their highest level (5-min cruise 83.3 %, cruise/combat 86.7 %). Without
+    the limit the same start moves 0.5 A in landing, 7.5 A on gen2."""
+    from genthermal.mission import load_mission
+
+    rated = load_mission("thesis_fig_7_7").rated_current_A
+    held = FeasibilityProblem(chapter7, LAGS, dt_s=60.0, inlet_follows_load=True, receiver_limit_A=rated)
+    upper = held.displacement_upper_A()
+    assert upper == pytest.approx([rated * (1 - 0.833), rated * (1 - 0.867), rated * (1 - 0.833), 0.0], abs=1e-9)
+    start = Start("shipped", {n: chapter7.parameters.value(n) for n in held.names if n in chapter7.parameters},
+                  31.0, SHIPPED_TAU_MIN, 1.0)
+    assert held.describe(held.bounds_and_start(start)[2])["receiver_max_current_A"] <= rated + 1e-9
+    free = FeasibilityProblem(chapter7, LAGS, dt_s=60.0, inlet_follows_load=True)
+    assert free.describe(free.bounds_and_start(start)[2])["receiver_max_current_A"] == pytest.approx(rated + 0.5)
+    solution = minimise_worst_violation(held, start, max_iter=15)
+    assert solution["receiver_max_current_A"] <= rated + 1e-6 and solution["receiver_limit_A"] == rated
+    assert solution["displaced_A"]["landing"] <= 1e-6
+    with pytest.raises(InputError, match="receiver_limit_A"):
+        FeasibilityProblem(chapter7, LAGS, dt_s=60.0, receiver_limit_A=-7.0)
+
+
+def test_rated_reading_ships_with_its_own_provenance(tmp_path):
+    """`--rated-current --write` writes the study's values with the rated-current reading in every
+    value's provenance, and the header names the command that wrote it."""
+    import importlib.util
+    from pathlib import Path
+
+    import yaml
+
+    spec = importlib.util.spec_from_file_location(
+        "chapter7_feasibility_bench", Path(__file__).resolve().parents[1] / "benchmarks" / "chapter7_feasibility.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    from genthermal.machines.chapter7_feasibility import MACHINE_NAMES
+
+    best = {"values": {n: 1.0 for n in MACHINE_NAMES} | {"k_flow": 0.5, "n_flow": 0.6}, "at_bound": ["R0"],
+            "inlet_rise_K": 28.0, "inlet_tau_min": 30.0, "inlet_load_share": 1.0}
+    path = tmp_path / "calibration.yaml"
+    module.write_calibration(best, path, module.SOURCE_RATED, "--inlet-follows-load --rated-current --write")
+    text = path.read_text()
+    assert "--rated-current --write" in text
+    parameters = yaml.safe_load(text)["parameters"]
+    assert set(parameters) == set(MACHINE_NAMES)
+    assert all("rated-current reading" in p["source"] for p in parameters.values())
+    assert "(at its bound)" in parameters["R0"]["source"] and "(at its bound)" not in parameters["P_iron"]["source"]
+
+
+def test_rated_reading_per_level_lets_the_receiver_take_load_only_in_landings_continuous_level(chapter7):
+    """Per level, the receiver held to 7 A has no room in landing's 5 min at 100 % and 7 A less
+    76.7 % in its continuous level; the start's displacement stays within the rating."""
+    held = FeasibilityProblem(chapter7, LAGS, dt_s=60.0, inlet_follows_load=True, receiver_limit_A=7.0, per_level=True)
+    upper = dict(zip(held.managed.displacement_names, held.displacement_upper_A()))
+    assert upper["landing_5min"] == 0.0 and upper["landing_continuous"] == pytest.approx(7.0 * (1 - 0.767))
+    assert upper["cruise_combat_5min"] == pytest.approx(7.0 * (1 - 0.867))
+    start = Start("shipped", {n: chapter7.parameters.value(n) for n in held.names if n in chapter7.parameters},
+                  31.0, SHIPPED_TAU_MIN, 1.0)
+    described = held.describe(held.bounds_and_start(start)[2])
+    assert described["receiver_max_current_A"] <= 7.0 + 1e-9
+    assert set(described["displaced_A"]) == set(held.managed.displacement_names)

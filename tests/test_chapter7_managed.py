@@ -91,3 +91,43 @@ def test_bad_inputs_name_their_field(chapter7):
         best_displacement(chapter7, 1.5, 0.5, 31.0, 0.0, ONSET_S)
     with pytest.raises(InputError, match="n_flow"):
         best_displacement(chapter7, 0.5, float("nan"), 31.0, 0.0, ONSET_S)
+
+
+def test_level_masks_split_each_condition_into_its_start_up_and_continuous_levels():
+    """Each K-condition's 5-min start-up level and its continuous level (Table 7.1) partition its
+    mask; landing's start-up level runs at 100 %, its continuous level at 76.7 %."""
+    from genthermal.machines.chapter7_managed import START_UP_S, level_masks
+
+    line = managed_timeline(60.0)
+    masks, names = level_masks(line)
+    assert names[-2:] == ("landing_5min", "landing_continuous") and masks.shape == (2 * len(CONDITIONS), line["time_s"].size)
+    assert np.array_equal(masks[0::2] + masks[1::2], line["masks"])
+    assert np.all(masks[0::2].sum(axis=1) * 60.0 == START_UP_S)
+    rated = load_mission("thesis_fig_7_7").rated_current_A
+    assert np.all(line["current_A"][masks[-2] > 0] == pytest.approx(rated))
+    assert np.all(line["current_A"][masks[-1] > 0] == pytest.approx(0.767 * rated))
+
+
+def test_per_level_displacement_moves_current_only_in_its_level(chapter7):
+    """With ``per_level`` a current displaced in landing's continuous level cools gen1's landing
+    and leaves every earlier condition as it was."""
+    proxy = ManagedBlockageProxy(blockable(chapter7), ["k_flow", "n_flow"], 60.0, None, 31.0, 41.5 * 60, ONSET_S,
+                                 per_level=True)
+    assert proxy.displaced.numel() == 2 * len(CONDITIONS)
+    peaks = proxy.peaks(ca.DM([0.53, 0.5]), 0.1)
+    evaluate = ca.Function("peaks", [proxy.displaced], [peaks["gen1"]])
+    none = np.asarray(evaluate(np.zeros(8))).ravel()
+    landing_continuous = np.asarray(evaluate(np.eye(8)[-1] * 1.5)).ravel()
+    assert np.allclose(landing_continuous[:-1], none[:-1]) and landing_continuous[-1] < none[-1]
+
+
+def test_best_displacement_held_to_rated_current_never_exceeds_it(chapter7):
+    """Held to 7 A per level, the receiver's current stays within it at every sample and nothing
+    moves in landing's 5 min at 100 %; without the limit the same blockage sends gen2 past 7 A."""
+    kwargs = dict(k_flow=0.6, n_flow=0.5, inlet_rise_C=26.0, inlet_rise_tau_s=36 * 60.0, onset_s=ONSET_S, dt_s=60.0,
+                  inlet_load_share=1.0)
+    held = best_displacement(chapter7, per_level=True, receiver_limit_A=7.0, **kwargs)
+    assert held["receiver_max_current_A"] <= 7.0 + 1e-6
+    assert held["displaced_A"]["landing_5min"] <= 1e-6 and held["displaced_A"]["landing_continuous"] > 0.1
+    free = best_displacement(chapter7, **kwargs)
+    assert free["receiver_max_current_A"] > 7.0 and set(free["displaced_A"]) == {c[0] for c in CONDITIONS}

@@ -41,6 +41,17 @@ violations share one unit (K of winding temperature past the outcome's band):
     decision variables, the healthy generator held by no current limit, as eqs. 7.2-7.4 hold it by
     θmax alone).
 
+The rated-current reading (``receiver_limit_A``)
+------------------------------------------------
+7.3.3 also says "during landing there is very little spare capacity in either the faulty or healthy
+generators", which holds if "spare capacity" means current below the rating: a receiver held to its
+rated current :math:`I_r` (7 A). With ``receiver_limit_A`` the study holds gen2 to that limit at every
+instant: a constant displacement :math:`I_d(k)` (eq. 7.3-7.4) is at most :math:`I_r` less the highest
+nominal current of its K-condition (:func:`receiver_headroom_A`), so none where the nominal load
+reaches 100 % (landing's first 5 min). With ``per_level`` each K-condition's 5-min start-up level and
+its continuous level have a displaced current of their own (as the heuristic's plan segments do),
+so landing's continuous level (76.7 %) can pass up to 1.63 A to a receiver held to 7 A.
+
 Free values and their bounds
 ----------------------------
 The machine's assumed cooling and loss values of :data:`~genthermal.machines.chapter7.FIT_BOUNDS`
@@ -79,7 +90,8 @@ from ..mission import load_mission
 from ..model import ThermalModel
 from .chapter7 import (BLOCKAGE_INLET_RISE_C, BLOCKAGE_MINUTES, DT_S, FIT_BOUNDS, INLET_TAU_BOUNDS_MIN, ONSET_S,
                        PLANNING_LIMIT_C, PROXIES, SOFTMAX_K, Proxy, ProxySimulator, blockable, manager_lags)
-from .chapter7_managed import CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy
+from .chapter7_managed import (CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy,
+                               receiver_headroom_A)
 
 #: Highest winding temperature the thesis's managed blockage reached, °C (7.3.3: breaches of 110.7 and 111 °C).
 MANAGED_LIMIT_C = 111.0
@@ -137,10 +149,22 @@ class FeasibilityProblem:
     softmax_K : float
         Smoothness of the peaks, K (the study's :data:`~genthermal.machines.chapter7.SOFTMAX_K`; a
         few mK gives the sharp peaks of the samples, to check a solution).
+    receiver_limit_A : float or None
+        Highest phase current the receiver gen2 may carry at any instant, A (the rated-current
+        reading: the mission's rated current, 7 A); None (default): no limit, θmax alone (eqs. 7.2-7.4).
+    per_level : bool
+        One displaced current per level of each K-condition (its 5-min start-up and continuous
+        levels, as the heuristic plans them) instead of one per K-condition (eq. 7.3, default): with
+        ``receiver_limit_A`` this lets the receiver take load in landing's continuous level.
     """
 
     def __init__(self, plant: ThermalModel, lags: dict, rest_s: float = REST_BEFORE_LANDING_S,
-                 inlet_follows_load: bool = False, dt_s: float = DT_S, softmax_K: float = SOFTMAX_K):
+                 inlet_follows_load: bool = False, dt_s: float = DT_S, softmax_K: float = SOFTMAX_K,
+                 receiver_limit_A: float | None = None, per_level: bool = False):
+        if receiver_limit_A is not None and not (isinstance(receiver_limit_A, (int, float))
+                                                 and math.isfinite(receiver_limit_A) and receiver_limit_A > 0):
+            raise InputError("receiver_limit_A", receiver_limit_A, "must be a current > 0 A or None (no limit)")
+        self.receiver_limit_A = None if receiver_limit_A is None else float(receiver_limit_A)
         if not (isinstance(softmax_K, (int, float)) and math.isfinite(softmax_K) and softmax_K > 0):
             raise InputError("softmax_K", softmax_K, "must be a smoothness > 0 K")
         self.softmax_K = float(softmax_K)
@@ -166,7 +190,7 @@ class FeasibilityProblem:
         self._threshold_violations(plant, theta)
         self._blockage_violations(model, theta, dt_s)
         self.managed = ManagedBlockageProxy(model, self.names, dt_s, None, 0.0, 0.0, ONSET_S, self.rest_s,
-                                            inlet_rise_of=self._gen1_inlet_rise)
+                                            inlet_rise_of=self._gen1_inlet_rise, per_level=per_level)
         self.managed_peaks = self.managed.peaks(theta, self.softmax_K)
         for unit in ("gen1", "gen2"):
             for i, (condition, _, _) in enumerate(CONDITIONS):
@@ -231,14 +255,23 @@ class FeasibilityProblem:
         lower = [s.bounds()[0] for s in self.scalings] + [INLET_RISE_BOUNDS_K[0], INLET_TAU_RANGE_MIN[0], 0.0]
         upper = [s.bounds()[1] for s in self.scalings] + [INLET_RISE_BOUNDS_K[1], INLET_TAU_RANGE_MIN[1],
                                                           1.0 if self.inlet_follows_load else 0.0]
-        n_displaced = self.managed.displaced.numel()
-        lower += [DISPLACEMENT_BOUNDS_A[0]] * n_displaced
-        upper += [DISPLACEMENT_BOUNDS_A[1]] * n_displaced
+        lower += [DISPLACEMENT_BOUNDS_A[0]] * self.managed.displaced.numel()
+        upper += self.displacement_upper_A().tolist()
         values = [s.decision(float(np.clip(start.values.get(n, s.reference), s.lower, s.upper)))
                   for n, s in zip(self.names, self.scalings)]
         values += [start.inlet_rise_K, start.inlet_tau_min, start.load_share if self.inlet_follows_load else 0.0]
-        values += [0.5] * n_displaced
+        values += [0.5] * self.managed.displaced.numel()
         return lower, upper, list(np.clip(values, lower, upper))
+
+    def displacement_upper_A(self) -> np.ndarray:
+        """Upper bound of each K-condition's displaced current, A: :data:`DISPLACEMENT_BOUNDS_A`, and
+        with :attr:`receiver_limit_A` the receiver's headroom (:func:`receiver_headroom_A`)."""
+        upper = np.full(self.managed.displaced.numel(), DISPLACEMENT_BOUNDS_A[1])
+        if self.receiver_limit_A is None:
+            return upper
+        headroom = receiver_headroom_A(self.managed.nominal_current_A, self.managed.displacement_masks,
+                                       self.receiver_limit_A)
+        return np.minimum(upper, headroom)
 
     def describe(self, x) -> dict:
         """Values, violations (K) and managed displacement at the decision ``x``."""
@@ -251,11 +284,11 @@ class FeasibilityProblem:
         others = {k: v for k, v in violations.items() if not k.startswith("managed_")}
         displaced = x[n + 3:]
         nominal = self.managed_nominal_current(self.managed.time_s)
-        receiver_max = float(np.max(nominal + self.managed.masks.T @ displaced))
+        receiver_max = float(np.max(nominal + self.managed.displacement_masks.T @ displaced))
         return {"values": {name: s.value(float(v)) for name, s, v in zip(self.names, self.scalings, x[:n])},
                 "inlet_rise_K": float(x[n]), "inlet_tau_min": float(x[n + 1]), "inlet_load_share": float(x[n + 2]),
-                "displaced_A": {c[0]: float(d) for c, d in zip(CONDITIONS, displaced)},
-                "receiver_max_current_A": receiver_max,
+                "displaced_A": {name: float(d) for name, d in zip(self.managed.displacement_names, displaced)},
+                "receiver_max_current_A": receiver_max, "receiver_limit_A": self.receiver_limit_A,
                 "violations_K": violations, "worst_violation_K": max(violations.values()),
                 "worst_outcome": max(violations, key=violations.get),
                 "managed_peak_C": MANAGED_LIMIT_C + max(managed), "others_worst_violation_K": max(others.values()),
@@ -370,9 +403,13 @@ def calibrated_plant(base: ThermalModel, result: dict) -> ThermalModel:
 
 
 def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BEFORE_LANDING_S,
-          inlet_follows_load: bool = False, rounds: int = 2, starts=None) -> dict:
+          inlet_follows_load: bool = False, rounds: int = 2, starts=None,
+          receiver_limit_A: float | None = None, per_level: bool = False) -> dict:
     """The minimax study from every start, with the manager lags re-measured on the best solution
     and the problem solved again from it, ``rounds`` times in all (the lags depend on the values).
+    ``receiver_limit_A`` holds the receiver to that current at every instant (the rated-current
+    reading, :class:`FeasibilityProblem`); ``per_level`` gives each level of a K-condition its own
+    displaced current.
 
     Returns
     -------
@@ -385,16 +422,19 @@ def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BE
     if not (isinstance(rounds, int) and rounds >= 1):
         raise InputError("rounds", rounds, "must be an integer >= 1")
     lags = measured_lags(chapter7)
-    problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load)
+    problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, receiver_limit_A=receiver_limit_A,
+                                 per_level=per_level)
     firsts = [minimise_worst_violation(problem, s) for s in (starts or default_starts(chapter7, default))]
     best = min(firsts, key=lambda r: r["worst_violation_K"])
     history = [{"lags_K": lags, "worst_violation_K": best["worst_violation_K"], "start": best["start"]}]
     for _ in range(rounds - 1):
         lags = measured_lags(calibrated_plant(chapter7, best))
-        problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load)
+        problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, receiver_limit_A=receiver_limit_A,
+                                     per_level=per_level)
         best = minimise_worst_violation(problem, Start("previous round", {}), x0=best["decision"])
         history.append({"lags_K": lags, "worst_violation_K": best["worst_violation_K"], "start": best["start"]})
-    sharp = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, softmax_K=SHARP_K).describe(best["decision"])
+    sharp = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, softmax_K=SHARP_K,
+                               receiver_limit_A=receiver_limit_A, per_level=per_level).describe(best["decision"])
     return {"starts": firsts, "best": best, "sharp": {k: sharp[k] for k in ("violations_K", "worst_violation_K",
                                                                             "worst_outcome")},
             "rounds": history, "problem": problem}

@@ -22,10 +22,15 @@ own breaches (0.7 and 1 K) are what its manager's prediction errors cost on top.
 The healthy receiver is not held to the rated current here: the thesis bounds it by θmax alone
 (eqs. 7.2-7.4), and it displaces load in landing, whose first 5 min run at 100 % (7.3.3: "a short
 rest with some load displacement is required for landing"), which a receiver held to rated
-current could not take.
+current could not take. The rated-current reading of "very little spare capacity" is an option of
+:func:`best_displacement` and of the feasibility study (``receiver_limit_A``, with
+:func:`receiver_headroom_A`), and ``per_level`` gives each K-condition's 5-min start-up and
+continuous levels their own displaced current (:func:`level_masks`).
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 import numpy as np
@@ -47,6 +52,8 @@ CONDITIONS = (("cruise", 66 * 60.0, 120 * 60.0), ("cruise_combat", 120 * 60.0, 1
               ("cruise_after", 180 * 60.0, 220 * 60.0), ("landing", 220 * 60.0, 240 * 60.0))
 #: Bounds of each displaced current, A: from none to the whole continuous cruise load of gen1.
 DISPLACEMENT_BOUNDS_A = (0.0, 4.0)
+#: Length of a K-condition's start-up level, s (thesis Table 7.1: "5 mins", then the continuous level).
+START_UP_S = 300.0
 #: Sharpness of the smooth excess, K: :math:`s \ln(1 + e^{x/s})` is within :math:`s \ln 2` = 0.07 K
 #: of :math:`\max(x, 0)`.
 EXCESS_SHARPNESS_K = 0.1
@@ -90,6 +97,53 @@ def managed_timeline(dt_s: float, rest_s: float = REST_BEFORE_LANDING_S) -> dict
             "rest": resting, "mission": mission}
 
 
+def level_masks(line: dict) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Each K-condition's mask of :func:`managed_timeline` split into its 5-min start-up level and its
+    continuous level (Table 7.1), so a displacement can differ between the two.
+
+    Returns
+    -------
+    masks : ndarray, shape (2 k, n)
+        Start-up then continuous level of each K-condition, in the order of :data:`CONDITIONS`.
+    names : tuple of str
+        ``"<condition>_5min"`` and ``"<condition>_continuous"`` for each row.
+    """
+    rows, names = [], []
+    for mask, (condition, start, _) in zip(line["masks"], CONDITIONS):
+        start_up = line["mission_time_s"] < start + START_UP_S - 1e-9
+        rows += [mask * start_up, mask * ~start_up]
+        names += [f"{condition}_5min", f"{condition}_continuous"]
+    return np.array(rows, dtype=float), tuple(names)
+
+
+def receiver_headroom_A(nominal_current_A: np.ndarray, masks: np.ndarray, limit_A: float) -> np.ndarray:
+    r"""Largest constant displacement per K-condition that keeps the receiver at or below ``limit_A``
+    at every sample, A (0 where the nominal current already reaches the limit).
+
+    Parameters
+    ----------
+    nominal_current_A : ndarray, shape (n,)
+        Undisplaced phase current of both generators at each sample, A.
+    masks : ndarray, shape (k, n)
+        1 where each K-condition's displacement applies, else 0.
+    limit_A : float
+        Highest phase current the receiver may carry, A (> 0).
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        :math:`\max(0, I_{lim} - \max_{t \in k} I_{nom}(t))` per K-condition, A.
+    """
+    if not (isinstance(limit_A, (int, float)) and math.isfinite(limit_A) and limit_A > 0):
+        raise InputError("receiver_limit_A", limit_A, "must be a current > 0 A (the receiver's rated current)")
+    nominal = np.asarray(nominal_current_A, dtype=float)
+    masks = np.asarray(masks, dtype=float)
+    if masks.ndim != 2 or masks.shape[1] != nominal.size:
+        raise InputError("masks", masks.shape, f"must be (conditions, {nominal.size}), one row per K-condition")
+    highest = np.array([nominal[row > 0].max(initial=0.0) for row in masks])
+    return np.clip(float(limit_A) - highest, 0.0, None)
+
+
 class ManagedBlockageProxy:
     """The managed-blockage proxy (module docstring) as CasADi expressions.
 
@@ -117,16 +171,32 @@ class ManagedBlockageProxy:
         Share of gen1's inlet rise that follows its load, in [0, 1]
         (:func:`genthermal.coolant.inlet_load_factor` of gen1's current against the undisplaced
         one); 0 (default): the fault's rise alone. Not with ``inlet_rise_of``.
+    per_level : bool
+        One displaced current per level of each K-condition (its 5-min start-up level and its
+        continuous level, :func:`level_masks`) instead of one per K-condition (eq. 7.3, default).
+
+    Attributes
+    ----------
+    masks : ndarray, shape (4, n)
+        Where each K-condition runs (the windows of its peaks).
+    displacement_masks : ndarray, shape (m, n)
+        Where each displaced current of :attr:`displaced` applies (``masks``, or the levels).
+    displacement_names : tuple of str
+        Name of each displaced current.
     """
 
     def __init__(self, model: ThermalModel, names, dt_s: float, k_flow: float | None, inlet_rise_C: float,
                  inlet_rise_tau_s: float, onset_s: float, rest_s: float = REST_BEFORE_LANDING_S, inlet_rise_of=None,
-                 inlet_load_share: float = 0.0):
+                 inlet_load_share: float = 0.0, per_level: bool = False):
         self.names = list(names)
         if inlet_load_share != 0 and inlet_rise_of is not None:
             raise InputError("inlet_load_share", inlet_load_share, "give it or inlet_rise_of, not both")
         line = managed_timeline(dt_s, rest_s)
         self.time_s, self.masks = line["time_s"], line["masks"]
+        if per_level:
+            self.displacement_masks, self.displacement_names = level_masks(line)
+        else:
+            self.displacement_masks, self.displacement_names = self.masks, tuple(c[0] for c in CONDITIONS)
         self.nominal_current_A = line["current_A"]
         generator = model.spec.interface.generator
         mission = line["mission"]
@@ -151,8 +221,9 @@ class ManagedBlockageProxy:
         for name in generator.phase_inputs:
             per_amp[index(name)] = 1.0
         per_amp[index(generator.excitation_input)] = slope
-        self.displaced = ca.MX.sym("displaced", len(CONDITIONS))
-        moved = ca.DM(per_amp) * ca.repmat(ca.mtimes(ca.DM(self.masks).T, self.displaced).T, frame.shape[0], 1)
+        self.displaced = ca.MX.sym("displaced", self.displacement_masks.shape[0])
+        moved_A = ca.mtimes(ca.DM(self.displacement_masks).T, self.displaced).T  # (1, n): current off gen1
+        moved = ca.DM(per_amp) * ca.repmat(moved_A, frame.shape[0], 1)
         self.inputs = {"gen1": ca.DM(blocked) - moved, "gen2": ca.DM(frame) + moved}
         inlet_load_factor(1.0, 1.0, inlet_load_share)  # rejects a share outside [0, 1], naming it
         if inlet_rise_of is None and inlet_load_share != 0:
@@ -161,7 +232,7 @@ class ManagedBlockageProxy:
             def inlet_rise_of(time_s, gen1_current):
                 return fault_rise * inlet_load_factor(gen1_current, ca.DM(current).T, inlet_load_share)
         if inlet_rise_of is not None:
-            gen1_current = ca.DM(current).T - ca.mtimes(ca.DM(self.masks).T, self.displaced).T
+            gen1_current = ca.DM(current).T - moved_A
             row = np.zeros((frame.shape[0], 1))
             row[index(generator.coolant_input)] = 1.0
             self.inputs["gen1"] = ca.DM(frame) - moved + ca.mtimes(ca.DM(row), inlet_rise_of(self.time_s, gen1_current))
@@ -197,7 +268,8 @@ class ManagedBlockageProxy:
 
 def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_rise_C: float,
                       inlet_rise_tau_s: float, onset_s: float, dt_s: float = 30.0,
-                      softmax_K: float = 0.1, inlet_load_share: float = 0.0) -> dict:
+                      softmax_K: float = 0.1, inlet_load_share: float = 0.0, per_level: bool = False,
+                      receiver_limit_A: float | None = None) -> dict:
     """The displaced currents that give the managed-blockage proxy of ``plant`` (blockage values
     fixed) its lowest worst peak, by IPOPT over the four currents (minimise the bound :math:`w` on
     every K-condition's smooth peak of both generators): what the thesis's outcome asks of the
@@ -217,11 +289,18 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
         Sample period (s) and smoothness of the peaks (K).
     inlet_load_share : float
         Share of gen1's inlet rise that follows its load (:func:`genthermal.coolant.inlet_load_factor`).
+    per_level : bool
+        One displaced current per level (5-min start-up, continuous) of each K-condition
+        (:class:`ManagedBlockageProxy`); default one per K-condition (eq. 7.3).
+    receiver_limit_A : float or None
+        Highest current the receiver gen2 may carry at any instant, A (:func:`receiver_headroom_A`);
+        None (default): no limit, θmax alone.
 
     Returns
     -------
     dict
-        ``conditions`` (condition, displaced_A, gen1_peak_C, gen2_peak_C), ``worst_peak_C`` (the
+        ``conditions`` (condition, displaced_A: the largest of its currents, gen1_peak_C, gen2_peak_C),
+        ``displaced_A`` (name → A, one per displaced current), ``worst_peak_C`` (the
         lowest reachable highest smooth peak of either generator, °C), ``worst_excess_K`` (over
         :data:`LIMIT_C`), ``receiver_max_current_A`` (the most gen2 carries, A), ``converged``.
     """
@@ -233,22 +312,28 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
         raise InputError("n_flow", n_flow, "must be a convection exponent in [0, 1.5] (the effect's range)")
     model = blockable(plant)
     proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s,
-                                 inlet_load_share=inlet_load_share)
+                                 inlet_load_share=inlet_load_share, per_level=per_level)
+    n = proxy.displaced.numel()
+    upper = np.full(n, DISPLACEMENT_BOUNDS_A[1])
+    if receiver_limit_A is not None:
+        upper = np.minimum(upper, receiver_headroom_A(proxy.nominal_current_A, proxy.displacement_masks, receiver_limit_A))
     peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
     every = ca.vertcat(peaks["gen1"], peaks["gen2"])
     d, bound = proxy.displaced, ca.MX.sym("worst")
     solver = ca.nlpsol("managed_displacement", "ipopt",
                        {"x": ca.vertcat(d, bound), "f": bound + 1e-6 * ca.sumsqr(d), "g": every - bound},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes", "ipopt.tol": 1e-8})
-    n = len(CONDITIONS)
-    solution = solver(x0=[1.0] * n + [150.0], lbx=[DISPLACEMENT_BOUNDS_A[0]] * n + [-ca.inf],
-                      ubx=[DISPLACEMENT_BOUNDS_A[1]] * n + [ca.inf], ubg=0.0)
+    solution = solver(x0=np.minimum(1.0, upper).tolist() + [150.0], lbx=[DISPLACEMENT_BOUNDS_A[0]] * n + [-ca.inf],
+                      ubx=upper.tolist() + [ca.inf], ubg=0.0)
     x = np.asarray(solution["x"]).ravel()
     displaced = x[:n]
     gen1, gen2 = (np.asarray(v).ravel() for v in ca.Function("peaks", [d], [peaks["gen1"], peaks["gen2"]])(displaced))
     worst = float(max(gen1.max(), gen2.max()))
-    return {"conditions": [{"condition": c[0], "displaced_A": float(v), "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
-                           for c, v, a, b in zip(CONDITIONS, displaced, gen1, gen2)],
+    per_condition = [float(np.max(displaced[(proxy.displacement_masks[:, row > 0] > 0).any(axis=1)]))
+                     for row in proxy.masks]
+    return {"conditions": [{"condition": c[0], "displaced_A": v, "gen1_peak_C": float(a), "gen2_peak_C": float(b)}
+                           for c, v, a, b in zip(CONDITIONS, per_condition, gen1, gen2)],
+            "displaced_A": {name: float(v) for name, v in zip(proxy.displacement_names, displaced)},
             "worst_peak_C": worst, "worst_excess_K": worst - LIMIT_C,
-            "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.masks.T @ displaced)),
+            "receiver_max_current_A": float(np.max(proxy.nominal_current_A + proxy.displacement_masks.T @ displaced)),
             "converged": bool(solver.stats()["success"])}

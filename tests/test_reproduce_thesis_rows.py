@@ -1,0 +1,69 @@
+"""The chapter-7 verdicts of benchmarks/reproduce_thesis.py check what the thesis states: +4 K is
+reproduced only with both a rest before landing and load displaced in it ("a short rest and load
+adjust before landing"), +16 K only with displacement in cruise/combat, none in the cruise after and
+"a short rest with some load displacement" for landing. Flight outcomes are built by hand (no flight)."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ACTIONS = ("loading_preparation", "start_warm_up", "taxi", "take_off_climb", "cruise", "cruise_combat", "cruise",
+           "landing")
+
+
+@pytest.fixture(scope="module")
+def reproduce():
+    spec = importlib.util.spec_from_file_location(
+        "reproduce_thesis", Path(__file__).resolve().parents[1] / "benchmarks" / "reproduce_thesis.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _outcome(shed=None, rest_before_landing=0.0, peak=107.0):
+    """A flight outcome with ``shed`` (action index → A) and a rest of ``rest_before_landing`` min before landing."""
+    shed = shed or {}
+    actions = [{"action": name, "shed_A": shed.get(i, 0.0), "rest_min": rest_before_landing if i == 7 else 0.0,
+                "rest_before_min": rest_before_landing if i == 7 else 0.0} for i, name in enumerate(ACTIONS)]
+    return {"actions": actions, "peak_C": peak, "peak_gen1_C": peak, "peak_gen2_C": peak - 4.0}
+
+
+@pytest.mark.parametrize("shed, rest, verdict, missing", [
+    ({7: 0.3}, 5.0, "reproduced", ""),
+    ({}, 5.0, "qualitative", "displaces no load in landing"),        # the rated-current reading's flight
+    ({7: 0.05}, 0.0, "qualitative", "does not rest before landing"),  # the θmax reading's flight
+    ({5: 0.2, 7: 0.3}, 5.0, "contradicted", "acts earlier too"),
+])
+def test_inlet_4K_needs_both_the_rest_and_the_load_adjust(reproduce, shed, rest, verdict, missing):
+    row = reproduce.inlet_4K_row(_outcome(shed, rest))
+    assert row["verdict"] == verdict
+    assert missing in row["reason"]
+
+
+def test_inlet_4K_reason_reports_the_rated_reading(reproduce):
+    """The reason names what the flight held to 7 A did and the rated-current study's least violation."""
+    study = {"worst_violation_K": 3.21, "sharp_worst_violation_K": 3.25, "active": ["landing_4K", "managed_gen1_landing"]}
+    row = reproduce.inlet_4K_row(_outcome({7: 0.05}, 0.0), _outcome({}, 5.0, 97.2), study)
+    assert "5-min rest before landing, 0.00 A displaced in it" in row["reason"] and "without the load adjust" in row["reason"]
+    assert "+3.21 K (+3.25 K on the samples' sharp peaks): no calibration meets them all" in row["reason"]
+    assert "landing_4K, managed_gen1_landing" in row["reason"]
+
+
+@pytest.mark.parametrize("shed, rest, verdict", [
+    ({5: 0.04, 7: 0.45}, 5.0, "reproduced"),
+    ({5: 0.04}, 20.0, "qualitative"),            # no displacement in landing (the rated-current flight)
+    ({5: 0.04, 6: 0.2, 7: 0.45}, 5.0, "qualitative"),  # displacement in the cruise after
+    ({4: 0.1, 5: 0.04, 7: 0.45}, 5.0, "qualitative"),  # displacement before cruise/combat
+    ({}, 0.0, "contradicted"),
+])
+def test_inlet_16K_checks_every_part_of_the_thesis_outcome(reproduce, shed, rest, verdict):
+    row = reproduce.inlet_16K_row(_outcome(shed, rest))
+    assert row["verdict"] == verdict
+    assert (row["reason"] == "") == (verdict == "reproduced")
+
+
+def test_inlet_16K_reason_adds_the_rated_flight_as_one_clause(reproduce):
+    row = reproduce.inlet_16K_row(_outcome({5: 0.04, 7: 0.45}, 5.0), _outcome({5: 0.04}, 20.0))
+    assert row["verdict"] == "reproduced"
+    assert row["reason"].startswith("held to the rated 7 A instead:") and "20-min rest before landing" in row["reason"]
