@@ -179,7 +179,7 @@ def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys):
 def test_receiver_headroom_is_the_rated_current_less_each_conditions_highest_load():
     """A constant displacement per K-condition fits under the limit only up to the limit less the
     condition's highest nominal current; none where the load reaches it, and a bad limit is named."""
-    from genthermal.machines.chapter7_feasibility import receiver_headroom_A
+    from genthermal.machines.chapter7_managed import receiver_headroom_A
 
     nominal = np.array([5.0, 6.0, 7.0, 4.0, 6.5])
     masks = np.array([[1, 1, 0, 0, 0], [0, 0, 1, 1, 0], [0, 0, 0, 0, 1]], dtype=float)

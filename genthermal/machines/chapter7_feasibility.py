@@ -47,7 +47,7 @@ The rated-current reading (``receiver_limit_A``)
 generators", which holds if "spare capacity" means current below the rating: a receiver held to its
 rated current :math:`I_r` (7 A). With ``receiver_limit_A`` the study holds gen2 to that limit at every
 instant: a constant displacement :math:`I_d(k)` (eq. 7.3-7.4) is at most :math:`I_r` less the highest
-nominal current of its K-condition (:func:`receiver_headroom_A`), so none where the nominal load
+nominal current of its K-condition (:func:`~genthermal.machines.chapter7_managed.receiver_headroom_A`), so none where the nominal load
 reaches 100 % (landing's first 5 min). With ``per_level`` each K-condition's 5-min start-up level and
 its continuous level have a displaced current of their own (as the heuristic's plan segments do),
 so landing's continuous level (76.7 %) can pass up to 1.63 A to a receiver held to 7 A.
@@ -90,8 +90,7 @@ from ..mission import load_mission
 from ..model import ThermalModel
 from .chapter7 import (BLOCKAGE_INLET_RISE_C, BLOCKAGE_MINUTES, DT_S, FIT_BOUNDS, INLET_TAU_BOUNDS_MIN, ONSET_S,
                        PLANNING_LIMIT_C, PROXIES, SOFTMAX_K, Proxy, ProxySimulator, blockable, manager_lags)
-from .chapter7_managed import (CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy,
-                               receiver_headroom_A)
+from .chapter7_managed import CONDITIONS, DISPLACEMENT_BOUNDS_A, REST_BEFORE_LANDING_S, ManagedBlockageProxy
 
 #: Highest winding temperature the thesis's managed blockage reached, °C (7.3.3: breaches of 110.7 and 111 °C).
 MANAGED_LIMIT_C = 111.0
@@ -264,14 +263,9 @@ class FeasibilityProblem:
         return lower, upper, list(np.clip(values, lower, upper))
 
     def displacement_upper_A(self) -> np.ndarray:
-        """Upper bound of each K-condition's displaced current, A: :data:`DISPLACEMENT_BOUNDS_A`, and
-        with :attr:`receiver_limit_A` the receiver's headroom (:func:`receiver_headroom_A`)."""
-        upper = np.full(self.managed.displaced.numel(), DISPLACEMENT_BOUNDS_A[1])
-        if self.receiver_limit_A is None:
-            return upper
-        headroom = receiver_headroom_A(self.managed.nominal_current_A, self.managed.displacement_masks,
-                                       self.receiver_limit_A)
-        return np.minimum(upper, headroom)
+        """Upper bound of each displaced current, A, with :attr:`receiver_limit_A`
+        (:meth:`~genthermal.machines.chapter7_managed.ManagedBlockageProxy.displacement_upper_A`)."""
+        return self.managed.displacement_upper_A(self.receiver_limit_A)
 
     def describe(self, x) -> dict:
         """Values, violations (K) and managed displacement at the decision ``x``."""

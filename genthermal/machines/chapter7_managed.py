@@ -244,6 +244,14 @@ class ManagedBlockageProxy:
         self.indicators = {"gen1": self.simulators["gen1"].indicator([after]),
                            "gen2": self.simulators["gen2"].indicator()}
 
+    def displacement_upper_A(self, receiver_limit_A: float | None = None) -> np.ndarray:
+        """Upper bound of each displaced current of :attr:`displaced`, A: :data:`DISPLACEMENT_BOUNDS_A`,
+        and with ``receiver_limit_A`` (A) the receiver's headroom under it (:func:`receiver_headroom_A`)."""
+        upper = np.full(self.displacement_masks.shape[0], DISPLACEMENT_BOUNDS_A[1])
+        if receiver_limit_A is None:
+            return upper
+        return np.minimum(upper, receiver_headroom_A(self.nominal_current_A, self.displacement_masks, receiver_limit_A))
+
     def peaks(self, theta, softmax_K: float) -> dict:
         """Smooth winding peaks (°C) of gen1 and gen2 in each K-condition: name → (4,) expressions of
         ``theta`` and :attr:`displaced`."""
@@ -314,9 +322,7 @@ def best_displacement(plant: ThermalModel, k_flow: float, n_flow: float, inlet_r
     proxy = ManagedBlockageProxy(model, ["k_flow", "n_flow"], dt_s, None, inlet_rise_C, inlet_rise_tau_s, onset_s,
                                  inlet_load_share=inlet_load_share, per_level=per_level)
     n = proxy.displaced.numel()
-    upper = np.full(n, DISPLACEMENT_BOUNDS_A[1])
-    if receiver_limit_A is not None:
-        upper = np.minimum(upper, receiver_headroom_A(proxy.nominal_current_A, proxy.displacement_masks, receiver_limit_A))
+    upper = proxy.displacement_upper_A(receiver_limit_A)
     peaks = proxy.peaks(ca.DM([k_flow, n_flow]), softmax_K)
     every = ca.vertcat(peaks["gen1"], peaks["gen2"])
     d, bound = proxy.displaced, ca.MX.sym("worst")
