@@ -1,6 +1,8 @@
 """Shared fixtures: the thesis generator models are built once per test session."""
 
+import importlib.util
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -18,6 +20,23 @@ def plant_model():
 def design_model(plant_model):
     """Linear design model (thesis 5.2) derived from the same network."""
     return linear_design_model(plant_model)
+
+
+@pytest.fixture(scope="session")
+def benchmark_script():
+    """``benchmark_script(name)``: the script ``benchmarks/<name>.py`` loaded as a module (the
+    benchmarks are scripts, not a package), once per test session."""
+    loaded = {}
+
+    def load(name: str):
+        if name not in loaded:
+            spec = importlib.util.spec_from_file_location(
+                name, Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py")
+            loaded[name] = importlib.util.module_from_spec(spec)
+            spec.loader.exec_module(loaded[name])
+        return loaded[name]
+
+    return load
 
 
 @pytest.fixture(autouse=True)

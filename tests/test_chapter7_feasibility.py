@@ -133,22 +133,11 @@ def test_minimax_holds_its_epigraph_and_its_cap(chapter7):
         minimise_worst_violation(problem, start, managed_cap_C=111.0, others_cap_K=0.0)
 
 
-def _reproduce_module():
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "reproduce_thesis", Path(__file__).resolve().parents[1] / "benchmarks" / "reproduce_thesis.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_reproduction_row_states_the_least_violation_and_the_conflicting_outcomes():
+def test_reproduction_row_states_the_least_violation_and_the_conflicting_outcomes(benchmark_script):
     """The managed-plant row of benchmarks/reproduce_thesis.py says whether a calibration meets every
     outcome from the study's sharp check, with the least violation, the values at a bound and the
     outcomes at the worst; --quick names the command instead."""
-    text = _reproduce_module()._feasibility_text
+    text = benchmark_script("reproduce_thesis")._feasibility_text
     study = {"worst_violation_K": 0.0706, "sharp_worst_violation_K": 0.1028, "at_bound": ["h_top_air", "k_flow"],
              "receiver_max_current_A": 7.61, "active": ["cruise_combat_16K", "managed_gen2_cruise_combat"]}
     missed = text(study)
@@ -159,16 +148,10 @@ def test_reproduction_row_states_the_least_violation_and_the_conflicting_outcome
     assert "benchmarks/chapter7_feasibility.py" in text(None)
 
 
-def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys):
+def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys, benchmark_script):
     """`benchmarks/chapter7_feasibility.py --rounds 0` stops with a usage error naming the option
     and the value, before any solve (it raised the study's InputError as a traceback)."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location(
-        "chapter7_feasibility_bench", Path(__file__).resolve().parents[1] / "benchmarks" / "chapter7_feasibility.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = benchmark_script("chapter7_feasibility")
     with pytest.raises(SystemExit) as stop:
         module.main(["--rounds", "0"])
     assert stop.value.code == 2
@@ -214,18 +197,12 @@ def test_rated_reading_holds_the_receiver_to_rated_current_at_every_instant(chap
         FeasibilityProblem(chapter7, LAGS, dt_s=60.0, receiver_limit_A=-7.0)
 
 
-def test_rated_reading_ships_with_its_own_provenance(tmp_path):
+def test_rated_reading_ships_with_its_own_provenance(tmp_path, benchmark_script):
     """`--rated-current --write` writes the study's values with the rated-current reading in every
     value's provenance, and the header names the command that wrote it."""
-    import importlib.util
-    from pathlib import Path
-
     import yaml
 
-    spec = importlib.util.spec_from_file_location(
-        "chapter7_feasibility_bench", Path(__file__).resolve().parents[1] / "benchmarks" / "chapter7_feasibility.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = benchmark_script("chapter7_feasibility")
     from genthermal.machines.chapter7_feasibility import MACHINE_NAMES
 
     best = {"values": {n: 1.0 for n in MACHINE_NAMES} | {"k_flow": 0.5, "n_flow": 0.6}, "at_bound": ["R0"],

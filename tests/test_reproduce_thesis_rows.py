@@ -3,9 +3,6 @@ reproduced only with both a rest before landing and load displaced in it ("a sho
 adjust before landing"), +16 K only with displacement in cruise/combat, none in the cruise after and
 "a short rest with some load displacement" for landing. Flight outcomes are built by hand (no flight)."""
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
 ACTIONS = ("loading_preparation", "start_warm_up", "taxi", "take_off_climb", "cruise", "cruise_combat", "cruise",
@@ -13,12 +10,8 @@ ACTIONS = ("loading_preparation", "start_warm_up", "taxi", "take_off_climb", "cr
 
 
 @pytest.fixture(scope="module")
-def reproduce():
-    spec = importlib.util.spec_from_file_location(
-        "reproduce_thesis", Path(__file__).resolve().parents[1] / "benchmarks" / "reproduce_thesis.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def reproduce(benchmark_script):
+    return benchmark_script("reproduce_thesis")
 
 
 def _outcome(shed=None, rest_before_landing=0.0, peak=107.0):

@@ -225,17 +225,12 @@ def test_schedulers_share_a_flight_only_when_they_plan_on_the_same_model():
         sweep.run_sweep([], ("optimal",), optimal_planner_model="quadratic")
 
 
-def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys):
+def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys, benchmark_script):
     """A partial re-fly replaces its cases of the whole grid and every summary key is recomputed
     from the merged cases; a re-fly of another grid or other schedulers is refused."""
-    import importlib.util
     import json
-    from pathlib import Path
 
-    spec = importlib.util.spec_from_file_location(
-        "robustness_report", Path(__file__).resolve().parents[1] / "benchmarks" / "robustness_report.py")
-    report_module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(report_module)
+    report_module = benchmark_script("robustness_report")
     schedulers = ("heuristic", "engineer", "optimal")
 
     def grid(cases):
