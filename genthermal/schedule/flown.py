@@ -56,10 +56,10 @@ DEFAULT_CONFIDENCE_SIGMAS = 2.0
 
 
 def covariance_steps(ekf: ExtendedKalmanFilter) -> ca.Function:
-    """``(z, P, U, update) -> (Z, P_end, variance)``: :data:`PREDICTION_CHUNK_STEPS` filter steps
+    """``(z, P, U, update) -> (Z, P_all, variance)``: :data:`PREDICTION_CHUNK_STEPS` filter steps
     with the covariance recursion of the module docstring (``update`` 1 where the filter makes its
-    measurement update before the step): the states and the outputs' variances (K²) after each
-    step side by side, the covariance after the last. Built once per filter."""
+    measurement update before the step): the states, the covariances and the outputs' variances
+    (K²) after each step side by side. Built once per filter."""
     cached = getattr(ekf, "_planning_covariance_steps", None)
     if cached is not None:
         return cached
@@ -78,8 +78,8 @@ def covariance_steps(ekf: ExtendedKalmanFilter) -> ca.Function:
     U, updates = ca.MX.sym("U", len(ekf.model.input_names), chunk), ca.MX.sym("update", 1, chunk)
     Z, P_all, V = steps(z0, P0, U, updates)
     ekf._planning_covariance_steps = ca.Function(
-        "planning_prediction_chunk", [z0, P0, U, updates], [Z, P_all[:, -nz:], V],
-        ["z", "P", "U", "update"], ["Z", "P_end", "variance"])
+        "planning_prediction_chunk", [z0, P0, U, updates], [Z, P_all, V],
+        ["z", "P", "U", "update"], ["Z", "P_all", "variance"])
     return ekf._planning_covariance_steps
 
 
@@ -135,22 +135,39 @@ class FlownPlanning:
         n_out = self.filters[0].H.shape[0]
         outputs = np.empty((problem.n_generators, n_out, n + 1))
         backoff = np.empty_like(outputs)
-        chunk = PREDICTION_CHUNK_STEPS
-        n_padded = int(np.ceil(n / chunk)) * chunk
-        updates = update_steps(n_padded, problem.dt_s, problem.window_s)
-        for g, ekf in enumerate(self.filters):
-            currents = np.concatenate([timeline.currents_A[g], np.full(n_padded - n, timeline.currents_A[g, -1])])
-            U = problem.inputs(g, currents).T
-            run = covariance_steps(ekf)
-            z, P = self.z0[g], self.P0[g]
-            parts = []
-            for start in range(0, n_padded, chunk):
-                part = run(z, P, U[:, start:start + chunk], updates[start:start + chunk].reshape(1, -1))
-                Z_part, P, variance_part = (np.asarray(m) for m in part)
-                z = Z_part[:, -1]
-                parts.append((Z_part, variance_part))
-            Z = np.column_stack([self.z0[g], np.hstack([p[0] for p in parts])[:, :n]])
-            variance = np.column_stack([np.diag(ekf.H @ self.P0[g] @ ekf.H.T), np.hstack([p[1] for p in parts])[:, :n]])
-            outputs[g] = (ekf.H @ Z) + ekf.e[:, None]
-            backoff[g] = self.confidence_sigmas * np.sqrt(np.clip(variance, 0.0, None))
+        for g in range(problem.n_generators):
+            outputs[g], backoff[g], _ = self.run(problem, g, self.z0[g], self.P0[g], timeline.currents_A[g])
         return np.arange(n + 1) * problem.dt_s, outputs, backoff
+
+    def run(self, problem, g: int, z: np.ndarray, P: np.ndarray, currents_A: np.ndarray,
+            first_step: int = 0) -> tuple[np.ndarray, np.ndarray, tuple]:
+        """Generator ``g``'s filter model from state ``z`` and covariance ``P`` through the phase
+        currents ``currents_A`` (n_steps,), A, starting ``first_step`` steps after the planning
+        instant (which sets where along it the filter's updates fall).
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray, tuple)
+            Outputs (°C) and back-off (K), each (n_outputs, n_steps + 1) with the start first, and
+            ``(z, P, first_step)`` after the last step.
+        """
+        ekf, chunk = self.filters[g], PREDICTION_CHUNK_STEPS
+        n, nz = len(currents_A), len(ekf.state_names)
+        n_padded = int(np.ceil(n / chunk)) * chunk
+        updates = update_steps(first_step + n_padded, problem.dt_s, problem.window_s)[first_step:]
+        U = problem.inputs(g, np.concatenate([currents_A, np.full(n_padded - n, currents_A[-1])])).T
+        step_chunk = covariance_steps(ekf)
+        z_now, P_now, parts = np.asarray(z, dtype=float), np.asarray(P, dtype=float), []
+        for start in range(0, n_padded, chunk):
+            Z_part, P_part, variance_part = (np.asarray(m) for m in step_chunk(
+                z_now, P_now, U[:, start:start + chunk], updates[start:start + chunk].reshape(1, -1)))
+            z_now, P_now = Z_part[:, -1], P_part[:, -nz:]
+            if start + chunk >= n:  # the state and covariance after step n
+                last = n - start - 1
+                z_end, P_end = Z_part[:, last], P_part[:, last * nz:(last + 1) * nz]
+            parts.append((Z_part, variance_part))
+        Z = np.column_stack([z, np.hstack([p[0] for p in parts])[:, :n]])
+        variance = np.column_stack([np.diag(ekf.H @ P @ ekf.H.T), np.hstack([p[1] for p in parts])[:, :n]])
+        outputs = (ekf.H @ Z) + ekf.e[:, None]
+        backoff = self.confidence_sigmas * np.sqrt(np.clip(variance, 0.0, None))
+        return outputs, backoff, (z_end, P_end, first_step + n)

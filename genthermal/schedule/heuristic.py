@@ -23,6 +23,7 @@ import time
 
 import numpy as np
 
+from .heuristic_flown import FlownSegmentResponse
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, predict,
                    rest_available_s, robust_outputs)
 
@@ -47,6 +48,7 @@ class SegmentResponse:
     rise back-off of ``problem`` (:func:`~genthermal.schedule.plan.robust_outputs`)."""
 
     def __init__(self, problem: PlanningProblem, g: int, k: int, x_start: np.ndarray, rest_s: float):
+        self.problem, self.g, self.k = problem, g, k
         generator, dt = problem.generators[g], problem.dt_s
         segment = problem.segments[k]
         E, G = generator.step(dt)
@@ -71,6 +73,18 @@ class SegmentResponse:
     def peak(self, d: float) -> float:
         """Peak temperature (°C) with displaced current ``d`` (A)."""
         return float(np.max(self.y0 + d * self.yd))
+
+    def end(self, d: float) -> np.ndarray:
+        """State (°C) after the segment with displaced current ``d`` (A)."""
+        return self.x_end0 + d * self.x_end_d
+
+    def room(self, limit_C: float) -> float:
+        """:func:`receiver_room` of this response."""
+        return receiver_room(self, limit_C)
+
+    def later_room(self, limit_C: float) -> float:
+        """:func:`future_room` of this response."""
+        return future_room(self.problem, self.g, self.k, self, limit_C)
 
     def least_displacement(self, limit_C: float) -> float:
         """Smallest ``d >= 0`` keeping the peak within ``limit_C``; ``inf`` if none does."""
@@ -147,7 +161,8 @@ def _displacement(problem: PlanningProblem, k: int, responses, violators) -> np.
 
 
 def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = HeuristicSettings()) -> PlanResult:
-    """Plan by the thesis heuristic (Fig. 7.2) on the design model.
+    """Plan by the thesis heuristic (Fig. 7.2) on the design model, or on the flown model when
+    ``problem.flown`` is set (:mod:`~genthermal.schedule.heuristic_flown`).
 
     Parameters
     ----------
@@ -165,7 +180,10 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
     started = time.perf_counter()
     n_seg, n_gen = len(problem.segments), problem.n_generators
     displaced, rests = np.zeros((n_gen, n_seg)), np.zeros(n_seg)
-    x = problem.x0.copy()
+    if problem.flown is None:
+        respond, x = SegmentResponse, list(problem.x0.copy())
+    else:  # on the flown model: the filters' states and covariances, 0 steps from now
+        respond, x = FlownSegmentResponse, [(problem.flown.z0[g], problem.flown.P0[g], 0) for g in range(n_gen)]
     warnings = []
     for k in range(n_seg):
         # the rest this segment may still take: the longest before one action (less what was rested
@@ -175,7 +193,7 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
         available = rest_available_s(problem, k, float(np.sum(rests[:k])))
         rest = 0.0
         while True:
-            responses = [SegmentResponse(problem, g, k, x[g], rest) for g in range(n_gen)]
+            responses = [respond(problem, g, k, x[g], rest) for g in range(n_gen)]
             violators = [g for g in range(n_gen) if responses[g].peak(0.0) > problem.limit_C + LIMIT_TOLERANCE_K]
             d = np.zeros(n_gen) if not violators else _displacement(problem, k, responses, violators)
             if d is not None:
@@ -187,7 +205,7 @@ def heuristic_plan(problem: PlanningProblem, settings: HeuristicSettings = Heuri
                 break
             rest += settings.rest_step_s
         displaced[:, k], rests[k] = d, rest
-        x = np.array([responses[g].x_end0 + d[g] * responses[g].x_end_d for g in range(n_gen)])
+        x = [responses[g].end(d[g]) for g in range(n_gen)]
     schedule = Schedule(displaced, rests)
     return evaluate(problem, schedule, "heuristic", time.perf_counter() - started, warnings)
 
@@ -201,8 +219,8 @@ def _best_effort(problem: PlanningProblem, k: int, responses, violators) -> np.n
     receivers = [g for g in range(problem.n_generators) if g not in violators]
     d = np.zeros(problem.n_generators)
     if receivers:
-        share = min([-low] + [min(receiver_room(responses[h], problem.limit_C),
-                                  future_room(problem, h, k, responses[h], problem.limit_C)) for h in receivers])
+        share = min([-low] + [min(responses[h].room(problem.limit_C), responses[h].later_room(problem.limit_C))
+                              for h in receivers])
         d[violators] = max(0.0, min(high, share * len(receivers) / len(violators)))
         d[receivers] = -np.sum(d[violators]) / len(receivers)
     return d

@@ -81,7 +81,7 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     onsets) and one plan is made for the rest of the mission, which the same model then flies.
     """
     dt = settings.dt_s
-    segments = flight_segments(system, settings)
+    segments = flight_segments(system, settings, scheduler)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     flown_run = FlownOpenLoop(system, dt) if settings.nonlinear else None

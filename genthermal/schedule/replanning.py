@@ -386,8 +386,10 @@ def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x
                            None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 
 
-def flight_segments(system: PowerSystem, settings: ManagerSettings) -> tuple:
-    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle."""
+def flight_segments(system: PowerSystem, settings: ManagerSettings, scheduler: str) -> tuple:
+    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle,
+    except for the thesis heuristic, which decides per K-condition (eq. 7.2) on either model."""
     segments = mission_segments(system.mission)
-    return split_segments(segments, settings.cycle_s, settings.dt_s) if settings.nonlinear else segments
+    split = settings.nonlinear and scheduler != "heuristic"
+    return split_segments(segments, settings.cycle_s, settings.dt_s) if split else segments
 
