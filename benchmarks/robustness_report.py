@@ -4,15 +4,20 @@ Usage::
 
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json [--png benchmarks/figures/robustness.png]
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json --merge refly.json
+    python benchmarks/robustness_report.py benchmarks/figures/robustness.json --add other_schedulers.json
 
 ``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
 seed) that every scheduler flew to the end in place of the same cases of the whole grid, recomputes every summary key with
 :func:`genthermal.schedule.sweep.summarise`, records the re-fly under ``provenance.merged`` and
-writes the whole grid's JSON back before reporting on it.
+writes the whole grid's JSON back before reporting on it. ``--add`` joins the flights of the same
+grid flown with other schedulers (``genthermal sweep --schedulers heuristic_flown``, same
+``--cases`` and seed) to each case, recomputes every summary key over all the schedulers (the best
+baseline then counts the added ones, :mod:`genthermal.schedule.baseline_comparison`) and records
+that sweep under ``provenance.added``.
 
 Prints two markdown tables: one row per scheduler (cases flown to the end, breach-free share,
 longest breach, median and max detection delay, false alarms), then the figures of the optimal
-scheduler against the best baseline (heuristic or engineer, whichever rests less in that case;
+scheduler against the best baseline (heuristic, engineer or, when flown, heuristic_flown, whichever rests less in that case;
 and, at the manager's price of rest min + 1000 min per A·h not served, whichever costs less),
 the rest ratio over the cases where no scheduler sheds load, and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
 best baseline), each with what the flight reports about it. Draws, per case and scheduler, the
@@ -32,7 +37,8 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red"}
+SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red",
+                     "heuristic_flown": "tab:purple"}
 
 
 def _minutes(seconds) -> str:
@@ -153,6 +159,34 @@ def merge_cases(report: dict, partial: dict) -> dict:
     return {**report, **summarise(cases, schedulers), "provenance": provenance, "cases": cases}
 
 
+def add_schedulers(report: dict, other: dict) -> dict:
+    """``report`` (a whole grid) with the flights of ``other`` (the same grid flown with other
+    schedulers) added to each case, every summary key recomputed over all the schedulers and
+    ``other``'s provenance under ``provenance.added``.
+
+    Raises
+    ------
+    ValueError
+        When the two grids differ in their cases or share a scheduler.
+    """
+    from genthermal.schedule.sweep import summarise
+
+    schedulers, added = list(report["robustness"]["breach_s"]), list(other["robustness"]["breach_s"])
+    shared = sorted(set(schedulers) & set(added))
+    if shared:
+        raise ValueError(f"both flew {shared}: use --merge to replace a re-flown scheduler's cases")
+    names, other_names = [c["name"] for c in report["cases"]], [c["name"] for c in other["cases"]]
+    if names != other_names:
+        raise ValueError(f"the grids differ in their cases ({len(names)} against {len(other_names)}, first "
+                         f"difference {next((a, b) for a, b in zip(names + [None], other_names + [None]) if a != b)}):"
+                         " fly the same --cases and --seed")
+    cases = [{**case, "runs": {**case["runs"], **{s: more["runs"][s] for s in added}}}
+             for case, more in zip(report["cases"], other["cases"])]
+    provenance = dict(report.get("provenance") or {})
+    provenance["added"] = list(provenance.get("added") or []) + [{**(other.get("provenance") or {}), "schedulers": added}]
+    return {**report, **summarise(cases, schedulers + added), "provenance": provenance, "cases": cases}
+
+
 def missed_lines(report: dict) -> list[str]:
     """One line per case and scheduler that misses a target, with its cause as the flight reports it."""
     lines = []
@@ -217,18 +251,22 @@ def main(argv=None) -> int:
     parser.add_argument("--png", help="write the plot here (default: next to the JSON, .png)")
     parser.add_argument("--merge", metavar="REFLY_JSON", help="a partial re-fly of the grid: its cases replace "
                         "the grid's, and the JSON is written back with the summary recomputed")
+    parser.add_argument("--add", metavar="SWEEP_JSON", help="the same grid flown with other schedulers: their "
+                        "flights join each case, and the JSON is written back with the summary recomputed")
     args = parser.parse_args(argv)
     path = Path(args.json)
     report = json.loads(path.read_text())
     if "cases" not in report or "robustness" not in report:
         print(f"{path}: not a genthermal sweep JSON (needs 'robustness' and 'cases')", file=sys.stderr)
         return 2
-    if args.merge:
-        partial = json.loads(Path(args.merge).read_text())
+    for option, combine in ((args.merge, merge_cases), (args.add, add_schedulers)):
+        if not option:
+            continue
         try:
-            report = merge_cases(report, partial)
+            report = combine(report, json.loads(Path(option).read_text()))
         except (KeyError, ValueError) as error:
-            print(f"{args.merge}: cannot merge into {path}: {error}", file=sys.stderr)
+            print(f"{option}: cannot {'merge into' if combine is merge_cases else 'add to'} {path}: {error}",
+                  file=sys.stderr)
             return 2
         from genthermal.outputs import report_json
 

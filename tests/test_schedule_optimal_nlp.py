@@ -159,7 +159,7 @@ def test_planner_model_settings_and_options_reject_bad_values(tmp_path, capsys):
     with pytest.raises(InputError, match="filter"):
         FlownPlanning([object()], np.zeros((1, 3)), np.zeros((1, 3, 3)))
     for extra, option in ((["--planner-model", "quadratic"], "--planner-model"),
-                          (["--planner-model", "nonlinear", "--scheduler", "heuristic"], "--planner-model"),
+                          (["--planner-model", "nonlinear", "--scheduler", "engineer"], "--planner-model"),
                           (["--planner-model", "nonlinear", "--filter", "kf"], "--filter"),
                           (["--confidence-sigmas", "-1"], "--confidence-sigmas")):
         assert main(["fly", "blockage_large", "--json", str(tmp_path / "x.json"), *extra]) == 2

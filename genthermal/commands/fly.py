@@ -4,8 +4,9 @@ Closed-loop load management (thesis 7.2) on the true plant: every cycle a filter
 noisy measurements, fault detection on the innovations and identification in flight, a prediction
 to the end of the mission and a re-plan when a violation is predicted. The true plant differs from
 the planning model (scenario ``generators.plant_mismatch`` or ``--plant``); the manager is not told
-the faults unless ``--tell-fault``. With ``--planner-model nonlinear`` the optimal scheduler plans on
-the filter's nonlinear model with a back-off from the filter's covariance instead of ``--margin``.
+the faults unless ``--tell-fault``. With ``--planner-model nonlinear`` the optimal scheduler (or the
+thesis heuristic, per K-condition) plans on the filter's nonlinear model with a back-off from the
+filter's covariance instead of ``--margin``.
 """
 
 from __future__ import annotations

@@ -3,8 +3,9 @@
 Open-loop load-management plan on the linear design model (thesis chapter 7): the mission is flown
 as planned until the first management cycle after the fault onset, then one schedule (displaced
 current per generator and rest before each action) is planned for the rest of the mission. With
-``--planner-model nonlinear`` the optimal scheduler plans and flies on the nonlinear model (per
-management cycle, back-off from the filter's initial covariance: no measurements in open loop).
+``--planner-model nonlinear`` the optimal scheduler (per management cycle) or the thesis heuristic
+(per K-condition) plans and flies on the nonlinear model (back-off from the filter's initial
+covariance: no measurements in open loop).
 """
 
 from __future__ import annotations
@@ -42,11 +43,11 @@ def add_schedule_arguments(parser) -> None:
                         f"{100 * DEFAULT_REST_BUDGET_FRACTION:g} %% of the mission); when it is spent, or no rest "
                         "keeps a generator within the limit, the manager switches that generator off and sheds load")
     parser.add_argument("--planner-model", default=ManagerSettings.planner_model, metavar="|".join(PLANNER_MODELS),
-                        help="what the optimal scheduler plans on — affine: the linear design model within θmax "
-                        "minus --margin, with --rise-backoff (default); nonlinear: the flown model the filter runs "
-                        "on (--model with the faults believed), within θmax minus a back-off of "
+                        help="what the optimal scheduler or the heuristic plans on — affine: the linear design "
+                        "model within θmax minus --margin, with --rise-backoff (default); nonlinear: the flown model "
+                        "the filter runs on (--model with the faults believed), within θmax minus a back-off of "
                         "--confidence-sigmas standard deviations of the filter's covariance, displacement and rest "
-                        "free per management cycle")
+                        "free per management cycle (the heuristic: per K-condition)")
     parser.add_argument("--confidence-sigmas", default=str(ManagerSettings.confidence_sigmas),
                         help="nonlinear planner: standard deviations of the predicted temperature kept below θmax "
                         f"(default {ManagerSettings.confidence_sigmas:g})")
@@ -87,9 +88,10 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     planner_model = getattr(args, "planner_model", ManagerSettings.planner_model)
     if planner_model not in PLANNER_MODELS:
         raise InputError("--planner-model", planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
-    if planner_model == "nonlinear" and args.scheduler != "optimal":
-        raise InputError("--planner-model", planner_model, "the nonlinear transcription is the optimal scheduler's: "
-                         "use --scheduler optimal (the other schedulers plan on the design model)")
+    if planner_model == "nonlinear" and args.scheduler not in ("optimal", "heuristic"):
+        raise InputError("--planner-model", planner_model, "only the optimal scheduler and the thesis heuristic plan "
+                         "on the flown model: use --scheduler optimal or heuristic (the engineer's heuristic and the "
+                         "MILP plan on the design model)")
     if planner_model == "nonlinear" and getattr(args, "filter", None) not in (None, "ekf"):
         raise InputError("--filter", args.filter, "the nonlinear planner plans on the extended Kalman filter's "
                          "model and covariance: use --filter ekf")

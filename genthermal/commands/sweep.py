@@ -16,8 +16,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..outputs import finite_document, report_json
-from ..schedule.manager_settings import PLANNER_MODELS, SCHEDULERS
-from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S
+from ..schedule.manager_settings import PLANNER_MODELS
+from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, SWEEP_SCHEDULERS
 
 
 def register(subparsers) -> None:
@@ -26,7 +26,8 @@ def register(subparsers) -> None:
                                    description=__doc__.split("\n\n")[1])
     parser.add_argument("--cases", default=60, type=int, help="number of cases (default 60)")
     parser.add_argument("--schedulers", default="heuristic,engineer,optimal",
-                        help=f"comma-separated, of {', '.join(SCHEDULERS)} (default heuristic,engineer,optimal)")
+                        help=f"comma-separated, of {', '.join(SWEEP_SCHEDULERS)} (default heuristic,engineer,optimal; "
+                        f"{FLOWN_HEURISTIC}: the thesis heuristic on the flown model, a third baseline)")
     parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: a local cluster)")
     parser.add_argument("--workers", default=2, type=int, help="workers of the local cluster (default 2)")
     parser.add_argument("--seed", default=0, type=int, help="seed of the cases (default 0)")
@@ -54,9 +55,9 @@ def run(args) -> int:
     from ..schedule.sweep import robustness_case, run_sweep, summarise
 
     schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
-    bad = [s for s in schedulers if s not in SCHEDULERS]
+    bad = [s for s in schedulers if s not in SWEEP_SCHEDULERS]
     if bad or not schedulers:
-        raise InputError("--schedulers", args.schedulers, f"each must be one of {', '.join(SCHEDULERS)}")
+        raise InputError("--schedulers", args.schedulers, f"each must be one of {', '.join(SWEEP_SCHEDULERS)}")
     if args.cases < 1:
         raise InputError("--cases", args.cases, "must be a whole number >= 1")
     if args.workers < 1:

@@ -398,12 +398,14 @@ def calibrated_plant(base: ThermalModel, result: dict) -> ThermalModel:
 
 def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BEFORE_LANDING_S,
           inlet_follows_load: bool = False, rounds: int = 2, starts=None,
-          receiver_limit_A: float | None = None, per_level: bool = False) -> dict:
+          receiver_limit_A: float | None = None, per_level: bool = False, lags_K: dict | None = None) -> dict:
     """The minimax study from every start, with the manager lags re-measured on the best solution
     and the problem solved again from it, ``rounds`` times in all (the lags depend on the values).
     ``receiver_limit_A`` holds the receiver to that current at every instant (the rated-current
     reading, :class:`FeasibilityProblem`); ``per_level`` gives each level of a K-condition its own
-    displaced current.
+    displaced current. ``lags_K`` (``landing``, ``cruise_combat``, K) holds the manager lags at
+    these values instead of measuring them on the design model's manager: zero for a manager that
+    predicts on the simulation model itself (thesis 7.3.4, ``planner_model`` ``nonlinear``).
 
     Returns
     -------
@@ -415,14 +417,14 @@ def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BE
     """
     if not (isinstance(rounds, int) and rounds >= 1):
         raise InputError("rounds", rounds, "must be an integer >= 1")
-    lags = measured_lags(chapter7)
+    lags = measured_lags(chapter7) if lags_K is None else dict(lags_K)
     problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, receiver_limit_A=receiver_limit_A,
                                  per_level=per_level)
     firsts = [minimise_worst_violation(problem, s) for s in (starts or default_starts(chapter7, default))]
     best = min(firsts, key=lambda r: r["worst_violation_K"])
     history = [{"lags_K": lags, "worst_violation_K": best["worst_violation_K"], "start": best["start"]}]
     for _ in range(rounds - 1):
-        lags = measured_lags(calibrated_plant(chapter7, best))
+        lags = measured_lags(calibrated_plant(chapter7, best)) if lags_K is None else lags
         problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, receiver_limit_A=receiver_limit_A,
                                      per_level=per_level)
         best = minimise_worst_violation(problem, Start("previous round", {}), x0=best["decision"])

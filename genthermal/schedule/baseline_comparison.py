@@ -4,7 +4,8 @@ Two comparisons per faulty case that the heuristic, the engineer's heuristic and
 scheduler all flew to the end (``rest_vs_best_baseline`` of a sweep JSON):
 
 * **rest** (the issue's key, as defined there): the optimal scheduler's added rest over that of
-  the best baseline, the one of the heuristic and the engineer's heuristic that rests less
+  the best baseline, the one of the heuristic and the engineer's heuristic (and of the heuristic on
+  the flown model, :data:`OPTIONAL_BASELINES`, where the sweep flew it) that rests less
   (``ratio``, ``mean_ratio``, ``cases_optimal_rests_more``). Rest alone is an honest measure only
   where nobody sheds load: a flight that leaves load unserved buys its rest with it, so the rest
   ratio is also given over the cases where no scheduler sheds (``without_shedding``);
@@ -26,6 +27,14 @@ REST_RESOLUTION_S = 10.0
 #: below the closed loop's 10-s step (the records' not-served sums carry rounding of the currents).
 NOT_SERVED_RESOLUTION_AH = 1e-6
 BASELINES = ("heuristic", "engineer")
+#: Baselines a case's comparison counts when the sweep flew them (the thesis heuristic on the flown
+#: model, :data:`~genthermal.schedule.sweep.FLOWN_HEURISTIC`).
+OPTIONAL_BASELINES = ("heuristic_flown",)
+
+
+def baselines_of(runs: dict) -> tuple:
+    """The baselines of a case's ``runs``: :data:`BASELINES` and those of :data:`OPTIONAL_BASELINES` it has."""
+    return BASELINES + tuple(s for s in OPTIONAL_BASELINES if s in runs)
 
 
 def finished(run: dict) -> bool:
@@ -60,7 +69,7 @@ def _ratio(numerator: float, denominator: float):
 
 def rest_versus_best_baseline(records: list) -> dict:
     """The ``rest_vs_best_baseline`` key (module docstring) over the faulty ``records`` whose
-    optimal, heuristic and engineer flights all finished.
+    optimal, heuristic and engineer flights (and the optional baselines it has) all finished.
 
     Returns
     -------
@@ -78,10 +87,11 @@ def rest_versus_best_baseline(records: list) -> dict:
     per_case = []
     for r in records:
         runs = r["runs"]
-        if not r["faulty"] or not all(finished(runs[s]) for s in (*BASELINES, "optimal")):
+        baselines = baselines_of(runs)
+        if not r["faulty"] or not all(finished(runs[s]) for s in (*baselines, "optimal")):
             continue
-        best = min(BASELINES, key=lambda s: rest_of(runs[s]))
-        cheapest = min(BASELINES, key=lambda s: cost_of(runs[s]))
+        best = min(baselines, key=lambda s: rest_of(runs[s]))
+        cheapest = min(baselines, key=lambda s: cost_of(runs[s]))
         optimal, baseline = rest_of(runs["optimal"]), rest_of(runs[best])
         optimal_cost, baseline_cost = cost_of(runs["optimal"]), cost_of(runs[cheapest])
         hindsight = r.get("hindsight") or {}
@@ -95,7 +105,7 @@ def rest_versus_best_baseline(records: list) -> dict:
                          "best_baseline_cost_min": baseline_cost,
                          "cost_vs_best_baseline": _ratio(optimal_cost, baseline_cost),
                          "sheds": any(not_served_of(runs[s]) > NOT_SERVED_RESOLUTION_AH
-                                      for s in (*BASELINES, "optimal"))})
+                                      for s in (*baselines, "optimal"))})
     optimal_total = sum(c["optimal_rest_s"] for c in per_case)
     best_total = sum(c["best_baseline_rest_s"] for c in per_case)
     calm = [c for c in per_case if not c["sheds"]]

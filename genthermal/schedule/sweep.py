@@ -62,6 +62,7 @@ from ..collector import collector_in_this_thread
 from ..errors import InputError
 from ..mission import Mission
 from .baseline_comparison import rest_versus_best_baseline
+from .manager_settings import SCHEDULERS
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss", "healthy")
@@ -118,10 +119,21 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
+#: A sweep's name for the thesis heuristic planning on the flown model (``planner_model``
+#: ``nonlinear``, :mod:`~genthermal.schedule.heuristic_flown`): a third baseline beside the heuristic
+#: and the engineer's heuristic on the design model.
+FLOWN_HEURISTIC = "heuristic_flown"
+#: Schedulers a sweep flies: the manager's, and :data:`FLOWN_HEURISTIC`.
+SWEEP_SCHEDULERS = SCHEDULERS + (FLOWN_HEURISTIC,)
+
+
 def planner_model_of(scheduler: str, optimal_planner_model: str = "affine") -> str:
     """The model ``scheduler`` plans on in a sweep: ``optimal_planner_model`` for the optimal
-    scheduler (one of :data:`~genthermal.schedule.manager_settings.PLANNER_MODELS`), the design model
-    (``affine``) for the baselines, which are defined on it."""
+    scheduler (one of :data:`~genthermal.schedule.manager_settings.PLANNER_MODELS`), the flown model
+    (``nonlinear``) for :data:`FLOWN_HEURISTIC`, the design model (``affine``) for the other
+    baselines, which are defined on it."""
+    if scheduler == FLOWN_HEURISTIC:
+        return "nonlinear"
     return optimal_planner_model if scheduler == "optimal" else "affine"
 
 
@@ -208,8 +220,9 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
     record = {"case": document["name"], "scheduler": scheduler, "planner_model": planner_model}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
-        summary = flight_summary(fly(system, scheduler, ManagerSettings(cpu_limit_s=cpu_limit_s,
-                                                                        planner_model=planner_model)))
+        flown = "heuristic" if scheduler == FLOWN_HEURISTIC else scheduler
+        summary = flight_summary(fly(system, flown, ManagerSettings(cpu_limit_s=cpu_limit_s,
+                                                                    planner_model=planner_model)))
         summary.pop("warnings")
         record.update(status="ok", summary=summary)
     except FlightTimeout as stopped:
