@@ -255,3 +255,54 @@ def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys, bench
     stranger.write_text(json.dumps(grid([{**new_a, "name": "case9:z"}])))
     assert report_module.main([str(whole), "--merge", str(stranger), "--png", str(tmp_path / "g.png")]) == 2
     assert "not in the grid" in capsys.readouterr().err
+
+
+def test_the_flown_heuristic_counts_as_a_baseline_where_the_sweep_flew_it():
+    """Case a: the heuristic on the flown model rests 100 s, less than the other two baselines, so
+    it is the best baseline there; case b has no such flight and compares with the other two."""
+    records = [{"name": "a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                      "heuristic_flown": run(0, 100), "optimal": run(0, 150)}},
+               {"name": "b", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                      "optimal": run(0, 150)}}]
+    rest = summarise(records, ("heuristic", "engineer", "optimal"))["rest_vs_best_baseline"]
+    (a, b) = rest["per_case"]
+    assert (a["best_baseline"], a["best_baseline_rest_s"], a["ratio"]) == ("heuristic_flown", 100.0, pytest.approx(1.5))
+    assert (b["best_baseline"], b["best_baseline_rest_s"]) == ("engineer", 300.0)
+    assert rest["cases_optimal_rests_more"] == ["a"]
+
+
+def test_the_sweep_flies_the_flown_heuristic_on_the_nonlinear_model():
+    import genthermal.schedule.sweep as sweep
+
+    assert sweep.planner_model_of(sweep.FLOWN_HEURISTIC, "affine") == "nonlinear"
+    assert sweep.FLOWN_HEURISTIC in sweep.SWEEP_SCHEDULERS
+
+
+def test_robustness_report_adds_another_schedulers_flights(tmp_path, capsys, benchmark_script):
+    """The same grid flown with the flown heuristic joins each case; the best baseline then counts
+    it. Grids with other cases, or a scheduler flown in both, are refused."""
+    import json
+
+    report_module = benchmark_script("robustness_report")
+    schedulers = ("heuristic", "engineer", "optimal")
+    cases = [{"name": "case0:a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                        "optimal": run(0, 200)}}]
+    whole, other = tmp_path / "grid.json", tmp_path / "flown.json"
+    whole.write_text(json.dumps({**summarise(cases, schedulers), "provenance": {"command": "whole"}, "cases": cases}))
+    flown_cases = [{"name": "case0:a", "faulty": True, "runs": {"heuristic_flown": run(0, 120)}}]
+    other.write_text(json.dumps({**summarise(flown_cases, ("heuristic_flown",)), "provenance": {"command": "flown"},
+                                 "cases": flown_cases}))
+    assert report_module.main([str(whole), "--add", str(other), "--png", str(tmp_path / "g.png")]) == 0
+    joined = json.loads(whole.read_text())
+    assert set(joined["cases"][0]["runs"]) == {"heuristic", "engineer", "optimal", "heuristic_flown"}
+    assert joined["rest_vs_best_baseline"]["per_case"][0]["best_baseline"] == "heuristic_flown"
+    assert joined["rest_vs_best_baseline"]["mean_ratio"] == pytest.approx(200 / 120)
+    assert joined["provenance"]["added"][0]["schedulers"] == ["heuristic_flown"]
+    assert "| heuristic_flown | 1/1 |" in capsys.readouterr().out
+    assert report_module.main([str(whole), "--add", str(other), "--png", str(tmp_path / "g.png")]) == 2
+    assert "both flew ['heuristic_flown']" in capsys.readouterr().err
+    stranger = tmp_path / "stranger.json"
+    stranger_cases = [{**flown_cases[0], "name": "case9:z", "runs": {"milp": run(0, 0)}}]
+    stranger.write_text(json.dumps({**summarise(stranger_cases, ("milp",)), "cases": stranger_cases}))
+    assert report_module.main([str(whole), "--add", str(stranger), "--png", str(tmp_path / "g.png")]) == 2
+    assert "differ in their cases" in capsys.readouterr().err
