@@ -60,3 +60,24 @@ def test_inlet_16K_reason_adds_the_rated_flight_as_one_clause(reproduce):
     row = reproduce.inlet_16K_row(_outcome({5: 0.04, 7: 0.45}, 5.0), _outcome({5: 0.04}, 20.0))
     assert row["verdict"] == "reproduced"
     assert row["reason"].startswith("held to the rated 7 A instead:") and "20-min rest before landing" in row["reason"]
+
+
+def _flown_blockage(rests_before, gen1_starts):
+    """The blockage flown on the simulation model: rests (min) before and gen1's temperature (°C) at
+    the start of each action from cruise on."""
+    outcome = _outcome({4: 0.04, 5: 0.56, 6: 0.49, 7: 0.93}, peak=110.1)
+    for i, (rest, start) in enumerate(zip(rests_before, gen1_starts), start=4):
+        outcome["actions"][i].update(rest_min=rest, rest_before_min=rest, gen1_start_C=start)
+    return {**outcome, "breach_s": 40.0}
+
+
+def test_simulation_model_reading_ties_the_rests_within_the_conditions_to_gen1s_temperature(reproduce):
+    """Rests before cruise/combat and the cruise after, with gen1 1.7 K below θmax at the latest
+    start, are where the thesis breached; the study under that manager names its verdict."""
+    study = {"worst_violation_K": 0.46, "sharp_worst_violation_K": 0.48}
+    text = reproduce._simulation_model_text(_flown_blockage((0, 5, 5, 20), (95.0, 110.1, 108.3, 106.3)), study)
+    assert "rests before cruise_combat 5 min (gen1 at 110.1 °C when it began); cruise 5 min" in text
+    assert "within 1.7 K of θmax" in text and "the thesis breached instead" in text
+    assert "+0.46 K (+0.48 K on the sharp peaks): no calibration meets them all" in text
+    calm = reproduce._simulation_model_text(_flown_blockage((0, 0, 0, 10), (95.0, 104.0, 105.0, 106.0)), None)
+    assert "landing 10 min" in calm and "breached instead" not in calm and "least worst violation" not in calm
