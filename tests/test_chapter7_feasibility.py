@@ -49,6 +49,15 @@ def test_lags_must_be_given_for_both_thresholds(chapter7):
         FeasibilityProblem(chapter7, {"landing": float("nan"), "cruise_combat": -3.4})
 
 
+def test_study_holds_the_lags_it_is_given(chapter7):
+    """The simulation-model manager's study (lags 0 K) passes its lags to the problem instead of
+    measuring them: a lag missing from them is named before any solve."""
+    from genthermal.machines.chapter7_feasibility import study
+
+    with pytest.raises(InputError, match="lags.cruise_combat"):
+        study(chapter7, chapter7, lags_K={"landing": 0.0})
+
+
 def test_rest_must_divide_into_samples():
     with pytest.raises(InputError, match="rest_s"):
         managed_timeline(60.0, 630.0)
