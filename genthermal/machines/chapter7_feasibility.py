@@ -405,7 +405,8 @@ def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BE
     reading, :class:`FeasibilityProblem`); ``per_level`` gives each level of a K-condition its own
     displaced current. ``lags_K`` (``landing``, ``cruise_combat``, K) holds the manager lags at
     these values instead of measuring them on the design model's manager: zero for a manager that
-    predicts on the simulation model itself (thesis 7.3.4, ``planner_model`` ``nonlinear``).
+    predicts on the simulation model itself (thesis 7.3.4, ``planner_model`` ``nonlinear``). With
+    held lags there is nothing to re-measure and the study makes one round whatever ``rounds``.
 
     Returns
     -------
@@ -423,8 +424,8 @@ def study(chapter7: ThermalModel, default: ThermalModel, rest_s: float = REST_BE
     firsts = [minimise_worst_violation(problem, s) for s in (starts or default_starts(chapter7, default))]
     best = min(firsts, key=lambda r: r["worst_violation_K"])
     history = [{"lags_K": lags, "worst_violation_K": best["worst_violation_K"], "start": best["start"]}]
-    for _ in range(rounds - 1):
-        lags = measured_lags(calibrated_plant(chapter7, best)) if lags_K is None else lags
+    for _ in range(rounds - 1 if lags_K is None else 0):  # held lags: nothing to re-measure
+        lags = measured_lags(calibrated_plant(chapter7, best))
         problem = FeasibilityProblem(chapter7, lags, rest_s, inlet_follows_load, receiver_limit_A=receiver_limit_A,
                                      per_level=per_level)
         best = minimise_worst_violation(problem, Start("previous round", {}), x0=best["decision"])
