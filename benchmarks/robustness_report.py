@@ -7,7 +7,8 @@ Usage::
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json --add other_schedulers.json
 
 ``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
-seed) that every scheduler flew to the end in place of the same cases of the whole grid, recomputes every summary key with
+seed, some or all of the grid's schedulers) that every re-flown scheduler flew to the end in place of
+those schedulers' flights of the same cases of the whole grid, recomputes every summary key with
 :func:`genthermal.schedule.sweep.summarise`, records the re-fly under ``provenance.merged`` and
 writes the whole grid's JSON back before reporting on it. ``--add`` joins the flights of the same
 grid flown with other schedulers (``genthermal sweep --schedulers heuristic_flown``, same
@@ -132,30 +133,33 @@ def rest_table(report: dict) -> str:
 
 
 def merge_cases(report: dict, partial: dict) -> dict:
-    """``report`` (a whole grid) with the cases of ``partial`` (a re-fly of some of them) in place of
-    its own, every summary key recomputed and the re-fly's provenance under ``provenance.merged``.
+    """``report`` (a whole grid) with the flights of ``partial`` (a re-fly of some of its cases with some
+    or all of its schedulers) in place of its own, every summary key recomputed and the re-fly's
+    provenance under ``provenance.merged``.
 
     Raises
     ------
     ValueError
-        When ``partial`` names a case the grid does not have, or flies other schedulers.
+        When ``partial`` names a case the grid does not have, or flies a scheduler the grid does not.
     """
     from genthermal.schedule.sweep import summarise
 
-    schedulers = list(report["robustness"]["breach_s"])
-    if list(partial["robustness"]["breach_s"]) != schedulers:
-        raise ValueError(f"the re-fly flew {list(partial['robustness']['breach_s'])}, the grid {schedulers}: "
-                         "re-fly with the same --schedulers")
+    schedulers, refly_schedulers = list(report["robustness"]["breach_s"]), list(partial["robustness"]["breach_s"])
+    if not set(refly_schedulers) <= set(schedulers):
+        raise ValueError(f"the re-fly flew {refly_schedulers}, the grid {schedulers}: re-fly some of the grid's "
+                         "--schedulers (--add joins new ones)")
     names = [c["name"] for c in report["cases"]]
     unknown = [c["name"] for c in partial["cases"] if c["name"] not in names]
     if unknown:
         raise ValueError(f"cases {unknown} of the re-fly are not in the grid (same --cases and --seed?)")
     new = {c["name"]: c for c in partial["cases"]  # a case the re-fly did not finish keeps the grid's record
            if all(run.get("status", "ok") == "ok" for run in c["runs"].values())}
-    cases = [new.get(name, case) for name, case in zip(names, report["cases"])]
+    # the re-flown schedulers' runs replace the grid's; the others' stay
+    cases = [{**case, "runs": {**case["runs"], **new[name]["runs"]}} if name in new else case
+             for name, case in zip(names, report["cases"])]
     provenance = dict(report.get("provenance") or {})
     provenance["merged"] = list(provenance.get("merged") or []) + [
-        {**(partial.get("provenance") or {}), "cases": sorted(new, key=names.index)}]
+        {**(partial.get("provenance") or {}), "cases": sorted(new, key=names.index), "schedulers": refly_schedulers}]
     return {**report, **summarise(cases, schedulers), "provenance": provenance, "cases": cases}
 
 

@@ -255,6 +255,20 @@ def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys, bench
     stranger.write_text(json.dumps(grid([{**new_a, "name": "case9:z"}])))
     assert report_module.main([str(whole), "--merge", str(stranger), "--png", str(tmp_path / "g.png")]) == 2
     assert "not in the grid" in capsys.readouterr().err
+    # a re-fly of the optimal scheduler alone replaces its flight and keeps the baselines'
+    optimal_only = [{"name": "case1:b", "faulty": True, "runs": {"optimal": run(0, 60)}}]
+    alone = tmp_path / "alone.json"
+    alone.write_text(json.dumps({**summarise(optimal_only, ("optimal",)), "provenance": {"command": "refly b"},
+                                 "cases": optimal_only}))
+    assert report_module.main([str(whole), "--merge", str(alone), "--png", str(tmp_path / "g.png")]) == 0
+    merged = json.loads(whole.read_text())
+    assert merged["cases"][1]["runs"]["optimal"]["added_rest_s"] == 60
+    assert merged["cases"][1]["runs"]["heuristic"] == run(0, 0) and merged["provenance"]["merged"][1]["schedulers"] == ["optimal"]
+    capsys.readouterr()
+    milp = [{"name": "case1:b", "faulty": True, "runs": {"milp": run(0, 0)}}]
+    alone.write_text(json.dumps({**summarise(milp, ("milp",)), "cases": milp}))
+    assert report_module.main([str(whole), "--merge", str(alone), "--png", str(tmp_path / "g.png")]) == 2
+    assert "--add joins new ones" in capsys.readouterr().err
 
 
 def test_the_flown_heuristic_counts_as_a_baseline_where_the_sweep_flew_it():
