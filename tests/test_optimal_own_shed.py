@@ -9,7 +9,7 @@ from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.schedule.flown import FlownPlanning
 from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.optimal_shed import cheaper_shed_plan, on_flown_model, shed_guess
+from genthermal.schedule.optimal_shed import chosen_shed_plan, on_flown_model, shed_guess
 from genthermal.schedule.plan import PlanningProblem, PlanResult, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator
 from genthermal.schedule.price import PRICE_TOLERANCE_MIN, schedule_cost_min
@@ -44,7 +44,7 @@ def forced_to_shed(plant_model, design_model):
     return problem, flown
 
 
-def test_optimal_flies_its_own_shed_plan_when_cheaper_than_the_shared_one(forced_to_shed):
+def test_optimal_flies_its_own_shed_plan_on_the_flown_model(forced_to_shed):
     """The shared shed plan (the baselines') costs 1162 min at the manager's price on this problem;
     the optimal scheduler's own plan on the flown model keeps both generators within θmax with its
     back-off and costs 1069 min, so it is flown, reported infeasible (it sheds) with both costs."""
@@ -82,15 +82,19 @@ def test_without_own_shedding_the_optimal_scheduler_flies_the_shared_plan(forced
     assert not ManagerSettings().sheds_on_flown_model("optimal", "kf")
 
 
-def test_shared_plan_is_kept_when_the_own_plan_is_not_cheaper(forced_to_shed):
-    """A shared plan that costs nothing (all load served, no rest) cannot be beaten at the price:
-    it is returned as it is, with the comparison."""
+def test_own_plan_is_flown_when_it_keeps_thetamax_whatever_the_shared_plans_forecast_costs(forced_to_shed):
+    """A shared plan whose design-model forecast costs nothing (all load served, no rest) does not
+    displace an own plan that keeps θmax on the flown model: the two costs are forecasts on
+    different models (optimal_shed). Where the own plan cannot keep θmax on its forecast (a limit
+    below today's temperatures), the shared plan is returned as it is, with the comparison."""
     problem, flown = forced_to_shed
     nominal = Schedule.nominal(problem.n_generators, len(problem.segments))
     shared = PlanResult(nominal, False, 120.0, 0, 0, 0.0, "shed")
-    chosen, comparison = cheaper_shed_plan(problem, shared, flown, THETA_MAX_C)
-    assert chosen is shared and comparison["shed_plan_flown"] == "shared"
-    assert comparison["shared_shed_cost_min"] == 0.0
+    chosen, comparison = chosen_shed_plan(problem, shared, flown, THETA_MAX_C)
+    assert chosen is not shared and comparison["shed_plan_flown"] == "own"
+    assert comparison["shared_shed_cost_min"] == 0.0 < comparison["own_shed_cost_min"]
+    chosen, comparison = chosen_shed_plan(dataclasses.replace(problem, limit_C=40.0), shared, flown, 40.0)
+    assert chosen is shared and comparison["shed_plan_flown"] == "shared" and comparison["own_shed_cost_min"] is None
 
 
 def test_own_shed_plan_starts_from_a_switched_off_generator_shedding_its_load(forced_to_shed):
@@ -113,10 +117,10 @@ def test_bad_inputs_name_field_and_value(forced_to_shed):
     with pytest.raises(InputError, match="limit_C = nan"):
         on_flown_model(problem, flown, float("nan"))
     with pytest.raises(InputError, match="shared"):
-        cheaper_shed_plan(problem, PlanResult(Schedule.nominal(2, 3), False, 0.0, 0, 0, 0.0, "shed"), flown,
+        chosen_shed_plan(problem, PlanResult(Schedule.nominal(2, 3), False, 0.0, 0, 0, 0.0, "shed"), flown,
                           THETA_MAX_C)
     with pytest.raises(InputError, match="problem.flown"):
-        cheaper_shed_plan(dataclasses.replace(problem, flown=flown),
+        chosen_shed_plan(dataclasses.replace(problem, flown=flown),
                           PlanResult(Schedule.nominal(2, 2), False, 0.0, 0, 0, 0.0, "shed"), flown, THETA_MAX_C)
     with pytest.raises(InputError, match="own_shed = 'yes'"):
         ManagerSettings(own_shed="yes")

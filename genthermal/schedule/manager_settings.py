@@ -94,8 +94,8 @@ class ManagerSettings:
     own_shed : bool
         The optimal scheduler planning on the design model (``planner_model`` ``affine``) with the
         extended Kalman filter: when it must shed load, it also plans rest, displacement and load
-        not served together on the flown model and flies the cheaper of that and the shared shed
-        plan at the manager's price (:mod:`~genthermal.schedule.optimal_shed`; default True).
+        not served together on the flown model and flies that plan whenever it keeps θmax on its
+        forecast, else the shared shed plan (:mod:`~genthermal.schedule.optimal_shed`; default True).
         False: it flies the shared shed plan, as the baselines do. With ``filter`` ``kf`` there is
         no flown model and the shared plan is flown.
     heuristic, engineer, optimal, milp

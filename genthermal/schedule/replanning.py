@@ -38,9 +38,8 @@ The nonlinear planner prices the same way inside its transcription when it sheds
 (:func:`~genthermal.schedule.optimal_nlp.flown_optimal_plan`, ``shed``). The optimal scheduler
 planning on the design model does too when load must be shed (``flown_shed``,
 ``ManagerSettings.own_shed``): it plans rest, displacement and load not served together on the
-flown model and flies that plan instead of the shared one when it keeps θmax with the filters'
-back-off and costs less at the same price (:mod:`~genthermal.schedule.optimal_shed`); the
-baselines keep the shared plan.
+flown model and flies that plan instead of the shared one whenever it keeps θmax with the
+filters' back-off (:mod:`~genthermal.schedule.optimal_shed`); the baselines keep the shared plan.
 
 The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
 default :data:`~genthermal.schedule.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
@@ -62,7 +61,7 @@ from .manager_settings import ManagerSettings, planning_margin_K
 from .milp import milp_plan
 from .optimal import lowest_reachable_peak, optimal_plan
 from .optimal_nlp import flown_optimal_plan
-from .optimal_shed import cheaper_shed_plan, on_flown_model
+from .optimal_shed import chosen_shed_plan, on_flown_model
 from .plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from .power_system import PowerSystem
@@ -103,8 +102,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         above θmax).
     flown_shed : FlownPlanning, optional
         The filters the manager flies, for the optimal scheduler planning on the design model: when
-        it must shed load it also plans its own shed plan on the flown model and flies the cheaper
-        of that and the shared one (:mod:`~genthermal.schedule.optimal_shed`). None (default, and
+        it must shed load it also plans its own shed plan on the flown model and flies it when it
+        keeps θmax on its forecast, else the shared one (:mod:`~genthermal.schedule.optimal_shed`). None (default, and
         for the baselines): the shared shed plan.
 
     Returns
@@ -256,9 +255,9 @@ def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, sha
     """The optimal scheduler's shed plan: its own on the flown model ``flown`` (rest, displacement
     and load not served planned together, :func:`~genthermal.schedule.optimal_shed.own_shed_plan`)
     when its prediction with the back-off keeps θmax and it costs less at the manager's price, else
-    the shared ``shared`` (:func:`~genthermal.schedule.optimal_shed.cheaper_shed_plan`); never
+    the shared ``shared`` (:func:`~genthermal.schedule.optimal_shed.chosen_shed_plan`); never
     ``feasible``. ``details`` carry the comparison either way."""
-    chosen, comparison = cheaper_shed_plan(problem, shared, flown, limit_C, settings.optimal.nonlinear, previous)
+    chosen, comparison = chosen_shed_plan(problem, shared, flown, limit_C, settings.optimal.nonlinear, previous)
     if chosen is shared:
         shared.details.update(comparison)
         shared.solve_s += comparison["own_shed_solve_s"]
