@@ -135,3 +135,14 @@ def test_closed_loop_flight_on_the_nonlinear_model_holds_thetamax():
              for k in (5, 6, 7)]
     assert min(moved) > 0.05  # load displaced off gen1 in cruise/combat, the cruise after and landing
     assert all(plan["method"] == "heuristic" for plan in result.plans)
+
+
+def test_schedulers_defined_on_the_design_model_refuse_the_flown_model():
+    """The engineer's heuristic and the MILP plan on the design model: asked to plan on the flown
+    one, the flight names the field and the value before flying."""
+    from genthermal.errors import InputError
+
+    system = PowerSystem.from_mission(load_mission("chapter7_blockage_large"))
+    for scheduler in ("engineer", "milp"):
+        with pytest.raises(InputError, match="planner_model.*nonlinear.*design model"):
+            fly(system, scheduler, ManagerSettings(planner_model="nonlinear"))

@@ -16,7 +16,8 @@ from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
-from ..schedule.manager_settings import DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS, SCHEDULERS, ManagerSettings
+from ..schedule.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
+                                         ManagerSettings)
 from ..schedule.open_loop import plan_mission
 from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
@@ -88,7 +89,7 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     planner_model = getattr(args, "planner_model", ManagerSettings.planner_model)
     if planner_model not in PLANNER_MODELS:
         raise InputError("--planner-model", planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
-    if planner_model == "nonlinear" and args.scheduler not in ("optimal", "heuristic"):
+    if planner_model == "nonlinear" and args.scheduler not in FLOWN_SCHEDULERS:
         raise InputError("--planner-model", planner_model, "only the optimal scheduler and the thesis heuristic plan "
                          "on the flown model: use --scheduler optimal or heuristic (the engineer's heuristic and the "
                          "MILP plan on the design model)")

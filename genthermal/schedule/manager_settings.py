@@ -22,8 +22,11 @@ SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
 #: model with the margin and the rise back-off; ``nonlinear``, the flown model the filter runs
 #: on, with the back-off of its covariance (:mod:`genthermal.schedule.flown`), the mission cut
-#: into control intervals of one cycle.
+#: into control intervals of one cycle (the thesis heuristic keeps its K-conditions).
 PLANNER_MODELS = ("affine", "nonlinear")
+#: Schedulers that plan on the flown model when ``planner_model`` is ``nonlinear``; the engineer's
+#: heuristic and the MILP are defined on the design model.
+FLOWN_SCHEDULERS = ("optimal", "heuristic")
 #: Default back-off margin below θmax, K.
 DEFAULT_MARGIN_K = 2.5
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
@@ -88,7 +91,8 @@ class ManagerSettings:
         ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
         ``filter`` must be ``ekf``) within θmax with the back-off of the filter's covariance
         (``confidence_sigmas`` standard deviations; ``margin_K`` and ``rise_backoff`` unused), and
-        displacement and rest free per management cycle.
+        displacement and rest free per management cycle (the thesis heuristic: per K-condition;
+        only the schedulers of :data:`FLOWN_SCHEDULERS` plan on it).
     confidence_sigmas : float
         Standard deviations of the predicted temperature kept below θmax by the nonlinear planner.
     own_shed : bool
