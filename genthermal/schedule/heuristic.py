@@ -25,7 +25,7 @@ import numpy as np
 
 from .heuristic_flown import FlownSegmentResponse
 from .plan import (LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, affine_states, evaluate, predict,
-                   rest_available_s, robust_outputs)
+                   rest_available_s, rest_then_segment, robust_outputs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,10 +52,8 @@ class SegmentResponse:
         generator, dt = problem.generators[g], problem.dt_s
         segment = problem.segments[k]
         E, G = generator.step(dt)
-        n_rest = int(np.ceil(rest_s / dt - 1e-6))
-        n_run = max(int(round(segment.duration_s / dt)), 1)
-        current = np.concatenate([np.full(n_rest, problem.rest_current_A),
-                                  segment.current_at(np.arange(n_run) * dt)])
+        n_rest, current = rest_then_segment(segment, rest_s, problem.rest_current_A, dt)
+        n_run = current.size - n_rest
         u = problem.inputs(g, current)
         x = np.vstack([x_start, affine_states(E, generator.forcing(u) @ G.T, x_start)])
         u_sample = np.vstack([u, u[-1:]])  # the input in force at each sample

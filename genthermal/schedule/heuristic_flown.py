@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plan import LIMIT_TOLERANCE_K, PlanningProblem
+from .plan import LIMIT_TOLERANCE_K, PlanningProblem, Schedule, build_timeline, rest_then_segment
 
 #: A least displacement (or a largest room) is accepted once the peak is within this of the limit
 #: on its feasible side, K.
@@ -57,12 +57,7 @@ class FlownSegmentResponse:
 
     def __init__(self, problem: PlanningProblem, g: int, k: int, start: tuple, rest_s: float):
         self.problem, self.g, self.k, self.start = problem, g, k, start
-        dt = problem.dt_s
-        segment = problem.segments[k]
-        self.n_rest = int(np.ceil(rest_s / dt - 1e-6))
-        n_run = max(int(round(segment.duration_s / dt)), 1)
-        self.nominal = np.concatenate([np.full(self.n_rest, problem.rest_current_A),
-                                       segment.current_at(np.arange(n_run) * dt)])
+        self.n_rest, self.nominal = rest_then_segment(problem.segments[k], rest_s, problem.rest_current_A, problem.dt_s)
         self._runs: dict = {}
 
     def _run(self, d: float):
@@ -111,8 +106,8 @@ class FlownSegmentResponse:
         later = self.problem.segments[self.k + 1:]
         if not later:
             return np.inf
-        dt = self.problem.dt_s
-        currents = np.concatenate([s.current_at(np.arange(max(int(round(s.duration_s / dt)), 1)) * dt) for s in later])
+        currents = build_timeline(later, Schedule.nominal(1, len(later)), self.problem.rest_current_A,
+                                  self.problem.dt_s).currents_A[0]
 
         def later_peaks(e):
             z, P, first = self.end(-e)

@@ -250,6 +250,15 @@ class Timeline:
                         self.offset_s[:n_steps], self.window_start[:n_steps])
 
 
+def rest_then_segment(segment: Segment, rest_s: float, rest_current_A: float, dt_s: float) -> tuple[int, np.ndarray]:
+    """``(n_rest, currents)``: the phase currents (A) of a rest of ``rest_s`` (rounded up to whole
+    steps of ``dt_s``) at ``rest_current_A`` followed by ``segment``'s nominal load (its duration
+    rounded to the nearest step, at least one), and the number of rest steps."""
+    n_rest = int(np.ceil(rest_s / dt_s - 1e-6))
+    n_run = max(int(round(segment.duration_s / dt_s)), 1)
+    return n_rest, np.concatenate([np.full(n_rest, rest_current_A), segment.current_at(np.arange(n_run) * dt_s)])
+
+
 def build_timeline(segments, schedule: Schedule, rest_current_A: float, dt_s: float,
                    window_s: float = 300.0) -> Timeline:
     """Sample ``schedule`` on a grid of ``dt_s``; rests rounded up to whole steps, segment
