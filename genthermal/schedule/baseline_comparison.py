@@ -27,9 +27,12 @@ REST_RESOLUTION_S = 10.0
 #: below the closed loop's 10-s step (the records' not-served sums carry rounding of the currents).
 NOT_SERVED_RESOLUTION_AH = 1e-6
 BASELINES = ("heuristic", "engineer")
-#: Baselines a case's comparison counts when the sweep flew them (the thesis heuristic on the flown
-#: model, :data:`~genthermal.schedule.sweep.FLOWN_HEURISTIC`).
-OPTIONAL_BASELINES = ("heuristic_flown",)
+#: A sweep's name for the thesis heuristic planning on the flown model (``planner_model``
+#: ``nonlinear``, :mod:`~genthermal.schedule.heuristic_flown`): a third baseline beside the heuristic
+#: and the engineer's heuristic on the design model.
+FLOWN_HEURISTIC = "heuristic_flown"
+#: Baselines a case's comparison counts when the sweep flew them.
+OPTIONAL_BASELINES = (FLOWN_HEURISTIC,)
 
 
 def baselines_of(runs: dict) -> tuple:

@@ -126,8 +126,8 @@ def own_shed_plan(problem: PlanningProblem, flown: FlownPlanning, limit_C: float
 
 
 def chosen_shed_plan(problem: PlanningProblem, shared: PlanResult, flown: FlownPlanning, limit_C: float,
-                      settings: NonlinearSettings = NonlinearSettings(),
-                      previous: Schedule | None = None) -> tuple[PlanResult, dict]:
+                     settings: NonlinearSettings = NonlinearSettings(),
+                     previous: Schedule | None = None) -> tuple[PlanResult, dict]:
     """The optimal scheduler's choice between the shared shed plan ``shared`` and its own
     (:func:`own_shed_plan`, warm-started from ``shared``): its own whenever that keeps θmax on its
     forecast (module docstring).

@@ -61,7 +61,7 @@ import numpy as np
 from ..collector import collector_in_this_thread
 from ..errors import InputError
 from ..mission import Mission
-from .baseline_comparison import rest_versus_best_baseline
+from .baseline_comparison import FLOWN_HEURISTIC, rest_versus_best_baseline
 from .manager_settings import SCHEDULERS
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
@@ -119,10 +119,6 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
-#: A sweep's name for the thesis heuristic planning on the flown model (``planner_model``
-#: ``nonlinear``, :mod:`~genthermal.schedule.heuristic_flown`): a third baseline beside the heuristic
-#: and the engineer's heuristic on the design model.
-FLOWN_HEURISTIC = "heuristic_flown"
 #: Schedulers a sweep flies: the manager's, and :data:`FLOWN_HEURISTIC`.
 SWEEP_SCHEDULERS = SCHEDULERS + (FLOWN_HEURISTIC,)
 
