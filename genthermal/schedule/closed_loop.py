@@ -47,7 +47,7 @@ from ..simulate import simulate
 from .flight_result import FlightRecorder, FlightResult, FlightTimeout
 from .flown import FlownPlanning
 from .input_watch import InputWatch
-from .manager_settings import FLOWN_SCHEDULERS, ManagerSettings, flight_filter, infeasible_response, planning_margin_K
+from .manager_settings import ManagerSettings, flight_filter, infeasible_response, planning_margin_K
 from .monitor import FaultMonitor
 from .state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
@@ -160,9 +160,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
-    if settings.nonlinear and scheduler not in FLOWN_SCHEDULERS:
-        raise InputError("planner_model", settings.planner_model, f"the {scheduler} scheduler plans on the design "
-                         f"model; on the flown model plan with one of {', '.join(FLOWN_SCHEDULERS)}")
+    settings.check_scheduler(scheduler)
     if settings.nonlinear and flight_filter(system, settings) != "ekf":
         raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
                          "filter's model and covariance: fly this scenario with --filter ekf")

@@ -160,6 +160,14 @@ class ManagerSettings:
         if not isinstance(self.own_shed, bool):
             raise InputError("own_shed", self.own_shed, "must be True or False")
 
+    def check_scheduler(self, scheduler: str) -> None:
+        """InputError naming ``planner_model`` when ``scheduler`` cannot plan on the model it names
+        (on the flown model only those of :data:`FLOWN_SCHEDULERS` plan; the others are defined on
+        the design model, and their plans would be judged on the flown one)."""
+        if self.nonlinear and scheduler not in FLOWN_SCHEDULERS:
+            raise InputError("planner_model", self.planner_model, f"the {scheduler} scheduler plans on the design "
+                             f"model; on the flown model plan with one of {', '.join(FLOWN_SCHEDULERS)}")
+
     @property
     def nonlinear(self) -> bool:
         """True when planning on the flown (nonlinear) model."""

@@ -80,6 +80,7 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     fault onset; there every fault of the scenario is taken as known (conservative for later
     onsets) and one plan is made for the rest of the mission, which the same model then flies.
     """
+    settings.check_scheduler(scheduler)
     dt = settings.dt_s
     segments = flight_segments(system, settings, scheduler)
     schedule = Schedule.nominal(system.n_generators, len(segments))
