@@ -11,3 +11,18 @@ actions:
   - {condition: cruise_combat, duration_min: 30}
   - {condition: landing, duration_min: 15}
 """
+
+
+def fly_short_on_the_flown_model(tmp_path, scheduler: str) -> dict:
+    """:data:`SHORT` with θmax 104 °C flown by ``genthermal fly`` with ``scheduler`` planning on the
+    flown model, the fault told; the flight's JSON record."""
+    import json
+
+    from genthermal.cli import main
+
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 104}"))
+    out = tmp_path / "flight.json"
+    assert main(["fly", str(scenario), "--scheduler", scheduler, "--planner-model", "nonlinear", "--tell-fault",
+                 "--json", str(out)]) == 0
+    return json.loads(out.read_text())

@@ -127,18 +127,9 @@ def test_closed_loop_flight_on_a_plant_off_from_the_model_holds_thetamax(tmp_pat
     """One hour, gen1's coolant nearly blocked from 10 min, the plant 10 % short in end-winding
     cooling and 5 % high in resistance (the default mismatch), θmax 104 °C: the heuristic plans on
     the flown model from the command line and keeps both generators within θmax."""
-    import json
+    from flight_scenarios import fly_short_on_the_flown_model
 
-    from flight_scenarios import SHORT
-
-    from genthermal.cli import main
-
-    scenario = tmp_path / "short.yaml"
-    scenario.write_text(SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 104}"))
-    out = tmp_path / "flight.json"
-    assert main(["fly", str(scenario), "--scheduler", "heuristic", "--planner-model", "nonlinear", "--tell-fault",
-                 "--json", str(out)]) == 0
-    flight = json.loads(out.read_text())
+    flight = fly_short_on_the_flown_model(tmp_path, "heuristic")
     assert flight["breach_s"] == 0.0 and max(flight["max_T_winding"].values()) <= 104.0
     assert flight["plans"] and all(plan["method"] == "heuristic" for plan in flight["plans"])
 

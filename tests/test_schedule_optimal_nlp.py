@@ -170,16 +170,9 @@ def test_closed_loop_on_the_flown_model_keeps_every_generator_below_thetamax(tmp
     """One hour, gen1's coolant nearly blocked from 10 min, the plant 10 % short in end-winding
     cooling and 5 % high in resistance (the default mismatch), θmax 104 °C: the manager plans on
     the flown model with the filter's back-off, displacing and resting per cycle."""
-    import json
+    from flight_scenarios import fly_short_on_the_flown_model
 
-    from flight_scenarios import SHORT
-
-    scenario = tmp_path / "short.yaml"
-    scenario.write_text(SHORT.replace("generators: {count: 2}", "generators: {count: 2, limit_C: 104}"))
-    out = tmp_path / "flight.json"
-    assert main(["fly", str(scenario), "--scheduler", "optimal", "--planner-model", "nonlinear", "--tell-fault",
-                 "--json", str(out)]) == 0
-    flight = json.loads(out.read_text())
+    flight = fly_short_on_the_flown_model(tmp_path, "optimal")
     assert flight["breach_s"] == 0.0
     assert max(flight["max_T_winding"].values()) <= 104.0  # gen1 reaches 107 °C unmanaged
     assert flight["plans"] and all(plan["method"].startswith("optimal") for plan in flight["plans"])
