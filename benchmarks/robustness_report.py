@@ -20,7 +20,9 @@ Prints two markdown tables: one row per scheduler (cases flown to the end, breac
 longest breach, median and max detection delay, false alarms), then the figures of the optimal
 scheduler against the best baseline (heuristic, engineer or, when flown, heuristic_flown, whichever rests less in that case;
 and, at the manager's price of rest min + 1000 min per A·h not served, whichever costs less),
-the rest ratio over the cases where no scheduler sheds load, and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
+the rest ratio over the cases where no scheduler sheds load (the same for the optimal scheduler on
+the flown model, ``optimal_flown``, when the grid has it: the comparison with the information of
+``heuristic_flown``), and the cases where a target is missed (a breach, a flight that did not finish, more rest than the
 best baseline), each with what the flight reports about it. Draws, per case and scheduler, the
 time above θmax and the added rest of the optimal scheduler over the best baseline's.
 """
@@ -39,7 +41,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red",
-                     "heuristic_flown": "tab:purple"}
+                     "heuristic_flown": "tab:purple", "optimal_flown": "tab:olive"}
 
 
 def _minutes(seconds) -> str:
@@ -74,10 +76,15 @@ def _ratio_text(ratio) -> str:
     return "–" if ratio is None else f"{ratio:.2f}"
 
 
-def comparison(report: dict) -> dict | None:
-    """The report's ``rest_vs_best_baseline``; recomputed from its cases when the JSON predates the
-    comparison at the manager's price (:mod:`genthermal.schedule.baseline_comparison`)."""
-    rest = report.get("rest_vs_best_baseline")
+#: The report's comparison of the optimal scheduler on the flown model (:data:`FLOWN_KEY`).
+FLOWN_KEY = "flown_optimal_vs_best_baseline"
+
+
+def comparison(report: dict, key: str = "rest_vs_best_baseline") -> dict | None:
+    """The report's ``key`` comparison (``rest_vs_best_baseline`` or :data:`FLOWN_KEY`); the first
+    recomputed from its cases when the JSON predates the comparison at the manager's price
+    (:mod:`genthermal.schedule.baseline_comparison`)."""
+    rest = report.get(key)
     if rest and "mean_cost_ratio" not in rest:
         from genthermal.schedule.baseline_comparison import rest_versus_best_baseline
 
@@ -85,10 +92,11 @@ def comparison(report: dict) -> dict | None:
     return rest
 
 
-def rest_lines(report: dict) -> list[str]:
+def rest_lines(report: dict, key: str = "rest_vs_best_baseline") -> list[str]:
     """The optimal scheduler's added rest against the best baseline's, over all faulty cases and
-    over those where nobody sheds, and its cost at the manager's price against the best baseline's."""
-    rest = comparison(report)
+    over those where nobody sheds, and its cost at the manager's price against the best baseline's
+    (``key``: :func:`comparison`)."""
+    rest = comparison(report, key)
     if not rest:
         return ["(the sweep did not fly heuristic, engineer and optimal)"]
     resting = [c for c in rest["per_case"] if c["best_baseline_rest_s"] > 0 or c["optimal_rest_s"] > 0]
@@ -109,10 +117,11 @@ def rest_lines(report: dict) -> list[str]:
             f"({', '.join(rest['cases_optimal_costs_more']) or 'none'})."]
 
 
-def rest_table(report: dict) -> str:
+def rest_table(report: dict, key: str = "rest_vs_best_baseline") -> str:
     """One row per faulty case where anyone rests or leaves load unserved: the optimal
-    scheduler's rest and load not served, the best baseline's and the hindsight plan's."""
-    rest = comparison(report) or {}
+    scheduler's rest and load not served, the best baseline's and the hindsight plan's (``key``:
+    :func:`comparison`)."""
+    rest = comparison(report, key) or {}
     rows = [c for c in rest.get("per_case", []) if c["optimal_rest_s"] > 0 or c["best_baseline_rest_s"] > 0
             or c.get("optimal_not_served_Ah") or c.get("best_baseline_not_served_Ah")]
     lines = ["| case | optimal rest, min | best baseline rest, min | hindsight rest, min "
@@ -280,6 +289,11 @@ def main(argv=None) -> int:
     print("\n".join(rest_lines(report)))
     print()
     print(rest_table(report))
+    if report.get(FLOWN_KEY):
+        print("\nThe optimal scheduler on the flown model (optimal_flown) against the same baselines:\n")
+        print("\n".join(rest_lines(report, FLOWN_KEY)))
+        print()
+        print(rest_table(report, FLOWN_KEY))
     missed = missed_lines(report)
     print(f"\nTargets missed ({len(missed)}):" if missed else "\nNo target missed.")
     print("\n".join(missed))

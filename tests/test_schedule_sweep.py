@@ -292,6 +292,39 @@ def test_the_sweep_flies_the_flown_heuristic_on_the_nonlinear_model():
     assert sweep.FLOWN_HEURISTIC in sweep.SWEEP_SCHEDULERS
 
 
+def test_the_sweep_flies_the_optimal_scheduler_on_the_flown_model_under_its_own_name():
+    """``optimal_flown`` is the optimal scheduler planning on the nonlinear model whatever the
+    sweep's ``--planner-model``, so one grid holds both optimal flights side by side."""
+    import genthermal.schedule.sweep as sweep
+
+    assert sweep.FLOWN_OPTIMAL in sweep.SWEEP_SCHEDULERS
+    assert sweep.planner_model_of(sweep.FLOWN_OPTIMAL, "affine") == "nonlinear"
+    document = {"name": "case902:healthy:2gen:0.75h", "actions": [{"condition": c, "duration_min": 15} for c in (1, 3, 5)],
+                "generators": {"count": 2, "plant_mismatch": {"h_end_air": 1.2}}, "faults": []}
+    (flight,) = sweep.fly_case(document, (sweep.FLOWN_OPTIMAL,), optimal_planner_model="affine")
+    assert flight["status"] == "ok", flight.get("error")
+    assert (flight["scheduler"], flight["planner_model"]) == ("optimal_flown", "nonlinear")
+    assert flight["summary"]["breach_s"] == 0
+
+
+def test_the_flown_optimal_scheduler_meets_the_same_baselines():
+    """Its comparison is a key of its own, beside the optimal scheduler's, with the same best
+    baseline per case (here the flown heuristic in case a, the engineer's in case b)."""
+    records = [{"name": "a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                      "heuristic_flown": run(0, 100), "optimal": run(0, 150),
+                                                      "optimal_flown": run(0, 50)}},
+               {"name": "b", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                      "heuristic_flown": run(0, 400), "optimal": run(0, 150),
+                                                      "optimal_flown": run(0, 400)}}]
+    summary = summarise(records, ("heuristic", "engineer", "heuristic_flown", "optimal", "optimal_flown"))
+    flown, design = summary["flown_optimal_vs_best_baseline"], summary["rest_vs_best_baseline"]
+    assert [c["best_baseline"] for c in flown["per_case"]] == [c["best_baseline"] for c in design["per_case"]]
+    assert [c["optimal_rest_s"] for c in flown["per_case"]] == [50.0, 400.0]
+    assert flown["mean_ratio"] == pytest.approx(450 / 400) and design["mean_ratio"] == pytest.approx(300 / 400)
+    assert flown["cases_optimal_rests_more"] == ["b"]
+    assert "flown_optimal_vs_best_baseline" not in summarise(records, ("heuristic", "engineer", "optimal"))
+
+
 def test_robustness_report_adds_another_schedulers_flights(tmp_path, capsys, benchmark_script):
     """The same grid flown with the flown heuristic joins each case; the best baseline then counts
     it. Grids with other cases, or a scheduler flown in both, are refused."""
@@ -313,6 +346,14 @@ def test_robustness_report_adds_another_schedulers_flights(tmp_path, capsys, ben
     assert joined["rest_vs_best_baseline"]["mean_ratio"] == pytest.approx(200 / 120)
     assert joined["provenance"]["added"][0]["schedulers"] == ["heuristic_flown"]
     assert "| heuristic_flown | 1/1 |" in capsys.readouterr().out
+    optimal_flown = tmp_path / "optimal_flown.json"
+    optimal_flown_cases = [{"name": "case0:a", "faulty": True, "runs": {"optimal_flown": run(0, 60)}}]
+    optimal_flown.write_text(json.dumps({**summarise(optimal_flown_cases, ("optimal_flown",)), "cases": optimal_flown_cases}))
+    assert report_module.main([str(whole), "--add", str(optimal_flown), "--png", str(tmp_path / "g.png")]) == 0
+    assert json.loads(whole.read_text())["flown_optimal_vs_best_baseline"]["mean_ratio"] == pytest.approx(60 / 120)
+    out = capsys.readouterr().out
+    assert "The optimal scheduler on the flown model (optimal_flown) against the same baselines" in out
+    assert "| case0:a | 1.0 | 2.0 (heuristic_flown) |" in out
     assert report_module.main([str(whole), "--add", str(other), "--png", str(tmp_path / "g.png")]) == 2
     assert "both flew ['heuristic_flown']" in capsys.readouterr().err
     stranger = tmp_path / "stranger.json"

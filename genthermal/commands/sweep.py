@@ -17,7 +17,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..outputs import finite_document, report_json
 from ..schedule.manager_settings import PLANNER_MODELS
-from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, SWEEP_SCHEDULERS
+from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, FLOWN_OPTIMAL, SWEEP_SCHEDULERS
 
 
 def register(subparsers) -> None:
@@ -27,7 +27,8 @@ def register(subparsers) -> None:
     parser.add_argument("--cases", default=60, type=int, help="number of cases (default 60)")
     parser.add_argument("--schedulers", default="heuristic,engineer,optimal",
                         help=f"comma-separated, of {', '.join(SWEEP_SCHEDULERS)} (default heuristic,engineer,optimal; "
-                        f"{FLOWN_HEURISTIC}: the thesis heuristic on the flown model, a third baseline)")
+                        f"{FLOWN_HEURISTIC}: the thesis heuristic on the flown model, a third baseline; "
+                        f"{FLOWN_OPTIMAL}: the optimal scheduler on the flown model, whatever --planner-model)")
     parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: a local cluster)")
     parser.add_argument("--workers", default=2, type=int, help="workers of the local cluster (default 2)")
     parser.add_argument("--seed", default=0, type=int, help="seed of the cases (default 0)")

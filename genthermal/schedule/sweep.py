@@ -43,6 +43,8 @@ Keys of :func:`summarise` (benchmark JSON):
                                      ``mean_cost_ratio``, ``cases_optimal_costs_more``; and the rest ratio
                                      over the cases where no scheduler sheds, ``without_shedding``
                                      (:mod:`~genthermal.schedule.baseline_comparison`)
+``flown_optimal_vs_best_baseline``   the same for the optimal scheduler on the flown model
+                                     (:data:`~.baseline_comparison.FLOWN_OPTIMAL`), when the sweep flew it
 ``detect_delay_s``                   median and max over the faulty flights detected, how many were
                                      detected, and the faulty flights not detected (case, scheduler)
 ``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
@@ -61,7 +63,7 @@ import numpy as np
 from ..collector import collector_in_this_thread
 from ..errors import InputError
 from ..mission import Mission
-from .baseline_comparison import FLOWN_HEURISTIC, rest_versus_best_baseline
+from .baseline_comparison import FLOWN_HEURISTIC, FLOWN_OPTIMAL, rest_versus_best_baseline
 from .manager_settings import SCHEDULERS
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
@@ -119,16 +121,18 @@ def expected_cost(document: dict) -> float:
     return hours * document["generators"]["count"] * (4.0 if blockage else 1.0)
 
 
-#: Schedulers a sweep flies: the manager's, and :data:`FLOWN_HEURISTIC`.
-SWEEP_SCHEDULERS = SCHEDULERS + (FLOWN_HEURISTIC,)
+#: Schedulers a sweep flies: the manager's, :data:`FLOWN_HEURISTIC` and :data:`FLOWN_OPTIMAL`.
+SWEEP_SCHEDULERS = SCHEDULERS + (FLOWN_HEURISTIC, FLOWN_OPTIMAL)
+#: The manager's scheduler each flown-model sweep name flies.
+FLOWN_SCHEDULER_OF = {FLOWN_HEURISTIC: "heuristic", FLOWN_OPTIMAL: "optimal"}
 
 
 def planner_model_of(scheduler: str, optimal_planner_model: str = "affine") -> str:
     """The model ``scheduler`` plans on in a sweep: ``optimal_planner_model`` for the optimal
     scheduler (one of :data:`~genthermal.schedule.manager_settings.PLANNER_MODELS`), the flown model
-    (``nonlinear``) for :data:`FLOWN_HEURISTIC`, the design model (``affine``) for the other
-    baselines, which are defined on it."""
-    if scheduler == FLOWN_HEURISTIC:
+    (``nonlinear``) for :data:`FLOWN_HEURISTIC` and :data:`FLOWN_OPTIMAL`, the design model
+    (``affine``) for the other baselines, which are defined on it."""
+    if scheduler in FLOWN_SCHEDULER_OF:
         return "nonlinear"
     return optimal_planner_model if scheduler == "optimal" else "affine"
 
@@ -216,7 +220,7 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
     record = {"case": document["name"], "scheduler": scheduler, "planner_model": planner_model}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
-        flown = "heuristic" if scheduler == FLOWN_HEURISTIC else scheduler
+        flown = FLOWN_SCHEDULER_OF.get(scheduler, scheduler)
         summary = flight_summary(fly(system, flown, ManagerSettings(cpu_limit_s=cpu_limit_s,
                                                                     planner_model=planner_model)))
         summary.pop("warnings")
@@ -374,4 +378,6 @@ def summarise(records: list, schedulers) -> dict:
     }
     if {"heuristic", "engineer", "optimal"} <= set(schedulers):
         summary["rest_vs_best_baseline"] = rest_versus_best_baseline(records)
+    if {"heuristic", "engineer", FLOWN_OPTIMAL} <= set(schedulers):
+        summary["flown_optimal_vs_best_baseline"] = rest_versus_best_baseline(records, FLOWN_OPTIMAL)
     return summary
