@@ -168,6 +168,33 @@ def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys, benchmark_sc
     assert "--rounds must be >= 1" in err and "got 0" in err
 
 
+@pytest.mark.parametrize("value, message", [("0", "--rest-min must be a rest in min, > 0 and at most 60"),
+                                            ("75", "got 75"), ("nan", "got nan"),
+                                            ("20 --write", "--write ships the study with the thesis's 10-min rest")])
+def test_feasibility_benchmark_refuses_a_rest_outside_the_budget(capsys, benchmark_script, value, message):
+    """`--rest-min` (the managed outcome's rest before landing) is named with its value when it is
+    not a rest within the flights' 60-min budget, and cannot ship a calibration; before any solve."""
+    module = benchmark_script("chapter7_feasibility")
+    with pytest.raises(SystemExit) as stop:
+        module.main(["--inlet-follows-load", "--rest-min", *value.split()])
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_the_managed_outcome_rests_as_long_as_the_study_is_told(chapter7):
+    """The rig's 20-min rest (``rest_s``) puts both generators in minimum power mode for 20 min
+    before landing and moves landing 10 min later than the thesis's 10-min rest does."""
+    from genthermal.machines.chapter7_managed import REST_PERCENT, managed_timeline
+
+    thesis, rig = managed_timeline(60.0), managed_timeline(60.0, rest_s=1200.0)
+    assert thesis["rest"].sum() == 10 and rig["rest"].sum() == 20
+    assert rig["time_s"][-1] - thesis["time_s"][-1] == pytest.approx(600.0)
+    rated = thesis["mission"].rated_current_A
+    assert rig["current_A"][rig["rest"]] == pytest.approx(REST_PERCENT / 100.0 * rated)
+    problem = FeasibilityProblem(chapter7, LAGS, rest_s=1200.0, dt_s=60.0, inlet_follows_load=True)
+    assert problem.managed_nominal_current(rig["time_s"]) == pytest.approx(rig["current_A"])
+
+
 def test_receiver_headroom_is_the_rated_current_less_each_conditions_highest_load():
     """A constant displacement per K-condition fits under the limit only up to the limit less the
     condition's highest nominal current; none where the load reaches it, and a bad limit is named."""
