@@ -219,7 +219,8 @@ def missed_lines(report: dict) -> list[str]:
 
 
 def plot(report: dict, path: Path) -> None:
-    """Breach (s) per case and scheduler, and the optimal/best-baseline added-rest ratio per case."""
+    """Breach (s) per case and scheduler, and the optimal/best-baseline added-rest ratio per case (of
+    the optimal scheduler on the flown model too, when the grid has it)."""
     cases = report["cases"]
     schedulers = list(report["robustness"]["breach_s"])
     x = np.arange(len(cases))
@@ -239,17 +240,23 @@ def plot(report: dict, path: Path) -> None:
     top.legend(ncol=4, fontsize=8)
     top.grid(alpha=0.3, axis="y")
     top.set_title(f"Robustness grid: {len(cases)} cases (plant ±30 %, unknown fault, 2-4 generators, 2-8 h)")
-    rest = {c["case"]: c for c in (report.get("rest_vs_best_baseline") or {}).get("per_case", [])}
-    ratios = [rest[c["name"]]["ratio"] if c["name"] in rest and rest[c["name"]]["ratio"] is not None else np.nan
-              for c in cases]
-    only_optimal = [i for i, c in enumerate(cases) if c["name"] in rest and rest[c["name"]]["ratio"] is None
-                    and rest[c["name"]]["optimal_rest_s"] > 0]
-    bottom.bar(x, ratios, 0.6, color="tab:green", label="optimal / best baseline added rest")
-    bottom.plot(only_optimal, [1.0] * len(only_optimal), "r^", label="optimal rests, baseline does not")
+    compared = [(key, name) for key, name in (("rest_vs_best_baseline", "optimal"), (FLOWN_KEY, "optimal_flown"))
+                if report.get(key)]
+    bar_width = 0.8 / max(len(compared), 1)
+    for i, (key, name) in enumerate(compared):
+        rest = {c["case"]: c for c in report[key].get("per_case", [])}
+        ratios = [rest[c["name"]]["ratio"] if c["name"] in rest and rest[c["name"]]["ratio"] is not None else np.nan
+                  for c in cases]
+        only_optimal = [j for j, c in enumerate(cases) if c["name"] in rest and rest[c["name"]]["ratio"] is None
+                        and rest[c["name"]]["optimal_rest_s"] > 0]
+        offsets = x + (i - (len(compared) - 1) / 2) * bar_width
+        bottom.bar(offsets, ratios, bar_width, color=SCHEDULER_COLOURS[name], label=f"{name} / best baseline added rest")
+        bottom.plot(offsets[only_optimal], [1.0] * len(only_optimal), "^", color="red" if i == 0 else "darkred",
+                    label=f"{name} rests, baseline does not")
     bottom.axhline(1.0, color="k", lw=0.8)
     bottom.axhline(0.8, color="k", lw=0.8, ls="--", label="target 0.8 (grid mean)")
     bottom.set_ylabel("rest ratio [-]")
-    bottom.legend(fontsize=8)
+    bottom.legend(fontsize=8, loc="center right")
     bottom.grid(alpha=0.3, axis="y")
     bottom.set_xticks(x, [c["name"].split(":")[0] + ":" + c["name"].split(":")[1][:8] for c in cases],
                       rotation=90, fontsize=6)
