@@ -305,6 +305,10 @@ def test_the_sweep_flies_the_optimal_scheduler_on_the_flown_model_under_its_own_
     assert flight["status"] == "ok", flight.get("error")
     assert (flight["scheduler"], flight["planner_model"]) == ("optimal_flown", "nonlinear")
     assert flight["summary"]["breach_s"] == 0
+    # flown directly, with fly_flight's default design model, the name still decides the model
+    # (it flew the optimal scheduler on the design model under the flown name)
+    direct = sweep.fly_flight(document, sweep.FLOWN_OPTIMAL)
+    assert direct["planner_model"] == "nonlinear" and direct["summary"] == flight["summary"]
 
 
 def test_the_flown_optimal_scheduler_meets_the_same_baselines():

@@ -201,6 +201,8 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
                planner_model: str = "affine") -> dict:
     """Fly case ``document`` with ``scheduler`` planning on ``planner_model``
     (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.planner_model`); never raises.
+    A flown-model name (:data:`FLOWN_SCHEDULER_OF`) plans on the flown model whatever
+    ``planner_model`` says (:func:`planner_model_of`): its name is its model.
 
     Returns
     -------
@@ -217,6 +219,8 @@ def fly_flight(document: dict, scheduler: str, cpu_limit_s: float | None = DEFAU
     from .report import flight_summary
 
     started, cpu_started = time.perf_counter(), time.process_time()
+    if scheduler in FLOWN_SCHEDULER_OF:
+        planner_model = planner_model_of(scheduler)
     record = {"case": document["name"], "scheduler": scheduler, "planner_model": planner_model}
     try:
         system = PowerSystem.from_mission(Mission.from_dict(document))
