@@ -40,8 +40,10 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from genthermal.schedule.baseline_comparison import FLOWN_OPTIMAL, FLOWN_OPTIMAL_KEY  # noqa: E402
+
 SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red",
-                     "heuristic_flown": "tab:purple", "optimal_flown": "tab:olive"}
+                     "heuristic_flown": "tab:purple", FLOWN_OPTIMAL: "tab:olive"}
 
 
 def _minutes(seconds) -> str:
@@ -76,12 +78,8 @@ def _ratio_text(ratio) -> str:
     return "–" if ratio is None else f"{ratio:.2f}"
 
 
-#: The report's comparison of the optimal scheduler on the flown model (:data:`FLOWN_KEY`).
-FLOWN_KEY = "flown_optimal_vs_best_baseline"
-
-
 def comparison(report: dict, key: str = "rest_vs_best_baseline") -> dict | None:
-    """The report's ``key`` comparison (``rest_vs_best_baseline`` or :data:`FLOWN_KEY`); the first
+    """The report's ``key`` comparison (``rest_vs_best_baseline`` or ``FLOWN_OPTIMAL_KEY``); the first
     recomputed from its cases when the JSON predates the comparison at the manager's price
     (:mod:`genthermal.schedule.baseline_comparison`)."""
     rest = report.get(key)
@@ -240,7 +238,7 @@ def plot(report: dict, path: Path) -> None:
     top.legend(ncol=4, fontsize=8)
     top.grid(alpha=0.3, axis="y")
     top.set_title(f"Robustness grid: {len(cases)} cases (plant ±30 %, unknown fault, 2-4 generators, 2-8 h)")
-    compared = [(key, name) for key, name in (("rest_vs_best_baseline", "optimal"), (FLOWN_KEY, "optimal_flown"))
+    compared = [(key, name) for key, name in (("rest_vs_best_baseline", "optimal"), (FLOWN_OPTIMAL_KEY, FLOWN_OPTIMAL))
                 if report.get(key)]
     bar_width = 0.8 / max(len(compared), 1)
     for i, (key, name) in enumerate(compared):
@@ -296,11 +294,11 @@ def main(argv=None) -> int:
     print("\n".join(rest_lines(report)))
     print()
     print(rest_table(report))
-    if report.get(FLOWN_KEY):
-        print("\nThe optimal scheduler on the flown model (optimal_flown) against the same baselines:\n")
-        print("\n".join(rest_lines(report, FLOWN_KEY)))
+    if report.get(FLOWN_OPTIMAL_KEY):
+        print(f"\nThe optimal scheduler on the flown model ({FLOWN_OPTIMAL}) against the same baselines:\n")
+        print("\n".join(rest_lines(report, FLOWN_OPTIMAL_KEY)))
         print()
-        print(rest_table(report, FLOWN_KEY))
+        print(rest_table(report, FLOWN_OPTIMAL_KEY))
     missed = missed_lines(report)
     print(f"\nTargets missed ({len(missed)}):" if missed else "\nNo target missed.")
     print("\n".join(missed))

@@ -38,6 +38,9 @@ OPTIONAL_BASELINES = (FLOWN_HEURISTIC,)
 #: ``candidate``), it meets :data:`FLOWN_HEURISTIC` with the same information, the extended Kalman
 #: filter's nonlinear model, where the optimal scheduler on the design model does not.
 FLOWN_OPTIMAL = "optimal_flown"
+#: Summary key of :data:`FLOWN_OPTIMAL`'s comparison (a sweep's ``rest_vs_best_baseline`` is the
+#: optimal scheduler's).
+FLOWN_OPTIMAL_KEY = "flown_optimal_vs_best_baseline"
 
 
 def baselines_of(runs: dict) -> tuple:

@@ -63,7 +63,7 @@ import numpy as np
 from ..collector import collector_in_this_thread
 from ..errors import InputError
 from ..mission import Mission
-from .baseline_comparison import FLOWN_HEURISTIC, FLOWN_OPTIMAL, rest_versus_best_baseline
+from .baseline_comparison import FLOWN_HEURISTIC, FLOWN_OPTIMAL, FLOWN_OPTIMAL_KEY, rest_versus_best_baseline
 from .manager_settings import SCHEDULERS
 
 MISMATCH_PARAMETERS = ("h_end_air", "h_top_air", "R0", "P_iron", "m_dot_fan")
@@ -383,5 +383,5 @@ def summarise(records: list, schedulers) -> dict:
     if {"heuristic", "engineer", "optimal"} <= set(schedulers):
         summary["rest_vs_best_baseline"] = rest_versus_best_baseline(records)
     if {"heuristic", "engineer", FLOWN_OPTIMAL} <= set(schedulers):
-        summary["flown_optimal_vs_best_baseline"] = rest_versus_best_baseline(records, FLOWN_OPTIMAL)
+        summary[FLOWN_OPTIMAL_KEY] = rest_versus_best_baseline(records, FLOWN_OPTIMAL)
     return summary
