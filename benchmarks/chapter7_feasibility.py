@@ -53,11 +53,12 @@ from genthermal.machines import build_model
 import yaml
 
 from genthermal.mission import load_mission
-from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE
+from genthermal.machines.chapter7 import DT_S, FIT_BOUNDS, PARAMETER_FILE
 from genthermal.machines.chapter7_feasibility import (H_AIR_GAP_BOUNDS, MACHINE_NAMES, default_starts, pareto_trace,
                                                       study)
 from genthermal.machines.chapter7_managed import REST_BEFORE_LANDING_S
 from genthermal.model_file import load_model
+from genthermal.schedule.manager_settings import ManagerSettings
 
 #: Provenance of every value the study with a load-following inlet ships.
 SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/chapter7_feasibility.py, inlet follows load)"
@@ -65,9 +66,6 @@ SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/chapter7_feasibility.py, i
 SOURCE_RATED = ("fitted to thesis ch. 7 outcomes, rated-current reading (benchmarks/chapter7_feasibility.py, "
                 "inlet follows load, receiver held to rated current)")
 
-#: Longest rest before landing the study takes, min (the chapter-7 flights' rest budget: a quarter,
-#: DEFAULT_REST_BUDGET_FRACTION, of the 4-h Fig 7.7 mission).
-MAX_REST_MIN = 60.0
 #: Caps on the managed peaks of the Pareto trace, °C (θmax itself and halfway to the thesis's 111).
 MANAGED_CAPS_C = (110.0, 110.5)
 #: Caps on the other outcomes' violations of the Pareto trace, K (0: all met).
@@ -133,9 +131,12 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     if args.rounds < 1:
         parser.error(f"--rounds must be >= 1 (one solve, then one more per re-measured lag), got {args.rounds}")
-    if not (math.isfinite(args.rest_min) and 0 < args.rest_min <= MAX_REST_MIN):
-        parser.error(f"--rest-min must be a rest in min, > 0 and at most {MAX_REST_MIN:g} (the scenarios' rest "
-                     f"budget), got {args.rest_min:g}")
+    budget_min = ManagerSettings().rest_budget_for(load_mission("thesis_fig_7_7").duration_s) / 60.0
+    step_min = DT_S / 60.0
+    if not (math.isfinite(args.rest_min) and 0 < args.rest_min <= budget_min
+            and abs(args.rest_min / step_min - round(args.rest_min / step_min)) < 1e-9):
+        parser.error(f"--rest-min must be a rest in min, > 0 and at most {budget_min:g} (the chapter-7 flights' rest "
+                     f"budget) in steps of {step_min:g} min (the study's sample period), got {args.rest_min:g}")
     if args.write and args.rest_min != REST_BEFORE_LANDING_S / 60.0:
         parser.error("--write ships the study with the thesis's 10-min rest: leave --rest-min out")
     if args.write and not args.inlet_follows_load:

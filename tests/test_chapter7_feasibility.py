@@ -170,6 +170,7 @@ def test_feasibility_benchmark_refuses_fewer_than_one_round(capsys, benchmark_sc
 
 @pytest.mark.parametrize("value, message", [("0", "--rest-min must be a rest in min, > 0 and at most 60"),
                                             ("75", "got 75"), ("nan", "got nan"),
+                                            ("12.3", "in steps of 0.5 min (the study's sample period), got 12.3"),
                                             ("20 --write", "--write ships the study with the thesis's 10-min rest")])
 def test_feasibility_benchmark_refuses_a_rest_outside_the_budget(capsys, benchmark_script, value, message):
     """`--rest-min` (the managed outcome's rest before landing) is named with its value when it is
