@@ -102,6 +102,7 @@ from .filter_base import RecursiveFilter, checked_predict_steps
 from .kalman import (
     DEFAULT_INITIAL_STD_K,
     Update,
+    _LARGEST_MEASUREMENT,
     _covariance,
     heat_flow_process_noise,
     initial_state_from_measurements,
@@ -370,9 +371,10 @@ class ExtendedKalmanFilter(RecursiveFilter):
         :meth:`update`, :meth:`change_detector` and :meth:`predict`.
 
         ``measured`` holds 1 for each sensor read at this sample and 0 for a missing one (its
-        ``y`` is then ignored): the sensor's row of :math:`H` and its innovation are zeroed and its
-        row and column of :math:`R` replaced by the identity's, which gives exactly the update
-        without that sensor. ``change_mean`` is the test's memory :math:`m` (K, one per sensor;
+        ``y`` is then ignored whatever its value, NaN and infinity included): the sensor's row of
+        :math:`H` and its innovation are zeroed and its row and column of :math:`R` replaced by the
+        identity's, which gives exactly the update without that sensor. A flag other than 1 counts
+        as missing, and so does a non-finite ``y`` flagged 1 (as :meth:`update` skips a NaN). ``change_mean`` is the test's memory :math:`m` (K, one per sensor;
         zeros at the start of a record), ``change_statistic`` its :math:`T_k`
         (:mod:`~genthermal.estimation.change_detection`); on an alarm (:math:`T_k` above
         ``change_threshold``, every sensor read) ``P`` is the covariance already opened by the
@@ -381,8 +383,12 @@ class ExtendedKalmanFilter(RecursiveFilter):
         """
         nz, ny = len(self.state_names), len(self.output_names)
         z, P = ca.SX.sym("z_pred", nz), ca.SX.sym("P_pred", nz, nz)
-        u, y, measured = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
+        u, y_read, flags = ca.SX.sym("u", len(self.model.input_names)), ca.SX.sym("y", ny), ca.SX.sym("measured", ny)
         mean = ca.SX.sym("change_mean", ny)
+        # select, never multiply: 0 * NaN is NaN, a comparison with NaN is false
+        measured = ca.vertcat(*(ca.if_else((flags[i] == 1) * (ca.fabs(y_read[i]) <= _LARGEST_MEASUREMENT), 1.0, 0.0)
+                                for i in range(ny)))
+        y = ca.vertcat(*(ca.if_else(measured[i], y_read[i], 0.0) for i in range(ny)))
         mask = ca.diag(measured)
         H = mask @ ca.DM(self.H)
         R = mask @ ca.DM(self.R) @ mask + ca.diag(1 - measured)
@@ -404,7 +410,7 @@ class ExtendedKalmanFilter(RecursiveFilter):
         P_filtered = P_filtered + alarm * ca.DM(self.jump_covariance)
         z_next, F = self.transition(z_filtered, u)
         P_next = F @ P_filtered @ F.T + ca.DM(self.Q)
-        return ca.Function("ekf_update", [z, P, u, y, measured, mean],
+        return ca.Function("ekf_update", [z, P, u, y_read, flags, mean],
                            [z_filtered, P_filtered, z_next, P_next, mean_next, statistic],
                            ["z_pred", "P_pred", "u", "y", "measured", "change_mean"],
                            ["z", "P", "z_next_pred", "P_next_pred", "change_mean_next", "change_statistic"])
