@@ -35,11 +35,13 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+import sympy
 from scipy.integrate import solve_ivp
 
 from genthermal.ccompile import COMPILE_FLAGS, find_compiler
 from genthermal.codegen import model_library
 from genthermal.design import linear_design_model
+from genthermal.losses import LossFloor, input_symbol
 from genthermal.machines import build_model
 from genthermal.mission import load_mission
 
@@ -49,7 +51,9 @@ TOLERANCE = 1e-8
 FLOOR_SOURCE = r"""
 #define NX %(nx)d
 #define NU %(nu)d
+#define NF %(nf)d
 void floor_simulate(const double* restrict A, const double* restrict B, const double* restrict c,
+                    const double* restrict R, const double* restrict r, const double* restrict D,
                     const double* restrict x0, const double* restrict U, int n_steps, double* restrict X)
 {
     int k, i, j;
@@ -63,9 +67,39 @@ void floor_simulate(const double* restrict A, const double* restrict B, const do
             for (j = 0; j < NU; ++j) sum += B[i * NU + j] * u[j];
             next[i] = sum;
         }
+        for (j = 0; j < NF; ++j) {  /* loss floors: the line of loss j is held at 0 W below its zero */
+            double excess = -r[j];
+            for (i = 0; i < NU; ++i) excess -= R[j * NU + i] * u[i];
+            if (excess > 0.0)
+                for (i = 0; i < NX; ++i) next[i] += D[i * NF + j] * excess;
+        }
     }
 }
 """
+
+
+def loss_floors(model, discrete) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R, r, D) of the model's loss floors, from its sympy heat sources: floor j holds the loss line
+    ``R[j] u + r[j]`` (a :class:`~genthermal.losses.LossFloor`) at 0 W, which adds ``D[:, j]`` times
+    ``max(-(R[j] u + r[j]), 0)`` to the affine step ``A x + B u + c``. ``D[:, j]`` is measured on the
+    model's own step at the rating with floor j's currents at 0 A."""
+    atoms = sorted(set().union(*(s.power.atoms(LossFloor) for s in model.network.heat_sources)), key=str)
+    values = {model.parameters[n].symbol: model.parameters[n].value for n in model.parameter_names}
+    inputs = [input_symbol(n) for n in model.input_names]
+    lines = [sympy.Poly(atom.args[0].subs(values), *inputs) for atom in atoms]
+    R = np.array([[float(line.coeff_monomial(v)) for v in inputs] for line in lines]).reshape(len(atoms), len(inputs))
+    r = np.array([float(line.coeff_monomial(1)) for line in lines])
+    rated = model.input_vector(**model.spec.interface.rated_inputs)
+    x = np.full(model.n_states, 60.0)
+    D = np.zeros((model.n_states, len(atoms)))
+    for j in range(len(atoms)):
+        u = np.where(R[j] != 0.0, 0.0, rated)
+        excess = -(R @ u + r)
+        if not (excess[j] > 0 and np.all(np.delete(excess, j) <= 0)):
+            raise SystemExit(f"cannot isolate loss floor {atoms[j]}: the floor needs its own measurement point")
+        affine = discrete.A @ x + discrete.B @ u + discrete.c
+        D[:, j] = (np.asarray(discrete.step(x, u)).ravel() - affine) / excess[j]
+    return R, r, D
 
 
 def median_time(function, repeats: int) -> float:
@@ -79,15 +113,15 @@ def median_time(function, repeats: int) -> float:
     return statistics.median(times)
 
 
-def compile_floor(nx: int, nu: int, directory: Path):
+def compile_floor(nx: int, nu: int, nf: int, directory: Path):
     """Compile the hand-written loop into a shared library and return its ctypes function."""
     source = directory / "floor.c"
-    source.write_text(FLOOR_SOURCE % {"nx": nx, "nu": nu})
+    source.write_text(FLOOR_SOURCE % {"nx": nx, "nu": nu, "nf": max(nf, 1)})
     library = directory / "libfloor.so"
     subprocess.run([*find_compiler(), "-shared", *COMPILE_FLAGS, "-o", str(library), str(source)], check=True)
     function = ctypes.CDLL(str(library)).floor_simulate
     function.restype = None
-    function.argtypes = [ctypes.c_void_p] * 5 + [ctypes.c_int, ctypes.c_void_p]
+    function.argtypes = [ctypes.c_void_p] * 8 + [ctypes.c_int, ctypes.c_void_p]
     return function
 
 
@@ -120,6 +154,20 @@ def scipy_simulate(method: str, x0, pieces, affine, dt: float) -> np.ndarray:
     return np.vstack(states)
 
 
+def interleaved_times(functions: dict, rounds: int) -> dict:
+    """Wall times (s) of every function in ``functions``, called in turn in each of ``rounds`` rounds
+    (after one warm-up round), so that load on the machine hits them alike."""
+    for function in functions.values():
+        function()
+    times = {name: [] for name in functions}
+    for _ in range(rounds):
+        for name, function in functions.items():
+            start = time.perf_counter()
+            function()
+            times[name].append(time.perf_counter() - start)
+    return times
+
+
 def run(repeats: int) -> dict:
     """Measure every method; return the JSON-ready results."""
     plant = build_model()
@@ -128,12 +176,29 @@ def run(repeats: int) -> dict:
     U = np.ascontiguousarray(inputs[list(plant.input_names)].to_numpy()[:-1])
     n_steps, x0 = len(U), np.full(plant.n_states, U[0, plant.input_names.index("T_ambient")])
     pieces = constant_pieces(U)
-    median_s, differences, results = {}, {}, {}
+    median_s, differences, against_model, results = {}, {}, {}, {}
+    fast, outputs = {}, {}
+    with tempfile.TemporaryDirectory() as scratch:
+        for variant, model in models.items():  # the C methods: timed side by side below
+            compiled = model_library(model, dt_s=DT_S, prefix=f"bench_{variant}")
+            outputs[f"c_{variant}"] = X = np.empty((n_steps, model.n_states))
+            fast[f"c_{variant}"] = lambda compiled=compiled, X=X: compiled.simulate(x0, U, out=X)
+        linear = models["linear"]
+        discrete = linear.discretise(DT_S)
+        R, r, D = loss_floors(linear, discrete)
+        if not len(r):  # no floor: one that never acts keeps the loop's shape
+            R, r, D = np.zeros((1, len(linear.input_names))), np.zeros(1), np.zeros((linear.n_states, 1))
+        arrays = [np.ascontiguousarray(m) for m in (discrete.A, discrete.B, discrete.c, R, r, D, x0, U)]
+        floor = compile_floor(linear.n_states, len(linear.input_names), len(r), Path(scratch))
+        outputs["floor_linear"] = X_floor = np.empty((n_steps, linear.n_states))
+        fast["floor_linear"] = lambda: floor(*(a.ctypes.data for a in arrays), n_steps, X_floor.ctypes.data)
+        times = interleaved_times(fast, repeats * 10)
+    median_s.update({name: statistics.median(t) for name, t in times.items()})
+    c_over_floor = {v: float(np.median(np.array(times[f"c_{v}"]) / np.array(times["floor_linear"]))) for v in models}
     for variant, model in models.items():
-        compiled = model_library(model, dt_s=DT_S, prefix=f"bench_{variant}")
-        X = np.empty((n_steps, model.n_states))
-        median_s[f"c_{variant}"] = median_time(lambda: compiled.simulate(x0, U, out=X), repeats * 10)
-        results["c"] = X.copy()
+        results["c"] = outputs[f"c_{variant}"]
+        if variant == "linear":
+            results["floor"] = outputs["floor_linear"]
         simulator = model.discretise(DT_S).simulator(n_steps)
         median_s[f"casadi_{variant}"] = median_time(lambda: simulator(x0, U.T), repeats)
         results["casadi"] = np.asarray(simulator(x0, U.T)).T
@@ -143,20 +208,13 @@ def run(repeats: int) -> dict:
             median_s[f"{key}_{variant}"] = median_time(lambda: scipy_simulate(method, x0, pieces, affine, DT_S),
                                                        max(repeats // 2, 1))
             results[key] = scipy_simulate(method, x0, pieces, affine, DT_S)
-        if variant == "linear":
-            discrete = model.discretise(DT_S)
-            A, B, c = (np.ascontiguousarray(m) for m in (discrete.A, discrete.B, discrete.c))
-            with tempfile.TemporaryDirectory() as scratch:
-                floor = compile_floor(model.n_states, len(model.input_names), Path(scratch))
-                pointers = [a.ctypes.data for a in (A, B, c, x0, U)]
-                median_s["floor_linear"] = median_time(lambda: floor(*pointers, n_steps, X.ctypes.data),
-                                                       repeats * 10)
-            results["floor"] = X.copy()
+        against_model[variant] = {k: float(np.max(np.abs(results[k] - results["casadi"])))
+                                  for k in ("c", "floor") if k in results}
         reference = results.pop("scipy_bdf")
         differences[variant] = {k: float(np.max(np.abs(v - reference))) for k, v in results.items()}
         results.clear()
     ratios = {
-        "c_over_floor": {v: median_s[f"c_{v}"] / median_s["floor_linear"] for v in models},
+        "c_over_floor": c_over_floor,
         "scipy_bdf_over_c": {v: median_s[f"scipy_bdf_{v}"] / median_s[f"c_{v}"] for v in models},
         "casadi_over_c": {v: median_s[f"casadi_{v}"] / median_s[f"c_{v}"] for v in models},
     }
@@ -164,13 +222,16 @@ def run(repeats: int) -> dict:
     return {
         "mission": MISSION, "duration_h": n_steps * DT_S / 3600.0, "dt_s": DT_S, "n_steps": n_steps,
         "input_pieces": len(pieces), "repeats": repeats, "compiler": find_compiler(),
-        "flags": " ".join(COMPILE_FLAGS),
-        "scipy_rhs": {"linear": "numpy A x + B u + c (exact Jacobians of the design model)",
+        "flags": " ".join(COMPILE_FLAGS), "loss_floors_in_floor": int(np.count_nonzero(np.any(D != 0, axis=0))),
+        "scipy_rhs": {"linear": "numpy J x + f(0,u) per constant-input piece, exact (A, B, c with the loss floors)",
                       "nonlinear": "numpy J(u) x + f(0,u) per constant-input piece, exact (f affine in x)"},
         "median_s": median_s, "ratios": ratios, "max_abs_diff_K": differences,
+        "max_abs_diff_from_python_step_K": against_model,
         "targets": {"c_linear_within_3x_floor": ratios["c_over_floor"]["linear"] <= 3.0,
                     "c_nonlinear_within_6x_floor": ratios["c_over_floor"]["nonlinear"] <= 6.0,
                     "c_at_least_100x_faster_than_scipy_bdf": min(ratios["scipy_bdf_over_c"].values()) >= 100.0,
+                    "floor_equals_the_model_within_1e-9_K": against_model["linear"]["floor"] <= 1e-9,
+                    "c_equals_python_within_1e-9_K": max(d["c"] for d in against_model.values()) <= 1e-9,
                     "methods_agree_within_0.01_K": worst <= 0.01},
     }
 

@@ -31,6 +31,7 @@ from pathlib import Path
 import casadi as ca
 
 from . import __version__
+from .codegen_simplify import affine_with_floors, inline_floors
 from .errors import GenthermalError, InputError
 from .model import ThermalModel
 from .resources import TEMPLATE_DIR, shipped_file
@@ -167,12 +168,12 @@ def generate_c(model: ThermalModel, out_dir, dt_s: float = 10.0, prefix: str = "
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     discrete = model.discretise(dt_s)
-    functions = _casadi_functions(model, discrete.step, prefix)
+    functions = _casadi_functions(model, discrete, prefix)
     signatures = []
     for name, function in (extra_functions or {}).items():
         signature = _extra_signature(name, function)
         signatures.append(signature)
-        functions[name] = _dense_function(f"{prefix}_cg_{name}", function)
+        functions[name] = _dense_function(f"{prefix}_cg_{name}", inline_floors(function))
     for stale in out_dir.glob(f"{prefix}_casadi_*.c"):
         stale.unlink()
     sources = [_generate_source(out_dir, prefix, name, function) for name, function in functions.items()]
@@ -238,11 +239,13 @@ def _dense_function(name: str, function: ca.Function) -> ca.Function:
     return ca.Function(name, flat_inputs, flat_outputs, function.name_in(), function.name_out())
 
 
-def _casadi_functions(model: ThermalModel, step: ca.Function, prefix: str) -> dict:
-    """The functions behind the fixed entry points, named ``<prefix>_cg_<name>``."""
+def _casadi_functions(model: ThermalModel, discrete, prefix: str) -> dict:
+    """The functions behind the fixed entry points, named ``<prefix>_cg_<name>``; the step of an
+    affine model as matrix products with its loss floors (:func:`affine_with_floors`)."""
+    step = (discrete.exact and affine_with_floors(discrete.step)) or inline_floors(discrete.step)
     functions = {"step": _dense_function(f"{prefix}_cg_step", step)}
     for name in MODEL_FUNCTIONS:
-        functions[name] = _dense_function(f"{prefix}_cg_{name}", model.functions[name])
+        functions[name] = _dense_function(f"{prefix}_cg_{name}", inline_floors(model.functions[name]))
     rhs = model.functions["rhs"]
     x, u, p = rhs.sx_in()
     seed = ca.SX.sym("seed", model.n_states)
