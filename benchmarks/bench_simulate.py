@@ -15,10 +15,19 @@ method allows):
   side is affine in x for a fixed input (copper resistance linear in temperature), so on each
   piece ``f(x) = J(u) x + f(0, u)`` exactly, with ``J(u)`` and ``f(0, u)`` from the CasADi
   functions (checked: ``jac_x`` does not depend on x);
-* ``floor_linear`` -- a plain hand-written C loop ``x <- A x + B u + c`` with the same A, B, c as
-  the exact linear step, compiled here with the library's flags: the floor for any 8-state step.
+* ``floor_linear`` -- a plain hand-written C loop ``x <- A x + B u + c + D max(-(R u + r), 0)`` with
+  the same A, B, c as the exact linear step and the model's loss floors, compiled here with the
+  library's flags: the floor for any 8-state step.
 
-``max_abs_diff_K`` compares every method with the BDF solution of the same model.
+``max_abs_diff_K`` compares every method with the BDF solution of the same model,
+``max_abs_diff_from_python_step_K`` the C library and the floor with the model's own step in
+CasADi. The floor applies the design model's copper-loss floors (a loss line held at 0 W below
+1.6 A, :class:`~genthermal.losses.LossFloor`, read from the model's sympy heat sources), so it
+computes what the generated step computes. The three C methods are timed in turn in every round
+(``interleaved_times``), and ``c_over_floor`` is the median of the per-round ratios.
+``instructions_callgrind`` counts the instructions each C method executes over the mission
+(valgrind's callgrind, only inside the timed function; absent without valgrind): the same on every
+run, so the ``*_instructions_*`` targets do not depend on the machine's load.
 """
 
 from __future__ import annotations
@@ -26,6 +35,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import json
+import shutil
 import statistics
 import subprocess
 import sys
@@ -39,7 +49,7 @@ import sympy
 from scipy.integrate import solve_ivp
 
 from genthermal.ccompile import COMPILE_FLAGS, find_compiler
-from genthermal.codegen import model_library
+from genthermal.codegen import generate_c, model_library
 from genthermal.design import linear_design_model
 from genthermal.losses import LossFloor, input_symbol
 from genthermal.machines import build_model
@@ -125,6 +135,70 @@ def compile_floor(nx: int, nu: int, nf: int, directory: Path):
     return function
 
 
+DRIVER_SOURCE = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include "%(prefix)s.h"
+void floor_simulate(const double* A, const double* B, const double* c, const double* R, const double* r,
+                    const double* D, const double* x0, const double* U, int n_steps, double* X);
+
+static double* load(FILE* file, size_t count)
+{
+    double* values = malloc(count * sizeof(double));
+    if (!values || fread(values, sizeof(double), count, file) != count) exit(3);
+    return values;
+}
+
+int main(int argc, char** argv)
+{
+    const int n = %(n_steps)d, nx = %(nx)d, nu = %(nu)d, nf = %(nf)d;
+    FILE* file = argc == 3 ? fopen(argv[2], "rb") : NULL;
+    double *x0, *U, *A, *B, *c, *R, *r, *D, *X = malloc((size_t)n * nx * sizeof(double));
+    double* work = malloc((%(prefix)s_work_size() + 1) * sizeof(double));
+    int status = 0;
+    if (!file || !X || !work) return 2;
+    x0 = load(file, nx); U = load(file, (size_t)n * nu); A = load(file, nx * nx); B = load(file, nx * nu);
+    c = load(file, nx); R = load(file, nf * nu); r = load(file, nf); D = load(file, nx * nf);
+    if (argv[1][0] == 'c') status = %(prefix)s_simulate(x0, U, n, X, work, %(prefix)s_work_size());
+    else floor_simulate(A, B, c, R, r, D, x0, U, n, X);
+    printf("%%.17g\n", X[(size_t)(n - 1) * nx]);
+    return status;
+}
+"""
+
+
+def instruction_counts(models: dict, arrays: list, n_steps: int, nf: int, directory: Path) -> dict | None:
+    """Instructions executed by each model's ``gt_simulate`` over the mission and by the floor loop,
+    counted by valgrind's callgrind (``--toggle-collect``: inside that function only); None without
+    valgrind. Deterministic, unlike wall time on a shared machine."""
+    valgrind = shutil.which("valgrind")
+    if valgrind is None:
+        return None
+    data = directory / "inputs.bin"
+    data.write_bytes(b"".join(np.ascontiguousarray(a, dtype=float).tobytes() for a in
+                              (arrays[6], arrays[7], *arrays[:6])))
+    counts = {}
+    for variant, model in models.items():
+        prefix = f"count_{variant}"
+        generated = generate_c(model, directory / prefix, DT_S, prefix)
+        driver = directory / f"{prefix}_driver.c"
+        driver.write_text(DRIVER_SOURCE % {"prefix": prefix, "n_steps": n_steps, "nx": model.n_states,
+                                           "nu": len(model.input_names), "nf": nf})
+        program = directory / f"{prefix}_driver"
+        subprocess.run([*find_compiler(), *COMPILE_FLAGS, "-I", str(generated.directory), "-o", str(program),
+                        str(driver), str(directory / "floor.c"), *map(str, generated.sources), "-lm"], check=True)
+        entries = {f"c_{variant}": ("c", f"{prefix}_simulate")}
+        if variant == "linear":
+            entries["floor_linear"] = ("floor", "floor_simulate")
+        for key, (mode, function) in entries.items():
+            out = directory / f"{key}.callgrind"
+            subprocess.run([valgrind, "--tool=callgrind", f"--callgrind-out-file={out}", f"--toggle-collect={function}",
+                            str(program), mode, str(data)], check=True, capture_output=True)
+            summary = [line for line in out.read_text().splitlines() if line.startswith(("summary:", "totals:"))]
+            counts[key] = int(summary[0].split()[1])
+    return counts
+
+
 def constant_pieces(U: np.ndarray) -> list[tuple[int, int]]:
     """(first, end) step indices of the runs of identical input rows."""
     changes = np.flatnonzero(np.any(np.diff(U, axis=0) != 0.0, axis=1)) + 1
@@ -193,6 +267,7 @@ def run(repeats: int) -> dict:
         outputs["floor_linear"] = X_floor = np.empty((n_steps, linear.n_states))
         fast["floor_linear"] = lambda: floor(*(a.ctypes.data for a in arrays), n_steps, X_floor.ctypes.data)
         times = interleaved_times(fast, repeats * 10)
+        instructions = instruction_counts(models, arrays, n_steps, len(r), Path(scratch))
     median_s.update({name: statistics.median(t) for name, t in times.items()})
     c_over_floor = {v: float(np.median(np.array(times[f"c_{v}"]) / np.array(times["floor_linear"]))) for v in models}
     for variant, model in models.items():
@@ -215,6 +290,8 @@ def run(repeats: int) -> dict:
         results.clear()
     ratios = {
         "c_over_floor": c_over_floor,
+        "c_over_floor_instructions": instructions and {
+            v: instructions[f"c_{v}"] / instructions["floor_linear"] for v in models},
         "scipy_bdf_over_c": {v: median_s[f"scipy_bdf_{v}"] / median_s[f"c_{v}"] for v in models},
         "casadi_over_c": {v: median_s[f"casadi_{v}"] / median_s[f"c_{v}"] for v in models},
     }
@@ -227,7 +304,14 @@ def run(repeats: int) -> dict:
                       "nonlinear": "numpy J(u) x + f(0,u) per constant-input piece, exact (f affine in x)"},
         "median_s": median_s, "ratios": ratios, "max_abs_diff_K": differences,
         "max_abs_diff_from_python_step_K": against_model,
-        "targets": {"c_linear_within_3x_floor": ratios["c_over_floor"]["linear"] <= 3.0,
+        "instructions_callgrind": instructions,
+        "instructions_per_step": instructions and {k: v / n_steps for k, v in instructions.items()},
+        "targets": {**({} if not instructions else {
+                        "c_linear_instructions_within_3x_floor":
+                            instructions["c_linear"] <= 3.0 * instructions["floor_linear"],
+                        "c_nonlinear_instructions_within_6x_floor":
+                            instructions["c_nonlinear"] <= 6.0 * instructions["floor_linear"]}),
+                    "c_linear_within_3x_floor": ratios["c_over_floor"]["linear"] <= 3.0,
                     "c_nonlinear_within_6x_floor": ratios["c_over_floor"]["nonlinear"] <= 6.0,
                     "c_at_least_100x_faster_than_scipy_bdf": min(ratios["scipy_bdf_over_c"].values()) >= 100.0,
                     "floor_equals_the_model_within_1e-9_K": against_model["linear"]["floor"] <= 1e-9,
