@@ -241,8 +241,9 @@ def _dense_function(name: str, function: ca.Function) -> ca.Function:
 
 def _casadi_functions(model: ThermalModel, discrete, prefix: str) -> dict:
     """The functions behind the fixed entry points, named ``<prefix>_cg_<name>``; the step of an
-    affine model as matrix products with its loss floors (:func:`affine_with_floors`)."""
-    step = (discrete.exact and affine_with_floors(discrete.step)) or inline_floors(discrete.step)
+    affine model as matrix products with its loss floors (:func:`affine_with_floors`), any other
+    step without divisions by constants."""
+    step = (discrete.exact and affine_with_floors(discrete.step)) or inline_floors(discrete.step, reciprocals=True)
     functions = {"step": _dense_function(f"{prefix}_cg_step", step)}
     for name in MODEL_FUNCTIONS:
         functions[name] = _dense_function(f"{prefix}_cg_{name}", inline_floors(model.functions[name]))
