@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from genthermal.ccompile import COMPILE_FLAGS, find_compiler
+from genthermal.ccompile import COMPILE_FLAGS, compile_objects, find_compiler
 from genthermal.codegen import generate_c
 from genthermal.design import linear_design_model
 from genthermal.estimation.ekf import ExtendedKalmanFilter
@@ -100,9 +100,10 @@ def c_update_ns(model, build: Path, extra_functions: dict, driver_source: str = 
     driver = build / "bench_driver.c"
     driver.write_text(driver_source % {"n": iterations, **(sizes or {})})
     program = build / "bench_driver"
-    command = [*find_compiler(), *COMPILE_FLAGS, "-I", str(build), str(driver),
-               *map(str, generated.sources), "-o", str(program), "-lm"]
-    subprocess.run([c for c in command if c != "-fPIC"], check=True)
+    objects = compile_objects(generated.sources, generated.headers)  # cached, in parallel
+    command = [*find_compiler(), *COMPILE_FLAGS, "-I", str(build), str(driver), *map(str, objects), "-o",
+               str(program), "-lm"]
+    subprocess.run(command, check=True)
     output = subprocess.run([str(program)], check=True, capture_output=True, text=True).stdout.split()
     return float(output[0])
 
