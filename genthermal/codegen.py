@@ -9,6 +9,8 @@
   ``codegen/model.c.in`` and ``codegen/model.h.in``: ``<prefix>_step``, ``<prefix>_simulate``,
   ``<prefix>_rhs`` ... and constant metadata (documented in ``codegen/ABI.md``).
 
+The step of an affine model is written as matrix products with its loss floors, every other SX
+function with its ``fmax``/``fmin`` in line (:mod:`genthermal.codegen_simplify`).
 Every public C symbol carries the prefix, so two models link into one program. The generated
 code is checked for mutable static data and heap use, which the reentrancy contract forbids.
 :func:`model_library` generates, compiles (cached) and loads a model in one call.

@@ -86,3 +86,16 @@ def test_generated_step_calls_no_fmax(design_model, tmp_path):
     body = step_source[start:step_source.index("\n}\n", start)]
     assert "fmax(" not in body and "/" not in body.split("{", 1)[1]  # no libm call, no division
     assert generated.exact
+
+
+def test_reciprocals_remove_divisions_by_constants_and_keep_the_nonlinear_step(plant_model):
+    step = plant_model.discretise(10.0).step
+    faster = inline_floors(step, reciprocals=True)
+    divisions = [k for k in range(faster.n_instructions()) if faster.instruction_id(k) == ca.OP_DIV]
+    assert divisions == [] and any(step.instruction_id(k) == ca.OP_DIV for k in range(step.n_instructions()))
+    for x, u in _samples(3, 50):
+        expected = np.asarray(step(x, u)).ravel()
+        assert np.max(np.abs(np.asarray(faster(x, u)).ravel() - expected)) < 1e-13 * np.max(np.abs(expected))
+    v = ca.SX.sym("v")
+    by_zero = inline_floors(ca.Function("f", [v], [v / 0.0, v / 4.0]), reciprocals=True)
+    assert np.isinf(float(by_zero(1.0)[0])) and float(by_zero(1.0)[1]) == 0.25  # 1/0 is not a reciprocal
