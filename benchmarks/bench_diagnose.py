@@ -148,6 +148,9 @@ def main() -> int:
                                        "described": [describe_term(f, results["open"].catalogue)
                                                      for f in results["open"].found]}
         document["stages"] = timer.stages
+        named = {f["effect"] for f in document["found"]} == {t["effect"] for t in document["truth"]}
+        document["targets"] = {"names_the_hidden_effects": named if name != "open" else bool(document["found"]),
+                               "within_target_seconds": document["wall_s"] <= document["target_seconds"]}
         documents.append(document)
         print(json.dumps(document), flush=True)
     if args.json:

@@ -56,6 +56,9 @@ def measure(variant: str, model, folder: Path) -> dict:
         default_errors = [np.abs(np.interp(grid, flown["time"], flown[o]) - default[o].to_numpy())
                           for o in model.output_names]
         result[f"max_error_K_vs_default_step_{kind}"] = float(np.max(default_errors))
+    result["targets"] = {"fmpy_validation_clean": not result["fmpy_validation"],
+                         "fmu_equals_genthermal_within_1e-6_K": max(result["max_error_K_ModelExchange"],
+                                                                    result["max_error_K_CoSimulation"]) <= 1e-6}
     return result
 
 

@@ -89,6 +89,7 @@ def run_case(hours: float, n_generators: int, time_limit_s: float, with_nlp: boo
             "solve_s", "peak_C", "n_rows", "n_columns", "n_integers")
     record.update({k: plan.get(k) for k in keys})
     record["milp_added_rest_s"] = milp.time_s[-1] - system.mission.duration_s
+    record["targets"] = {"certified": bool(plan.get("certified"))}
     if with_nlp:
         optimal = plan_mission(system, "optimal", settings)
         rest = optimal.time_s[-1] - system.mission.duration_s
