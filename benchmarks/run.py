@@ -282,10 +282,10 @@ def main(argv=None) -> int:
     parser.add_argument("--only", nargs="+", metavar="NAME", choices=[b.name for b in BENCHMARKS],
                         help="run only these benchmarks")
     parser.add_argument("--check", action="store_true",
-                        help=f"exit 1 when a target of {BASELINE.relative_to(ROOT)} is missed (twice)")
+                        help="exit 1 when a target of benchmarks/results/baseline.json is missed (twice)")
     parser.add_argument("--write-baseline", action="store_true", help="record the targets met in this run as the baseline")
     parser.add_argument("--timeout", type=float, default=None, help="per benchmark, s (default 600 quick, 7200 full)")
-    parser.add_argument("--no-markdown", action="store_true", help=f"do not write {MARKDOWN.relative_to(ROOT)}")
+    parser.add_argument("--no-markdown", action="store_true", help="do not write docs/results/benchmarks.md")
     args = parser.parse_args(argv)
     mode = "quick" if args.quick else "full"
     timeout = args.timeout or (600.0 if args.quick else 7200.0)
