@@ -126,7 +126,8 @@ def affine_with_floors(step: ca.Function) -> ca.Function | None:
     jacobian = ca.jacobian(pieces, everything)
     if ca.depends_on(jacobian, everything):
         return None
-    numbers = ca.Function("affine", [everything], [jacobian, ca.substitute(pieces, everything, ca.SX.zeros(everything.numel()))])
+    at_zero = ca.substitute(pieces, everything, ca.SX.zeros(everything.numel()))
+    numbers = ca.Function("affine", [everything], [jacobian, at_zero])
     J, offset = (np.asarray(v, dtype=float) for v in numbers(np.zeros(everything.numel())))
     nx, nu, nm = x.numel(), u.numel(), m.numel()
     n = x_next.numel()

@@ -374,8 +374,9 @@ class ExtendedKalmanFilter(RecursiveFilter):
         ``y`` is then ignored whatever its value, NaN and infinity included): the sensor's row of
         :math:`H` and its innovation are zeroed and its row and column of :math:`R` replaced by the
         identity's, which gives exactly the update without that sensor. A flag other than 1 counts
-        as missing, and so does a non-finite ``y`` flagged 1 (as :meth:`update` skips a NaN). ``change_mean`` is the test's memory :math:`m` (K, one per sensor;
-        zeros at the start of a record), ``change_statistic`` its :math:`T_k`
+        as missing, and so does a non-finite ``y`` flagged 1 (as :meth:`update` skips a NaN).
+        ``change_mean`` is the test's memory :math:`m` (K, one per sensor; zeros at the start of a
+        record), ``change_statistic`` its :math:`T_k`
         (:mod:`~genthermal.estimation.change_detection`); on an alarm (:math:`T_k` above
         ``change_threshold``, every sensor read) ``P`` is the covariance already opened by the
         jump covariance and ``change_mean_next`` is zero. Without a threshold the test is computed
