@@ -154,6 +154,9 @@ def main(argv=None) -> dict:
               "sensor_claims_on_physical_flights": sum(len(r["claimed"]) for r in rows if r["case"] == "physical"),
               "sensor_claims_on_healthy_flight": len(rows[0]["claimed"]),
               "elapsed_s": time.perf_counter() - started, "rows": rows}
+    result["targets"] = {"every_faulty_sensor_named": result["right_sensor"] == result["sensor_flights"],
+                         "no_sensor_blamed_on_a_healthy_or_machine_fault_flight":
+                             result["sensor_claims_on_physical_flights"] + result["sensor_claims_on_healthy_flight"] == 0}
     print(json.dumps({k: v for k, v in result.items() if k != "rows"}, indent=2))
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2, default=str))

@@ -22,6 +22,7 @@ import dataclasses
 import datetime
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -56,6 +57,9 @@ class Benchmark:
         Why a benchmark is full-only, what it needs, or why targets are unchecked.
     unchecked : tuple of str
         Targets reported but never written into the baseline (absolute wall times).
+    requires : dict of str to tuple
+        Programs on PATH and the targets that need them (empty: the whole benchmark); without one,
+        those targets are not checked (the benchmark is skipped when it needs the program itself).
     """
 
     name: str
@@ -66,6 +70,7 @@ class Benchmark:
     figures: tuple = ()
     reason: str = ""
     unchecked: tuple = ()
+    requires: dict = dataclasses.field(default_factory=dict)
 
 
 BENCHMARKS = (
@@ -73,12 +78,14 @@ BENCHMARKS = (
               figures=("ratios.c_over_floor.linear", "ratios.c_over_floor.nonlinear",
                        "ratios.c_over_floor_instructions.linear", "ratios.c_over_floor_instructions.nonlinear",
                        "ratios.scipy_bdf_over_c.linear", "ratios.scipy_bdf_over_c.nonlinear",
-                       "max_abs_diff_from_python_step_K.linear.floor")),
+                       "max_abs_diff_from_python_step_K.linear.floor"),
+              requires={"valgrind": ("c_linear_instructions_within_3x_floor", "c_nonlinear_instructions_within_6x_floor")}),
     Benchmark("kalman", "bench_kalman.py", figures=("c_update_ns", "ekf_c_update_ns"),
               unchecked=("c_update_within_1_us",),
               reason="c_update_within_1_us is an absolute wall time: reported, not checked on a shared machine"),
     Benchmark("embedded", "bench_embedded.py",
               figures=("*.load_percent_at_100MHz_1cpi", "*.max_error_vs_host_K", "*.instructions_step"),
+              requires={"arm-none-eabi-gcc": (), "qemu-system-arm": ()},
               reason="needs arm-none-eabi-gcc, newlib and qemu-system-arm (.ci/run installs them)"),
     Benchmark("fmu", "bench_fmu.py", figures=("*.max_error_K_ModelExchange", "*.max_error_K_CoSimulation")),
     Benchmark("milp", "bench_milp.py", (), ("--hours", "2", "--generators", "2", "--no-nlp"), json_flag=False,
@@ -88,8 +95,8 @@ BENCHMARKS = (
               reason="within_target_seconds is an absolute wall time: reported, not checked"),
     Benchmark("replan", "bench_replan.py", json_flag=False, quick=None,
               reason="two 4-h closed-loop flights with the optimal scheduler: 30 s idle, 280 s at load 11"),
-    Benchmark("sensor_flights", "bench_sensor_flights.py", quick=None,
-              reason="closed-loop flights: 77 s for one case at load 11 (--only NAME flies one)"),
+    Benchmark("sensor_flights", "bench_sensor_flights.py", (), ("--only", "T_winding-bias+4-gen1"),
+              figures=("right_sensor", "sensor_flights", "replans_caused")),
     Benchmark("detection", "bench_detection.py", ("--healthy", "20", "--faulty", "8"), None,
               reason="closed-loop flights: 150 s for 3 flights at load 11"),
     Benchmark("inlet_hold_price", "bench_inlet_hold_price.py", quick=None,
@@ -307,8 +314,15 @@ def main(argv=None) -> int:
             results["benchmarks"][benchmark.name] = {"skipped": f"full runs only: {benchmark.reason}",
                                                      "command": f"python benchmarks/{benchmark.script}"}
             continue
+        missing = [tool for tool in benchmark.requires if shutil.which(tool) is None]
+        if any(not benchmark.requires[tool] for tool in missing):
+            results["benchmarks"][benchmark.name] = {"skipped": f"{', '.join(missing)} not found: {benchmark.reason}",
+                                                     "command": f"python benchmarks/{benchmark.script}"}
+            continue
         entry = run_one(benchmark, args.quick, timeout)
-        expected = {k[len(benchmark.name) + 1:]: v for k, v in baseline.items() if k.startswith(benchmark.name + ":")}
+        untestable = {t for tool in missing for t in benchmark.requires[tool]}
+        expected = {k[len(benchmark.name) + 1:]: v for k, v in baseline.items()
+                    if k.startswith(benchmark.name + ":") and k[len(benchmark.name) + 1:] not in untestable}
         if args.check and missed_baseline(entry, expected):
             first = missed_baseline(entry, expected)
             entry = run_one(benchmark, args.quick, timeout)  # once more: a target must be missed twice
@@ -343,7 +357,8 @@ def main(argv=None) -> int:
         unchecked = {b.name: b.unchecked for b in BENCHMARKS}
         held = {f"{n}:{t}": True for n, e in results["benchmarks"].items() for t, v in e.get("targets", {}).items()
                 if v and not any(t == u or t.endswith("/" + u) for u in unchecked.get(n, ()))}
-        kept = {k: v for k, v in baseline.items() if k.split(":")[0] not in results["benchmarks"]}
+        ran = {n for n, e in results["benchmarks"].items() if "skipped" not in e}
+        kept = {k: v for k, v in baseline.items() if k.split(":")[0] not in ran}
         baselines[mode] = {"written_by": f"python benchmarks/run.py --{mode} --write-baseline",
                            "written_utc": results["finished_utc"], "targets": dict(sorted({**kept, **held}.items()))}
         BASELINE.write_text(json.dumps(baselines, indent=1) + "\n")

@@ -77,3 +77,15 @@ def test_check_runs_a_benchmark_again_and_fails_only_when_a_target_is_missed_twi
     assert dashboard.main(["--quick", "--only", "milp", "--check", "--no-markdown"]) == 1
     written = json.loads((tmp_path / "quick.json").read_text())
     assert written["summary"]["baseline_missed"] == ["milp:certified"] and not outcomes
+
+
+def test_a_benchmark_whose_program_is_missing_is_skipped_not_failed(dashboard, tmp_path, monkeypatch):
+    (tmp_path / "baseline.json").write_text(json.dumps({"quick": {"targets": {"embedded:x/flash": True}}}))
+    monkeypatch.setattr(dashboard, "BASELINE", tmp_path / "baseline.json")
+    monkeypatch.setattr(dashboard, "RESULTS", tmp_path)
+    monkeypatch.setattr(dashboard.shutil, "which", lambda name: None)
+    monkeypatch.setattr(dashboard, "run_one", lambda *a: pytest.fail("a skipped benchmark must not run"))
+    assert dashboard.main(["--quick", "--only", "embedded", "--check", "--no-markdown", "--write-baseline"]) == 0
+    written = json.loads((tmp_path / "quick.json").read_text())["benchmarks"]["embedded"]
+    assert "qemu-system-arm" in written["skipped"]
+    assert json.loads((tmp_path / "baseline.json").read_text())["quick"]["targets"] == {"embedded:x/flash": True}
