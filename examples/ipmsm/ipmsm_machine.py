@@ -41,12 +41,15 @@ phase resistance is estimated from the bench's own electrical power at standstil
 
 ``MACHINE`` is the full model; ``MACHINE_PLAIN`` the plain one a first attempt would write (copper
 loss only, constant convection): the tutorial ``docs/tutorials/real_motor.md`` starts from it.
-The logger's column map is :data:`COLUMN_MAP` (also ``columns.yaml`` beside this file).
+The logger's column map is :data:`COLUMN_MAP`, read from ``columns.yaml`` beside this file.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import sympy
+import yaml
 
 from genthermal.losses import input_symbol
 from genthermal.machines import InputKind, Machine, MachineInterface, ModelInput, Role, Sensor
@@ -107,21 +110,9 @@ INTERFACE = MachineInterface(
     ambient_input="T_ambient", coolant_input="T_water", roles=ROLES,
     rated_inputs={"motor_speed": 3000.0, "i_d": -120.0, "i_q": 200.0, "T_water": 25.0})
 
-#: The logger's columns: name in the file -> (model input or sensor column, unit in the file).
-#: Auxiliary columns (torque, electrical power) serve the unit checks only.
-COLUMN_MAP = {
-    "dt_s": 1.0,
-    "columns": {
-        "speed": {"input": "motor_speed", "unit": "rpm"},
-        "IdFbk": {"input": "i_d", "unit": "A"},
-        "IqFbk": {"input": "i_q", "unit": "A"},
-        "water_outlet": {"input": "T_water", "unit": "degC"},
-        "ambient": {"input": "T_ambient", "unit": "degC"},
-        **{column: {"sensor": column, "unit": "degC"} for s in SENSORS for column in s.columns},
-        "Torque": {"auxiliary": "torque", "unit": "N m"},
-        "Pele_PI": {"auxiliary": "electrical_power", "unit": "W"},
-    },
-}
+#: The logger's column map (``columns.yaml`` beside this file): file column -> model input or
+#: sensor column, with its unit; auxiliary columns (torque, electrical power) serve unit checks.
+COLUMN_MAP = yaml.safe_load((Path(__file__).parent / "columns.yaml").read_text(encoding="utf-8"))
 
 #: Parameters of the effects the plain model lacks, and their value in the plain model.
 EFFECT_PARAMETERS = {
@@ -287,6 +278,6 @@ def plain_parameters() -> ParameterSet:
 
 
 MACHINE = Machine(NAME, "nine-node LPTN of the water-cooled bench IPMSM (Liu et al. 2024 data set)",
-                  INTERFACE, default_parameters, build_network)
+                  INTERFACE, default_parameters, build_network, COLUMN_MAP)
 MACHINE_PLAIN = Machine(f"{NAME}_plain", "the bench IPMSM with copper loss and constant convection only",
-                        INTERFACE, plain_parameters, build_network)
+                        INTERFACE, plain_parameters, build_network, COLUMN_MAP)
