@@ -114,9 +114,9 @@ INTERFACE = MachineInterface(
 #: sensor column, with its unit; auxiliary columns (torque, electrical power) serve unit checks.
 COLUMN_MAP = yaml.safe_load((Path(__file__).parent / "columns.yaml").read_text(encoding="utf-8"))
 
-#: Parameters of the effects the plain model lacks, and their value in the plain model.
+#: The effects the plain model lacks, by name, with their parameters.
 EFFECT_PARAMETERS = {
-    "speed_iron_loss": ("P_hyst_ref", "P_eddy_ref", "k_fe_current"),
+    "speed_iron_loss": ("P_hyst_ref", "P_eddy_ref", "k_fe_current", "tooth_iron_share"),
     "air_gap_convection_speed": ("G_gap_speed",),
     "end_space_convection_speed": ("k_end_space_speed",),
     "ac_copper_loss": ("k_ac",),
@@ -177,7 +177,7 @@ def default_parameters() -> ParameterSet:
         Parameter("G_rotor_shaft", 15.0, "W/K", "assumed", "rotor hub to shaft, press fit"),
         Parameter("G_bearing_endcap", 3.0, "W/K", "assumed", "bearing outer ring into the end-cap bores"),
         # losses
-        Parameter("R_0", 0.0132, "ohm", "assumed", "phase resistance at 0 °C (cables included), estimated from "
+        Parameter("R_0", 0.0132, "ohm", "fitted", "phase resistance at 0 °C (cables included), estimated from "
                   "the bench's own data: the fit P_ele = 1.5 R (i_d² + i_q²) + b T omega over each profile gives "
                   "R = 14.5-16.5 mOhm near 35 °C on 9 of the 12 profiles"),
         Parameter("alpha_cu", 0.00393, "1/K", "literature", "temperature coefficient of copper resistivity"),
@@ -191,7 +191,6 @@ def default_parameters() -> ParameterSet:
                   lower_inclusive=True),
         Parameter("k_fe_current", 0.3, "1", "assumed", "relative iron-loss rise at I_ref from armature reaction",
                   lower_inclusive=True),
-        Parameter("I_ref", RATED_CURRENT_A, "A", "assumed", "current of the loss maps' load term"),
         Parameter("tooth_iron_share", 0.5, "1", "assumed", "share of the iron loss in the teeth (higher flux "
                   "density, less mass than the yoke)", upper=1.0),
         Parameter("P_pm_ref", 50.0, "W", "assumed", "magnet eddy loss at n_ref from slot harmonics "
@@ -200,16 +199,17 @@ def default_parameters() -> ParameterSet:
                   "(armature-field harmonics)", lower_inclusive=True),
         Parameter("P_friction_ref", 40.0, "W", "assumed", "bearing friction and windage at n_ref (two deep-"
                   "groove bearings, ~0.1 N m)", lower_inclusive=True),
-        Parameter("n_ref", N_REF_RPM, "rpm", "assumed", "reference speed of the loss maps: top speed"),
     ])
 
 
 def build_network(parameters: ParameterSet) -> Network:
-    """The nine-node LPTN (module docstring) from the symbols of ``parameters``."""
+    """The nine-node LPTN (module docstring) from the symbols of ``parameters``; an effect of
+    :data:`EFFECT_PARAMETERS` whose parameters the set lacks is left out (the plain model)."""
     S = parameters.symbols()
-    speed = input_symbol("motor_speed") / S["n_ref"]
+    has = {effect: all(n in parameters for n in names) for effect, names in EFFECT_PARAMETERS.items()}
+    speed = input_symbol("motor_speed") / N_REF_RPM  # n / n_ref
     current_squared = input_symbol("i_d") ** 2 + input_symbol("i_q") ** 2
-    load = current_squared / S["I_ref"] ** 2
+    load = current_squared / RATED_CURRENT_A ** 2  # (i / I_ref)^2
     nodes = (
         Node("winding_slot", "capacitive", S["C_winding_slot"], "solid"),
         Node("end_winding", "capacitive", S["C_end_winding"], "solid"),
@@ -241,40 +241,45 @@ def build_network(parameters: ParameterSet) -> Network:
         Link("shaft_bearing", "endcap", 1 / S["G_bearing_endcap"], "bearings to the end caps"),
     )
     network = Network(nodes, links, ())
-    copper_per_ohm = sympy.Rational(3, 2) * current_squared * S["R_0"] * (1 + S["k_ac"] * speed ** 2)
-    iron = (S["P_hyst_ref"] * speed + S["P_eddy_ref"] * speed ** 2) * (1 + S["k_fe_current"] * load)
-    end_share = S["end_winding_share"]
-    sources = (
-        HeatSource("winding_slot", (1 - end_share) * copper_per_ohm
-                   * (1 + S["alpha_cu"] * network.temperature_symbol("winding_slot")), "copper"),
-        HeatSource("end_winding", end_share * copper_per_ohm
-                   * (1 + S["alpha_cu"] * network.temperature_symbol("end_winding")), "copper"),
-        HeatSource("tooth", S["tooth_iron_share"] * iron, "iron"),
-        HeatSource("yoke_inner", (1 - S["tooth_iron_share"]) * iron, "iron"),
-        HeatSource("rotor", S["P_pm_ref"] * speed ** 2 * (1 + S["k_pm_current"] * load), "magnet"),
-        HeatSource("shaft_bearing", S["P_friction_ref"] * speed, "friction"),
-    )
     theta = network.temperature_symbol
-    # convection rising with speed: a conductance G(n) - G(0) between two nodes, as the heat it
+    ac = (1 + S["k_ac"] * speed ** 2) if has["ac_copper_loss"] else 1
+    copper_per_ohm = sympy.Rational(3, 2) * current_squared * S["R_0"] * ac
+    end_share = S["end_winding_share"]
+    sources = [
+        HeatSource("winding_slot", (1 - end_share) * copper_per_ohm * (1 + S["alpha_cu"] * theta("winding_slot")),
+                   "copper"),
+        HeatSource("end_winding", end_share * copper_per_ohm * (1 + S["alpha_cu"] * theta("end_winding")), "copper"),
+    ]
+    if has["speed_iron_loss"]:
+        iron = (S["P_hyst_ref"] * speed + S["P_eddy_ref"] * speed ** 2) * (1 + S["k_fe_current"] * load)
+        sources += [HeatSource("tooth", S["tooth_iron_share"] * iron, "iron"),
+                    HeatSource("yoke_inner", (1 - S["tooth_iron_share"]) * iron, "iron")]
+    if has["magnet_eddy_loss"]:
+        sources.append(HeatSource("rotor", S["P_pm_ref"] * speed ** 2 * (1 + S["k_pm_current"] * load), "magnet"))
+    if has["bearing_friction"]:
+        sources.append(HeatSource("shaft_bearing", S["P_friction_ref"] * speed, "friction"))
+    # convection rising with speed: the conductance G(n) - G(0) between two nodes, as the heat it
     # carries (link resistances may depend on parameters only)
-    rises = (("tooth", "rotor", S["G_gap_speed"], "air-gap convection rise"),
-             *((a, b, S["k_end_space_speed"] * S[g], "end-space convection rise")
-               for a, b, g in (("end_winding", "end_space_air", "G_end_winding_air"),
-                               ("rotor", "end_space_air", "G_rotor_air"),
-                               ("end_space_air", "endcap", "G_air_endcap"))))
+    rises = []
+    if has["air_gap_convection_speed"]:
+        rises.append(("tooth", "rotor", S["G_gap_speed"], "air-gap convection rise"))
+    if has["end_space_convection_speed"]:
+        rises += [(a, b, S["k_end_space_speed"] * S[g], "end-space convection rise")
+                  for a, b, g in (("end_winding", "end_space_air", "G_end_winding_air"),
+                                  ("rotor", "end_space_air", "G_rotor_air"),
+                                  ("end_space_air", "endcap", "G_air_endcap"))]
     for a, b, conductance, label in rises:
         flow = conductance * speed * (theta(a) - theta(b))
-        sources += (HeatSource(b, flow, label), HeatSource(a, -flow, label))
-    return network.with_heat_sources(sources)
+        sources += [HeatSource(b, flow, label), HeatSource(a, -flow, label)]
+    return network.with_heat_sources(tuple(sources))
 
 
 def plain_parameters() -> ParameterSet:
-    """The parameters of the plain model: every effect of :data:`EFFECT_PARAMETERS` switched off
-    (its values 0, provenance ``assumed``: "not modelled")."""
+    """The parameters of the plain model: those of :data:`EFFECT_PARAMETERS` left out, so that
+    :func:`build_network` builds copper loss and constant convection only."""
+    effects = {name for names in EFFECT_PARAMETERS.values() for name in names}
     base = default_parameters()
-    off = {name: 0.0 for names in EFFECT_PARAMETERS.values() for name in names}
-    return ParameterSet([base[n].replace(value=off[n], provenance="assumed", source="plain model: not modelled")
-                         if n in off else base[n] for n in base])
+    return ParameterSet([base[n] for n in base if n not in effects])
 
 
 MACHINE = Machine(NAME, "nine-node LPTN of the water-cooled bench IPMSM (Liu et al. 2024 data set)",

@@ -17,7 +17,8 @@ def register(subparsers) -> None:
                                    "confidence intervals and identifiability warnings.")
     add_model_and_data_arguments(parser, several=True)
     parser.add_argument("--params", required=True, metavar="NAMES",
-                        help="comma-separated parameter names, e.g. k_cr,h_end_air,R0")
+                        help="comma-separated parameter names, e.g. k_cr,h_end_air,R0, or 'assumed': every "
+                        "parameter whose provenance is assumed")
     parser.add_argument("--out", metavar="FILE", help="write the calibrated model as a YAML model file")
     parser.add_argument("--json", metavar="FILE", help="write the fit summary as JSON")
     parser.set_defaults(func=run)
@@ -30,6 +31,8 @@ def run(args) -> int:
     from ._records import calibrate_record_set, uses_record_set
 
     model = model_from_args(args)
+    if args.params.strip() == "assumed":  # every parameter whose value was assumed
+        args.params = ",".join(n for n in model.parameter_names if model.parameters[n].provenance == "assumed")
     names = check_parameter_names(model, args.params.split(","), "--params")
     if uses_record_set(args, model):
         return calibrate_record_set(model, names, args)
