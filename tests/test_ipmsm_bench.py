@@ -4,14 +4,13 @@ on the profile slice shipped in the package (no ../shared needed)."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 import warnings
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from genthermal.cli import main
 from genthermal.column_map import ColumnMap, read_logged, read_logged_set
 from genthermal.diagnose.multi_record import (fit_records, record_from_measurements, records_fisher,
                                               simulate_record)
@@ -194,19 +193,17 @@ def test_ekf_from_stator_sensors_tracks_the_winding_better_than_open_loop(model,
         NodeObserver(model, record.dt_s, ("T_magnet",))
 
 
-def test_compare_command_on_the_shipped_slice():
-    command = [sys.executable, "-m", "genthermal.cli", "compare", "--model", f"{MACHINE_FILE}:MACHINE_PLAIN",
-               str(SLICE), "--fit-step", "60"]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    assert "by speed band" in done.stdout and "3000-inf rpm" in done.stdout
+def test_compare_command_on_the_shipped_slice(capsys):
+    code = main(["compare", "--model", f"{MACHINE_FILE}:MACHINE_PLAIN", str(SLICE), "--fit-step", "60"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "each from its own measured initial state" in out
+    assert "by speed band" in out and "3000-inf rpm" in out
 
 
-def test_compare_command_names_a_bad_column_map(tmp_path):
+def test_compare_command_names_a_bad_column_map(tmp_path, capsys):
     bad = tmp_path / "map.yaml"
     bad.write_text("dt_s: 1\ncolumns:\n  speed: {input: motor_speed, unit: rpm}\n", encoding="utf-8")
-    command = [sys.executable, "-m", "genthermal.cli", "compare", "--model", str(MACHINE_FILE), str(SLICE),
-               "--columns", str(bad)]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
-    assert done.returncode == 2
-    assert "is not mapped" in done.stderr
+    code = main(["compare", "--model", str(MACHINE_FILE), str(SLICE), "--columns", str(bad)])
+    assert code == 2
+    assert "'i_d': this input or sensor column of the machine is not mapped" in capsys.readouterr().err

@@ -212,7 +212,7 @@ def _scaled(model: ThermalModel, name: str, factor: float):
         (upper - start) / scale if math.isfinite(upper) else 1e3
 
 
-def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[str], factor: float = 10.0,
+def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[str], factor: float = 30.0,
                 prior_weight: float = 0.0, max_iter: int = 60, output_weights=None) -> RecordsFit:
     """Fit ``names`` to all ``records`` at once (least squares, IPOPT, exact derivatives).
 

@@ -3,7 +3,8 @@ r"""An extended Kalman filter of every node of a model from a chosen subset of i
 :class:`NodeObserver` discretises the model at the record's step (the step of
 :func:`genthermal.discretise.parametric_step`, exact ZOH for the affine part), linearises it about
 the estimate at each step (:math:`A_k = \partial x_{k+1}/\partial x_k`), and updates with the
-sensors named in ``measured`` only (each a node temperature). The unmeasured nodes (rotor,
+sensors named in ``measured`` only (each a node temperature plus a slowly drifting offset state,
+which takes up persistent model error at that sensor). The unmeasured nodes (rotor,
 winding) are estimated through the network's couplings. :meth:`NodeObserver.run` filters a
 :class:`~genthermal.diagnose.multi_record.Record`; :meth:`NodeObserver.predict_errors` predicts
 each horizon open loop from the filtered state (the inputs known ahead, as a load plan gives them).
@@ -38,10 +39,18 @@ class NodeObserver:
     hidden_share : float
         Process noise of a node without a sensor as a share of ``process_std_K``: the model's
         error shows at the sensors, which absorb it locally instead of pushing the hidden nodes.
+    measurement_std_K : float, optional
+        Standard deviation of a sensor reading against its node, K: the sensor's noise (default,
+        from the machine) or more, when the model's node and the sensor's spot differ.
+    bias_std_K : float or None
+        Random-walk step, K per filter step, of an offset state per measured sensor (the reading
+        is node + offset): a persistent model error at a sensor is absorbed by its offset instead
+        of being pushed into the hidden nodes. None: no offsets.
     """
 
     def __init__(self, model: ThermalModel, dt_s: float, measured: Sequence[str], process_std_K: float = 0.2,
-                 initial_std_K: float = 3.0, hidden_share: float = 0.01):
+                 initial_std_K: float = 3.0, hidden_share: float = 0.01,
+                 measurement_std_K: float | None = None, bias_std_K: float | None = 0.02):
         unknown = [m for m in measured if m not in model.output_names]
         if unknown:
             raise InputError("measured", unknown[0], f"not a sensor of {model.name} ({', '.join(model.output_names)})")
@@ -59,18 +68,25 @@ class NodeObserver:
         rows = [model.output_names.index(m) for m in self.measured]
         self.C = C[rows]
         noise = model.spec.interface.noise_variances_K2
-        self.R = np.diag([noise[i] for i in rows]) if rows else np.zeros((0, 0))
+        variances = [noise[i] if measurement_std_K is None else measurement_std_K ** 2 for i in rows]
+        self.R = np.diag(variances) if rows else np.zeros((0, 0))
         self.initial_std_K = float(initial_std_K)
         self._output_rows = rows
         measured_nodes = {model.spec.interface.sensors[i].node for i in rows}
         self.Q = np.diag([(process_std_K if n in measured_nodes else hidden_share * process_std_K) ** 2
                           for n in model.state_names])
+        self.n_bias = len(rows) if bias_std_K is not None else 0
+        if self.n_bias:
+            self.C = np.hstack([self.C, np.eye(self.n_bias)])
+            self.Q = np.block([[self.Q, np.zeros((nx, self.n_bias))],
+                               [np.zeros((self.n_bias, nx)), np.eye(self.n_bias) * bias_std_K ** 2]])
 
     def _initial_covariance(self) -> np.ndarray:
         """Small for nodes with a sensor of their own (their initial value was measured)."""
         sensors = self.model.spec.interface.sensors
         measured_nodes = {sensors[i].node for i in self._output_rows}
-        return np.diag([(0.2 if n in measured_nodes else self.initial_std_K) ** 2 for n in self.model.state_names])
+        nodes = [(0.2 if n in measured_nodes else self.initial_std_K) ** 2 for n in self.model.state_names]
+        return np.diag(nodes + [1.0] * self.n_bias)  # offsets: within about 1 K
 
     def service_initial_state(self, record) -> np.ndarray:
         """Initial state as in service: nodes the filter measures from their first reading, the
@@ -92,9 +108,11 @@ class NodeObserver:
         known in service).
         """
         x = self.service_initial_state(record) if x0 is None else np.array(x0, dtype=float)
+        nx = x.size
+        x = np.concatenate([x, np.zeros(self.n_bias)])
         P = self._initial_covariance()
         n = record.n_samples
-        states = np.zeros((x.size, n))
+        states = np.zeros((nx, n))
         outputs = np.zeros((len(self.model.output_names), n))
         for k in range(n):
             u = record.inputs[:, k]
@@ -107,11 +125,14 @@ class NodeObserver:
                 K = np.linalg.solve(S, C @ P).T
                 x = x + K @ innovation
                 P = (np.eye(x.size) - K @ C) @ P
-            states[:, k] = x
-            outputs[:, k] = np.asarray(self._outputs(x, u)).ravel()
-            x_next, A = self._step(x, u)
+            states[:, k] = x[:nx]
+            outputs[:, k] = np.asarray(self._outputs(x[:nx], u)).ravel()  # the nodes, without offsets
+            x_next, A = self._step(x[:nx], u)
             A = np.asarray(A)
-            x, P = np.asarray(x_next).ravel(), A @ P @ A.T + self.Q
+            if self.n_bias:
+                A = np.block([[A, np.zeros((nx, self.n_bias))], [np.zeros((self.n_bias, nx)), np.eye(self.n_bias)]])
+            x = np.concatenate([np.asarray(x_next).ravel(), x[nx:]])
+            P = A @ P @ A.T + self.Q
         return states, outputs
 
     def predict_errors(self, record, states: np.ndarray, horizons_s: Sequence[float], outputs: Sequence[str],
