@@ -22,7 +22,7 @@ TEMPLATE_DIR = PACKAGE_DATA / "codegen"
 SCENARIO_DIR = PACKAGE_DATA / "scenarios"
 #: Shipped measurement files.
 DEMO_DATA_DIR = SCENARIO_DIR / "data"
-#: A slice of a real bench IPMSM's profile (MIT, Liu et al. 2024), its machine file and column map.
+#: A slice of a real bench motor's profile (MIT, Liu et al. 2024), its machine file and column map.
 IPMSM_BENCH_DIR = PACKAGE_DATA / "ipmsm_bench"
 
 
