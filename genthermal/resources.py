@@ -23,7 +23,7 @@ SCENARIO_DIR = PACKAGE_DATA / "scenarios"
 #: Shipped measurement files.
 DEMO_DATA_DIR = SCENARIO_DIR / "data"
 #: A slice of a real bench motor's profile (MIT, Liu et al. 2024), its machine file and column map.
-IPMSM_BENCH_DIR = PACKAGE_DATA / "ipmsm_bench"
+BENCH_MOTOR_DIR = PACKAGE_DATA / "bench_motor"
 
 
 class MissingResourceError(GenthermalError):

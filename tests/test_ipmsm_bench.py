@@ -17,10 +17,10 @@ from genthermal.diagnose.multi_record import (fit_records, record_from_measureme
 from genthermal.errors import InputError
 from genthermal.estimation.node_observer import NodeObserver
 from genthermal.machines import build_model, resolve_machine
-from genthermal.resources import IPMSM_BENCH_DIR
+from genthermal.resources import BENCH_MOTOR_DIR
 
-MACHINE_FILE = IPMSM_BENCH_DIR / "ipmsm_machine.py"
-SLICE = IPMSM_BENCH_DIR / "id_9_first_3000s.csv"
+MACHINE_FILE = BENCH_MOTOR_DIR / "ipmsm_machine.py"
+SLICE = BENCH_MOTOR_DIR / "id_9_first_3000s.csv"
 
 
 @pytest.fixture(scope="module")
