@@ -149,6 +149,9 @@ def _cell(m) -> str:
 
 def compare_record_set(model, args) -> int:
     """``compare`` over several records (or one read through a column map)."""
+    if getattr(args, "report", None):
+        raise InputError("--report", args.report, "reports are written for one record in the CSV schema; use "
+                         "--json for several records")
     records = load_record_set(args, model)
     with working("compare"):
         scores = score_records(model, records)
@@ -157,9 +160,6 @@ def compare_record_set(model, args) -> int:
     _print_scores(model, scores)
     if args.json:
         report_json(args.json, scores)
-    if getattr(args, "report", None):
-        raise InputError("--report", args.report, "reports are written for one record in the CSV schema; use "
-                         "--json for several records")
     return 0
 
 
