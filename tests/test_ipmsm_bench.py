@@ -207,3 +207,10 @@ def test_compare_command_names_a_bad_column_map(tmp_path, capsys):
     code = main(["compare", "--model", str(MACHINE_FILE), str(SLICE), "--columns", str(bad)])
     assert code == 2
     assert "'i_d': this input or sensor column of the machine is not mapped" in capsys.readouterr().err
+
+
+def test_calibrate_names_a_weight_on_an_unknown_sensor(capsys):
+    code = main(["calibrate", "--model", str(MACHINE_FILE), str(SLICE), "--params", "G_jacket",
+                 "--weight", "T_magnet=4"])
+    assert code == 2
+    assert "--weight T_magnet = 'T_magnet': not a sensor of ipmsm_bench" in capsys.readouterr().err

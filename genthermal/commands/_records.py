@@ -26,6 +26,9 @@ def add_record_set_arguments(parser) -> None:
     """``--columns FILE`` and ``--fit-step S``."""
     parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV: which column is "
                         "which input or sensor, in which unit (default: the machine's own map, if it has one)")
+    parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
+                        help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
+                        "repeatable")
     parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
                         f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
 
@@ -168,10 +171,18 @@ def calibrate_record_set(model, names, args) -> int:
     from ..diagnose.multi_record import fit_records, records_fisher
     from ..model_file import save_model
 
+    from ._common import parse_assignments
+
+    weights = parse_assignments(args.weight, "--weight")
+    for name, value in weights.items():
+        if name not in model.output_names:
+            raise InputError(f"--weight {name}", name, f"not a sensor of {model.name} ({', '.join(model.output_names)})")
+        if not (np.isfinite(value) and value >= 0):
+            raise InputError(f"--weight {name}", value, "a weight must be a number >= 0")
     records = load_record_set(args, model)
     before = score_records(model, records)
     with working("calibrate"):
-        fit = fit_records(model, records, names)
+        fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names])
     fisher = records_fisher(fit)
     after = score_records(fit.model, records)
     print(f"{model.name}: {len(names)} parameter(s) fitted to {len(records)} record(s) in {fit.fit_time_s:.0f} s "
