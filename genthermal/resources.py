@@ -22,6 +22,8 @@ TEMPLATE_DIR = PACKAGE_DATA / "codegen"
 SCENARIO_DIR = PACKAGE_DATA / "scenarios"
 #: Shipped measurement files.
 DEMO_DATA_DIR = SCENARIO_DIR / "data"
+#: A slice of a real bench motor's profile (MIT, Liu et al. 2024), its machine file and column map.
+BENCH_MOTOR_DIR = PACKAGE_DATA / "bench_motor"
 
 
 class MissingResourceError(GenthermalError):

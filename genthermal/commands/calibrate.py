@@ -15,9 +15,10 @@ def register(subparsers) -> None:
                                    description="Least-squares fit of the named parameters (IPOPT, exact "
                                    "derivatives, bounds from the parameters' physical ranges) with 95 % "
                                    "confidence intervals and identifiability warnings.")
-    add_model_and_data_arguments(parser)
+    add_model_and_data_arguments(parser, several=True)
     parser.add_argument("--params", required=True, metavar="NAMES",
-                        help="comma-separated parameter names, e.g. k_cr,h_end_air,R0")
+                        help="comma-separated parameter names, e.g. k_cr,h_end_air,R0, or 'assumed': every "
+                        "parameter whose provenance is assumed")
     parser.add_argument("--out", metavar="FILE", help="write the calibrated model as a YAML model file")
     parser.add_argument("--json", metavar="FILE", help="write the fit summary as JSON")
     parser.set_defaults(func=run)
@@ -27,8 +28,15 @@ def run(args) -> int:
     """Calibrate, print the table and warnings, write the model file."""
     from ..diagnose.calibrate import calibrate, check_parameter_names
 
+    from ._records import calibrate_record_set, uses_record_set
+
     model = model_from_args(args)
+    if args.params.strip() == "assumed":  # every parameter whose value was assumed
+        args.params = ",".join(n for n in model.parameter_names if model.parameters[n].provenance == "assumed")
     names = check_parameter_names(model, args.params.split(","), "--params")
+    if uses_record_set(args, model):
+        return calibrate_record_set(model, names, args)
+    args.data = args.data[0]
     data = fitting_data(args.data, model, args)
     with working("calibrate"):
         result = calibrate(model, data, names, data_step(args))

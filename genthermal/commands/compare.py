@@ -8,12 +8,20 @@ from ..outputs import replacing_folder, report_json
 from ._common import add_model_arguments, model_from_args, positive_float
 
 
-def add_model_and_data_arguments(parser) -> None:
-    """``--model`` (built-in name or model file), ``DATA`` (CSV) and ``--dt``."""
+def add_model_and_data_arguments(parser, several: bool = False) -> None:
+    """``--model`` (built-in name or model file), ``DATA`` (CSV; several with ``several``, and then
+    ``--columns`` and ``--fit-step`` too) and ``--dt``."""
     add_model_arguments(parser)
-    parser.add_argument("data", metavar="DATA", help="measurements CSV (time_s, I_u, I_v, I_w, I_exc, T_inlet, "
-                        "T_ambient, T_winding_u, T_winding_v, T_winding_w, T_iron)")
-    parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step)")
+    parser.add_argument("data", metavar="DATA", nargs="+" if several else None,
+                        help="measurements CSV (time_s, I_u, I_v, I_w, I_exc, T_inlet, T_ambient, T_winding_u, "
+                        "T_winding_v, T_winding_w, T_iron)" + ("; several records: each is simulated from its "
+                                                              "own measured initial state" if several else ""))
+    parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step); "
+                        "for a logger file without a time column (read through a column map): its sample period")
+    if several:
+        from ._records import add_record_set_arguments
+
+        add_record_set_arguments(parser)
 
 
 def data_step(args) -> float | None:
@@ -42,7 +50,7 @@ def register(subparsers) -> None:
                                    description="Simulate the model (--model) on the measured inputs of DATA from the measured "
                                    "initial temperatures; report RMSE, MAE, max error, bias and R² per sensor, "
                                    "split by load band, temperature band, heating/cooling and hour, with plots.")
-    add_model_and_data_arguments(parser)
+    add_model_and_data_arguments(parser, several=True)
     parser.add_argument("--report", metavar="DIR", help="write report.md, metrics.json and plots into DIR")
     parser.add_argument("--json", metavar="FILE", help="write the metrics as JSON to FILE")
     parser.set_defaults(func=run)
@@ -52,7 +60,12 @@ def run(args) -> int:
     """Compare and print the per-sensor metrics."""
     from ..diagnose.compare import compare
 
+    from ._records import compare_record_set, uses_record_set
+
     model = model_from_args(args)
+    if uses_record_set(args, model):
+        return compare_record_set(model, args)
+    args.data = args.data[0]
     comparison = compare(model, args.data, data_step(args))
     print(f"{model.name} on {comparison.source}: {comparison.metrics['samples']} samples")
     total = comparison.metrics["samples"]

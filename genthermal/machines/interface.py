@@ -307,6 +307,9 @@ class Machine:
         ``default_parameters() -> ParameterSet`` with the provenance of every value.
     build_network : callable
         ``build_network(parameters) -> Network`` from the symbols of a parameter set.
+    column_map : dict or None
+        How the machine's own logger writes its CSV (:class:`genthermal.column_map.ColumnMap`
+        form), used when a command reads a file without ``--columns``; None: the CSV schema.
     """
 
     name: str
@@ -314,3 +317,4 @@ class Machine:
     interface: MachineInterface
     default_parameters: Callable
     build_network: Callable
+    column_map: dict | None = None

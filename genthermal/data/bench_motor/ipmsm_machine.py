@@ -1,0 +1,1 @@
+../../../examples/ipmsm/ipmsm_machine.py

@@ -1,0 +1,216 @@
+"""The real bench IPMSM: its logger's column map, bad logger input, multi-record fit and the EKF,
+on the profile slice shipped in the package (no ../shared needed)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from genthermal.cli import main
+from genthermal.column_map import ColumnMap, read_logged, read_logged_set
+from genthermal.diagnose.multi_record import (fit_records, record_from_measurements, records_fisher,
+                                              simulate_record)
+from genthermal.errors import InputError
+from genthermal.estimation.node_observer import NodeObserver
+from genthermal.machines import build_model, resolve_machine
+from genthermal.resources import BENCH_MOTOR_DIR
+
+MACHINE_FILE = BENCH_MOTOR_DIR / "ipmsm_machine.py"
+SLICE = BENCH_MOTOR_DIR / "id_9_first_3000s.csv"
+
+
+@pytest.fixture(scope="module")
+def machine():
+    return resolve_machine(str(MACHINE_FILE))
+
+
+@pytest.fixture(scope="module")
+def column_map(machine):
+    return ColumnMap.from_dict(machine.column_map, machine.interface)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return build_model(str(MACHINE_FILE))
+
+
+@pytest.fixture(scope="module")
+def slice_data(machine, column_map):
+    return read_logged(SLICE, column_map, machine.interface)
+
+
+def _variant(tmp_path, name, change):
+    frame = pd.read_csv(SLICE, nrows=600)
+    change(frame)
+    path = tmp_path / name
+    frame.to_csv(path, index=False)
+    return path
+
+
+def test_slice_read_through_the_column_map(slice_data, machine):
+    frame = slice_data.frame
+    assert list(frame["time_s"][:3]) == [0.0, 1.0, 2.0]  # made from dt_s = 1: the file has no time column
+    raw = pd.read_csv(SLICE)
+    assert np.allclose(frame["motor_speed"], raw["speed"])
+    assert np.allclose(frame["T_water"], raw["water_outlet"])
+    winding = slice_data.output("T_winding")
+    assert np.allclose(winding, 0.5 * (raw["activewind_1"] + raw["activewind_2"]))
+    assert set(machine.interface.sensor_columns) <= set(frame.columns)
+
+
+def test_units_are_converted(tmp_path, machine):
+    mapping = {"dt_s": 2.0, "columns": {**ColumnMapDict.base(machine)}}
+    mapping["columns"]["speed"] = {"input": "motor_speed", "unit": "rad/s"}
+    mapping["columns"]["water_outlet"] = {"input": "T_water", "unit": "K"}
+    mapping["columns"].pop("Torque")
+    mapping["columns"].pop("Pele_PI")
+    path = _variant(tmp_path, "si.csv", lambda f: (f.__setitem__("speed", f["speed"] * 2 * math.pi / 60),
+                                                   f.__setitem__("water_outlet", f["water_outlet"] + 273.15)))
+    data = read_logged(path, ColumnMap.from_dict(mapping, machine.interface), machine.interface)
+    raw = pd.read_csv(SLICE, nrows=600)
+    assert np.allclose(data.frame["motor_speed"], raw["speed"])
+    assert np.allclose(data.frame["T_water"], raw["water_outlet"])
+    assert data.frame["time_s"].iloc[-1] == 2.0 * 599
+
+
+class ColumnMapDict:
+    @staticmethod
+    def base(machine):
+        return {k: dict(v) for k, v in machine.column_map["columns"].items()}
+
+
+def test_map_naming_a_column_not_in_the_file(tmp_path, machine, column_map):
+    path = _variant(tmp_path, "no_rotor.csv", lambda f: f.pop("rotor"))
+    with pytest.raises(InputError, match=r"no_rotor.csv: column = 'rotor'.*not in the file"):
+        read_logged(path, column_map, machine.interface)
+
+
+def test_kelvin_in_a_celsius_column(tmp_path, machine, column_map):
+    path = _variant(tmp_path, "kelvin.csv", lambda f: f.__setitem__("endcap", f["endcap"] + 273.15))
+    with pytest.raises(InputError, match=r"kelvin.csv: column endcap.*median 29[0-9].*look like kelvin"):
+        read_logged(path, column_map, machine.interface)
+
+
+def test_rad_per_s_where_rpm_is_declared(tmp_path, machine, column_map):
+    path = _variant(tmp_path, "rads.csv", lambda f: f.__setitem__("speed", f["speed"] * 2 * math.pi / 60))
+    with pytest.raises(InputError, match=r"rads.csv: column speed.*unit rpm.*rad/s declared as rpm"):
+        read_logged(path, column_map, machine.interface)
+
+
+def test_the_true_unit_passes_the_speed_check(slice_data):
+    assert slice_data.frame["motor_speed"].max() > 3000.0
+
+
+def test_negative_speed(tmp_path, machine, column_map):
+    path = _variant(tmp_path, "backwards.csv", lambda f: f.loc[100, "speed"].__class__ and f.__setitem__(
+        "speed", np.where(f.index == 100, -250.0, f["speed"])))
+    with pytest.raises(InputError, match=r"backwards.csv: column speed, data row 101 = -250.0: a negative speed"):
+        read_logged(path, column_map, machine.interface)
+
+
+def test_run_of_nan_in_a_sensor(tmp_path, machine, column_map):
+    def lose(frame):
+        frame["bearing"] = frame["bearing"].astype(float)
+        frame.loc[200:259, "bearing"] = np.nan
+
+    path = _variant(tmp_path, "lost.csv", lose)
+    with pytest.raises(InputError, match=r"lost.csv: column bearing, data rows 201-260 = 'NaN': 60 missing"):
+        read_logged(path, column_map, machine.interface)
+
+
+def test_a_short_gap_in_a_sensor_is_kept_as_missing(tmp_path, machine, column_map):
+    def lose(frame):
+        frame["bearing"] = frame["bearing"].astype(float)
+        frame.loc[200:204, "bearing"] = np.nan
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        data = read_logged(_variant(tmp_path, "gap.csv", lose), column_map, machine.interface)
+    assert data.missing_counts["bearing"] == 5
+
+
+def test_records_with_different_columns_in_one_call(tmp_path, machine, column_map):
+    same = _variant(tmp_path, "a.csv", lambda f: None)
+    other = _variant(tmp_path, "b.csv", lambda f: f.__setitem__("extra_probe", 1.0))
+    with pytest.raises(InputError, match=r"b.csv: columns = 'extra_probe'.*same columns"):
+        read_logged_set([same, other], column_map, machine.interface)
+
+
+def test_map_with_unknown_unit_or_target(machine):
+    columns = ColumnMapDict.base(machine)
+    columns["speed"] = {"input": "motor_speed", "unit": "furlongs"}
+    with pytest.raises(InputError, match=r"columns.speed.unit = 'furlongs': not a speed unit"):
+        ColumnMap.from_dict({"columns": columns}, machine.interface)
+    columns["speed"] = {"input": "speed_rpm", "unit": "rpm"}
+    with pytest.raises(InputError, match=r"'speed_rpm': not an input"):
+        ColumnMap.from_dict({"columns": columns}, machine.interface)
+
+
+def test_initial_state_from_each_records_first_readings(model, slice_data):
+    record = record_from_measurements(model, slice_data, 60.0)
+    first = {s.node: s for s in model.spec.interface.sensors}
+    states = dict(zip(model.state_names, record.x0))
+    rotor = slice_data.output("T_rotor")[:30].mean()  # the first 60-s window, centred on t = 0
+    assert abs(states["rotor"] - rotor) < 0.5
+    assert "end_space_air" not in first  # unmeasured: from its measured neighbours
+    neighbours = [states[n] for n in ("end_winding", "rotor", "endcap")]
+    assert min(neighbours) <= states["end_space_air"] <= max(neighbours)
+
+
+def test_fit_over_two_records_lowers_the_error_and_reports_intervals(model, slice_data):
+    from genthermal.measurements import MeasurementData
+
+    frame = slice_data.frame
+    halves = [MeasurementData(part.reset_index(drop=True).assign(time_s=lambda f: f["time_s"] - f["time_s"].iloc[0]),
+                              f"half {i}", {}, [], [], slice_data.interface)
+              for i, part in enumerate((frame.iloc[:1500], frame.iloc[1500:]))]
+    records = [record_from_measurements(model, half, 60.0) for half in halves]
+    before = np.sqrt(np.nanmean(np.concatenate([(simulate_record(model, r) - r.outputs).ravel() for r in records]) ** 2))
+    names = ["G_jacket", "G_slot_tooth", "G_slot_end", "G_end_winding_frame", "G_gap", "G_rotor_shaft"]
+    fit = fit_records(model, records, names, max_iter=30)
+    after = np.sqrt(np.nanmean(np.concatenate([(simulate_record(fit.model, r) - r.outputs).ravel() for r in records]) ** 2))
+    assert after < 0.6 * before
+    assert math.isclose(fit.rmse, after, rel_tol=0.05)
+    fisher = records_fisher(fit)
+    for value, (low, high) in zip(fit.values, fisher["ci95"]):
+        assert low < value < high
+    assert fit.model.parameters["G_jacket"].provenance == "fitted"
+
+
+def test_ekf_from_stator_sensors_tracks_the_winding_better_than_open_loop(model, slice_data):
+    record = record_from_measurements(model, slice_data, 30.0)
+    winding = model.output_names.index("T_winding")
+    open_loop = simulate_record(model, record)[winding] - record.outputs[winding]
+    observer = NodeObserver(model, record.dt_s, ("T_end_winding", "T_slot_bottom", "T_outer_yoke"))
+    _, outputs = observer.run(record)
+    filtered = outputs[winding] - record.outputs[winding]
+    assert np.sqrt(np.mean(filtered ** 2)) < 0.6 * np.sqrt(np.mean(open_loop ** 2))  # the uncalibrated model
+    with pytest.raises(InputError, match="'T_magnet': not a sensor"):
+        NodeObserver(model, record.dt_s, ("T_magnet",))
+
+
+def test_compare_command_on_the_shipped_slice(capsys):
+    code = main(["compare", "--model", f"{MACHINE_FILE}:MACHINE_PLAIN", str(SLICE), "--fit-step", "60"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "each from its own measured initial state" in out
+    assert "by speed band" in out and "3000-inf rpm" in out
+
+
+def test_compare_command_names_a_bad_column_map(tmp_path, capsys):
+    bad = tmp_path / "map.yaml"
+    bad.write_text("dt_s: 1\ncolumns:\n  speed: {input: motor_speed, unit: rpm}\n", encoding="utf-8")
+    code = main(["compare", "--model", str(MACHINE_FILE), str(SLICE), "--columns", str(bad)])
+    assert code == 2
+    assert "'i_d': this input or sensor column of the machine is not mapped" in capsys.readouterr().err
+
+
+def test_calibrate_names_a_weight_on_an_unknown_sensor(capsys):
+    code = main(["calibrate", "--model", str(MACHINE_FILE), str(SLICE), "--params", "G_jacket",
+                 "--weight", "T_magnet=4"])
+    assert code == 2
+    assert "--weight T_magnet = 'T_magnet': not a sensor of ipmsm_bench" in capsys.readouterr().err
