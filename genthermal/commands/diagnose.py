@@ -45,7 +45,9 @@ def run(args) -> int:
                               progress=lambda line: say(f"  ... {line}"))
         result = discovery.fit(model, data, baseline=baseline, dt_s=data_step(args))
     document = result.to_dict()
-    print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
+    floor = document["residual"].get("floor_K")
+    print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K"
+          + (f", discrepancy floor {floor:.3f} K (the calibrated model's error on the baseline)" if floor else ""))
     for c in document["ranked"]:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in c["params"].items())
         print(f"  {c['effect']:>32s}: {params:<22s} onset {c['onset_s'] / 3600:5.2f} h  RMSE "
@@ -58,6 +60,8 @@ def run(args) -> int:
         print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
     for fault in document["sensor_faults"]:
         print(f"  sensor fault: {fault['text']} (ΔBIC {fault['delta_ic']:.0f}, by {fault['evidence']})")
+    for refused in document.get("refused_sensor_faults", []):
+        print(f"  refused sensor fault: {refused['refused']}")
     print(f"verdict: {document['verdict']}")
     print(document["explanation"])
     print(document["residual"]["summary"])

@@ -87,11 +87,25 @@ def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise:
                 and rmse_before ** 2 - rmse_after ** 2 >= MIN_EXCESS_EXPLAINED * (rmse_before ** 2 - noise ** 2))
 
 
+def implausible_reason(candidate) -> str | None:
+    """Why a Candidate or JointCandidate's fitted values are no finding: the first effect fitted
+    outside its plausible range (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    for name, values in _explanations(candidate).items():
+        effect = CATALOGUE.get(name)
+        reason = effect.implausible(values) if effect is not None else None
+        if reason:
+            return reason
+    return None
+
+
 def is_significant(candidate: Candidate, noise: float, evidence_limit: float = DELTA_BIC_LIMIT,
                    design: DesignSensorScale | None = None) -> bool:
     """The four tests of the module docstring, against the model without the candidate; with
     ``design`` (phase sensors fitted one by one), the practical tests pass on every sensor or on
-    the design sensors (:mod:`genthermal.diagnose.design_scale`)."""
+    the design sensors (:mod:`genthermal.diagnose.design_scale`). A candidate fitted outside its
+    plausible range (:func:`implausible_reason`) is never significant."""
+    if implausible_reason(candidate) is not None:
+        return False
     if passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise, evidence_limit):
         return True
     return design is not None and passes_tests(design.rmse_before, design.rmse(candidate.predicted),
@@ -122,6 +136,8 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
                                                    design.rmse(pair.predicted), delta, design.noise, evidence_limit)
 
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
+        if implausible_reason(pair) is not None:
+            continue
         rivals = [None] + [by_name[e] for e in pair.effects] + [best_single]
         if all(beats(pair, rival) for rival in rivals):
             return pair
@@ -266,6 +282,30 @@ class Diagnosis:
         chosen = self.iterations[0].added_pair or self.iterations[0].added
         return list(chosen.onset_profiles) if chosen is not None else []
 
+    def claims(self) -> list:
+        """Every claim with its kind (``machine_effect``, ``sensor_fault``, ``unexplained``), what it
+        says, its evidence and its confidence (the criterion's change: ``strong`` below twice the
+        evidence limit, else ``moderate``; ``unexplained`` has the residual's level instead)."""
+        claims = []
+        rounds = {e: it for it in self.iterations for e in it.added_effects}
+        for found in self.found:
+            iteration = rounds.get(found.effect, self.iterations[0])
+            chosen = iteration.added_pair or iteration.added
+            delta = chosen.delta_bic if chosen is not None else float("nan")
+            claims.append({"kind": "machine_effect", "effect": found.effect, "params": found.values,
+                           "onset_s": found.onset_s, "evidence": f"{self.criterion} change {delta:.1f} on the record",
+                           "delta_ic": delta, "confidence": "strong" if delta < 2 * DELTA_BIC_LIMIT else "moderate"})
+        for fault in (self.sensor_screen.found if self.sensor_screen is not None else []):
+            claims.append({"kind": "sensor_fault", "sensor": fault.fault.sensor, "text": fault.fault.describe(),
+                           "evidence": fault.evidence, "delta_ic": fault.delta_bic,
+                           "confidence": "strong" if fault.evidence in ("redundancy", "frozen") or
+                           fault.delta_bic < 2 * DELTA_BIC_LIMIT else "moderate"})
+        if self.unexplained:
+            claims.append({"kind": "unexplained", "text": self.residual.get("summary", ""),
+                           "evidence": "residual tests", "rmse_K": self.residual.get("rmse_K"),
+                           "floor_K": self.residual.get("floor_K"), "confidence": "level"})
+        return claims
+
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""
         first = self.iterations[0]
@@ -289,6 +329,8 @@ class Diagnosis:
             "experiment": self.experiment.to_dict() if self.experiment else None,
             "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
             "sensor_error_limits_K": dict(self.sensor_screen.limits) if self.sensor_screen is not None else {},
+            "refused_sensor_faults": self.sensor_screen.refused_list() if self.sensor_screen is not None else [],
+            "claims": self.claims(),
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
@@ -331,7 +373,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     residual = search.predicted_before - series.outputs
     if candidate is None:
         return (f"No effect is significant: the model explains the data to RMSE {search.rmse_before:.3f} K "
-                f"against an estimated sensor noise of {search.noise:.3f} K; no catalogue effect passes the "
+                f"against an estimated error level of {search.noise:.3f} K (sensor noise, or the discrepancy floor with a baseline); no catalogue effect passes the "
                 "tests of evidence (ΔBIC), size (RMSE reduction) and share of the misfit explained.")
     effect = search.effect(candidate.effect)
     after = np.arange(series.time_s.size) >= candidate.onset_index
@@ -359,7 +401,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     return (f"{candidate.effect}: {effect.summary}. {when.capitalize()} the model ran {biases}; "
             f"{'; '.join(links)}. That is the signature of this effect: {effect.signature}. "
             f"Fitted {values} (neutral {neutral}); RMSE {candidate.rmse_before:.3f} → {candidate.rmse_after:.3f} K "
-            f"against an estimated noise of {search.noise:.3f} K (ΔBIC = {candidate.delta_bic:.0f})."
+            f"against an error level of {search.noise:.3f} K (ΔBIC = {candidate.delta_bic:.0f})."
             + _ambiguity(candidate, runner_up))
 
 
@@ -374,7 +416,7 @@ def explain_pair(pair: JointCandidate, search: EffectSearch, best_single: Candid
         parts.append(f"{name} ({effect.summary}; {values}, "
                      f"{'from the start' if pair.onset_indices[name] == 0 else f'from t = {onset / 3600:.2f} h'})")
     return (f"Two effects at once: {' and '.join(parts)}, fitted jointly (values and both onsets). RMSE "
-            f"{pair.rmse_before:.3f} → {pair.rmse_after:.3f} K against an estimated noise of {search.noise:.3f} K "
+            f"{pair.rmse_before:.3f} → {pair.rmse_after:.3f} K against an error level of {search.noise:.3f} K "
             f"(ΔBIC = {pair.delta_bic:.0f}); the best single effect, {best_single.effect}, only reached "
             f"{best_single.rmse_after:.3f} K (ΔBIC = {best_single.delta_bic:.0f}), and each effect of the pair is "
             f"needed: the pair passes the significance tests against either effect alone.")

@@ -1,0 +1,204 @@
+"""Score ``genthermal diagnose DATA --baseline healthy_baseline.csv --iterate`` on the independent records.
+
+Runs the command-line diagnosis (``genthermal.cli.main`` in a fresh process per record) on every
+record of ``../shared/records/independent_batch1/`` (or ``--records``) and scores its JSON against
+the record's truth file:
+
+* ``verdict``: ``right`` (the machine effects claimed are the true ones, mapped to genthermal's
+  names, and no sensor is blamed; for a single effect, a flagged look-alike that contains the true
+  effect counts too; for the stretch records, "not explained by the catalogue" with an open-search
+  term and no confident catalogue verdict other than the nearest one), ``partly`` (some true effect
+  named, or a healthy record with only an "unexplained" flag), ``wrong``;
+* ``false_claims``: claims (machine effects or sensor faults) that are not in the truth;
+* ``onset_error_min``: per true effect with an onset after the start, |fitted - true| onset, min;
+* ``rmse_over_floor``: the RMSE after the found effects over the discrepancy floor of the error
+  model (``residual.floor_K`` of the JSON);
+* ``wall_s``: wall time of the command (the machine may be shared: see ``load_avg``).
+
+Usage: ``python benchmarks/bench_independent.py [--records NAME ...] [--workers N] [--jobs J]
+[--out FILE]``. ``--workers`` is passed to ``diagnose`` (processes per record), ``--jobs`` records
+run side by side. Prints one JSON line per record, then a summary line (``"summary": true``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+RECORDS = ROOT / ".." / "shared" / "records" / "independent_batch1"
+#: Effect names of the independent implementation -> genthermal catalogue names.
+EFFECT_NAMES = {"coolant_blockage": "coolant_flow_reduction", "inter_turn_short": "phase_short_circuit",
+                "end_winding_stray_loss": "end_winding_stray_loss", "excitation_iron_loss": "excitation_iron_loss",
+                "insulation_degradation": "winding_insulation_degradation",
+                "fan_flow_reduction": "coolant_flow_reduction", "frame_radiation": "frame_cooling_change"}
+#: Healthy and load-only records: the false-claim set (the baseline itself is the calibration record).
+NO_CLAIM_CATEGORIES = ("healthy", "step", "varying")
+
+
+def expected_effects(truth: dict) -> set:
+    """genthermal names of the effects the model lacks in ``truth`` (the copper resistance rise is
+    part of genthermal's model already, so effect_b and control_b expect no catalogue effect)."""
+    return {EFFECT_NAMES[e["name"]] for e in truth["effects"] if e["name"] in EFFECT_NAMES}
+
+
+def claims_of(document: dict) -> dict:
+    """Machine effects, sensor faults and 'unexplained' of a diagnose JSON document."""
+    machine = [f["effect"] for f in document.get("found", [])]
+    sensors = [f.get("sensor", f.get("text", "")) for f in document.get("sensor_faults", [])
+               if f.get("claimed", True)]
+    lookalike = None
+    if document.get("experiment"):
+        lookalike = document["experiment"].get("explanations") or document["experiment"].get("candidates")
+    return {"machine": machine, "sensors": sensors, "unexplained": bool(document.get("unexplained")),
+            "open_terms": [t.get("term", t.get("name")) for t in document.get("open_search", {}).get("terms", [])]
+            if isinstance(document.get("open_search"), dict) else [],
+            "lookalike": lookalike}
+
+
+def _lookalike_names(lookalike) -> set:
+    names = set()
+    if isinstance(lookalike, dict):
+        lookalike = list(lookalike.values())
+    for item in lookalike or []:
+        if isinstance(item, str):
+            names.update(item.split(" + "))
+        elif isinstance(item, (list, tuple)):
+            names.update(str(x) for x in item)
+        elif isinstance(item, dict):
+            names.update(item)
+    return names
+
+
+def score(name: str, truth: dict, document: dict) -> dict:
+    """Score one record's diagnosis against its truth (module docstring)."""
+    expected = expected_effects(truth)
+    claims = claims_of(document)
+    machine, sensors = set(claims["machine"]), claims["sensors"]
+    category = truth["category"]
+    false_claims = sorted(machine - expected) + sensors
+    lookalike = _lookalike_names(claims["lookalike"])
+    if category == "stretch":
+        nearest = expected
+        confident_other = machine - nearest
+        if claims["unexplained"] and claims["open_terms"] and not confident_other and not sensors:
+            verdict = "right"
+        elif machine & nearest and not sensors:
+            verdict = "partly"
+        else:
+            verdict = "wrong"
+        false_claims = sorted(confident_other) + sensors
+    elif not expected:
+        if not machine and not sensors:
+            verdict = "right" if not claims["unexplained"] or category == "control" else "partly"
+        else:
+            verdict = "wrong"
+    elif machine == expected and not sensors:
+        verdict = "right"
+    elif len(expected) == 1 and expected <= lookalike and machine & lookalike and not sensors:
+        verdict = "right"
+        false_claims = sensors
+    elif machine & expected:
+        verdict = "partly"
+    else:
+        verdict = "wrong"
+    onset_error = {}
+    found = {f["effect"]: f for f in document.get("found", [])}
+    for effect in truth["effects"]:
+        mapped = EFFECT_NAMES.get(effect["name"])
+        if mapped in found and effect.get("onset_s"):
+            onset_error[mapped] = abs(found[mapped]["onset_s"] - float(effect["onset_s"])) / 60.0
+    residual = document.get("residual", {})
+    floor = residual.get("floor_K")
+    rmse = document.get("rmse_final")
+    return {"record": name, "category": category, "expected": sorted(expected), "verdict": verdict,
+            "claimed_machine": sorted(machine), "claimed_sensors": sensors, "unexplained": claims["unexplained"],
+            "open_terms": claims["open_terms"], "false_claims": false_claims, "n_false_claims": len(false_claims),
+            "onset_error_min": onset_error, "rmse_after_K": rmse, "floor_K": floor,
+            "rmse_over_floor": (rmse / floor) if (rmse is not None and floor) else None}
+
+
+def run_record(name: str, workers: int, timeout_s: float) -> dict:
+    """Run the CLI on one record in a fresh process; its JSON scored (``error`` when it failed)."""
+    data = RECORDS / "data" / f"{name}.csv"
+    truth = json.loads((RECORDS / "truth" / f"{name}.json").read_text())
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder) / "diagnosis.json"
+        command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline",
+                   str(RECORDS / "data" / "healthy_baseline.csv"), "--iterate", "--json", str(out),
+                   "--workers", str(workers)]
+        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        start = time.perf_counter()
+        try:
+            process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
+        except subprocess.TimeoutExpired:
+            return {"record": name, "category": truth["category"], "verdict": "wrong", "error": "timeout",
+                    "wall_s": timeout_s}
+        wall = time.perf_counter() - start
+        if process.returncode != 0 or not out.exists():
+            return {"record": name, "category": truth["category"], "verdict": "wrong", "wall_s": wall,
+                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        document = json.loads(out.read_text())
+    result = score(name, truth, document)
+    result["wall_s"] = round(wall, 1)
+    result["duration_h"] = truth["summary"]["duration_s"] / 3600.0
+    result["load_avg"] = round(os.getloadavg()[0], 2)
+    return result
+
+
+def summary(results: list) -> dict:
+    """Counts over the records: verdicts, false claims on the no-claim set, onset and RMSE figures."""
+    verdicts = {k: sum(r["verdict"] == k for r in results) for k in ("right", "partly", "wrong")}
+    no_claim = [r for r in results if r.get("category") in NO_CLAIM_CATEGORIES]
+    onset = [v for r in results for v in r.get("onset_error_min", {}).values()]
+    ratios = [r["rmse_over_floor"] for r in results if r.get("rmse_over_floor") is not None]
+    per_hour = [r["wall_s"] / r["duration_h"] * 4 for r in results if "duration_h" in r]
+    return {"summary": True, "records": len(results), **verdicts,
+            "claims_on_healthy_and_load_only": sum(r.get("n_false_claims", 1) for r in no_claim),
+            "healthy_and_load_only_records": len(no_claim),
+            "false_claims_total": sum(r.get("n_false_claims", 0) for r in results),
+            "onset_error_min_max": max(onset) if onset else None,
+            "onsets_within_10_min": sum(v <= 10 for v in onset), "onsets_scored": len(onset),
+            "rmse_over_floor_max": max(ratios) if ratios else None,
+            "wall_s_per_4h_max": max(per_hour) if per_hour else None,
+            "wall_s_total": round(sum(r.get("wall_s", 0) for r in results), 1)}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--records", nargs="*", help="record names (default: all of independent_batch1)")
+    parser.add_argument("--workers", type=int, default=1, help="diagnose --workers (default 1)")
+    parser.add_argument("--jobs", type=int, default=1, help="records run side by side (default 1)")
+    parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per record before it is failed")
+    parser.add_argument("--out", help="also write the JSON lines to this file")
+    args = parser.parse_args(argv)
+    if not RECORDS.is_dir():
+        print(json.dumps({"error": f"records not found: {RECORDS.resolve()}"}))
+        return 2
+    names = args.records or sorted(p.stem for p in (RECORDS / "data").glob("*.csv"))
+    unknown = [n for n in names if not (RECORDS / "data" / f"{n}.csv").exists()]
+    if unknown:
+        print(json.dumps({"error": f"unknown record {unknown[0]}"}))
+        return 2
+    lines = []
+    with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        for result in pool.map(lambda n: run_record(n, args.workers, args.timeout), names):
+            line = json.dumps(result)
+            print(line, flush=True)
+            lines.append(result)
+    total = json.dumps(summary(lines))
+    print(total, flush=True)
+    if args.out:
+        Path(args.out).write_text("\n".join([*map(json.dumps, lines), total]) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
