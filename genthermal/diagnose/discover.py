@@ -233,6 +233,11 @@ class Diagnosis:
     output_names : list of str
         The sensors fitted, rows of ``series.outputs`` (the model's, or those of its phase-resolved
         winding view, :mod:`genthermal.diagnose.phase_winding`, when the record's phases differ).
+    error_model : ErrorModel or None
+        The calibrated model's error on the baseline (:mod:`genthermal.diagnose.error_model`).
+    open_search : dict or None
+        The open search run after the catalogue left the residual unexplained
+        (:func:`~genthermal.diagnose.open_followup.open_followup`).
     """
 
     model: ThermalModel
@@ -247,6 +252,8 @@ class Diagnosis:
     criterion: str = "BIC"
     output_names: list = dataclasses.field(default_factory=list)
     sensor_screen: object = None
+    error_model: object = None
+    open_search: dict | None = None
 
     def __post_init__(self):
         self.output_names = list(self.output_names) or list(self.model.output_names)
@@ -301,9 +308,15 @@ class Diagnosis:
                            "confidence": "strong" if fault.evidence in ("redundancy", "frozen") or
                            fault.delta_bic < 2 * DELTA_BIC_LIMIT else "moderate"})
         if self.unexplained:
-            claims.append({"kind": "unexplained", "text": self.residual.get("summary", ""),
+            terms = (self.open_search or {}).get("terms", [])
+            text = "not explained by the catalogue" if not self.found else \
+                f"{' + '.join(f.effect for f in self.found)} leaves a residual the catalogue does not explain"
+            claims.append({"kind": "unexplained", "text": text, "residual": self.residual.get("summary", ""),
                            "evidence": "residual tests", "rmse_K": self.residual.get("rmse_K"),
-                           "floor_K": self.residual.get("floor_K"), "confidence": "level"})
+                           "floor_K": self.residual.get("floor_K"),
+                           "open_search_terms": [{k: t[k] for k in ("group", "form", "params", "onset_s", "text")}
+                                                 for t in terms],
+                           "confidence": "level"})
         return claims
 
     def to_dict(self) -> dict:
@@ -329,6 +342,7 @@ class Diagnosis:
             "experiment": self.experiment.to_dict() if self.experiment else None,
             "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
             "sensor_error_limits_K": dict(self.sensor_screen.limits) if self.sensor_screen is not None else {},
+            "open_search": self.open_search,
             "refused_sensor_faults": self.sensor_screen.refused_list() if self.sensor_screen is not None else [],
             "claims": self.claims(),
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,

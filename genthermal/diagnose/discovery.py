@@ -388,4 +388,5 @@ class Discovery:
         if screen is not None and screen.limit_text():
             iterations[0].explanation += " " + screen.limit_text()
         return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
-                         criterion=criterion.name, output_names=viewed.output_names, sensor_screen=screen)
+                         criterion=criterion.name, output_names=viewed.output_names, sensor_screen=screen,
+                         error_model=error_model)
