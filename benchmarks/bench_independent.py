@@ -9,14 +9,19 @@ the record's truth file:
   effect counts too; for the stretch records, "not explained by the catalogue" with an open-search
   term and no confident catalogue verdict other than the nearest one), ``partly`` (some true effect
   named, or a healthy record with only an "unexplained" flag), ``wrong``;
-* ``false_claims``: claims (machine effects or sensor faults) that are not in the truth;
+* ``false_claims``: claims (machine effects or sensor faults; on a record without an effect also
+  open-search terms) that are not in the truth;
 * ``onset_error_min``: per true effect with an onset after the start, |fitted - true| onset, min;
 * ``rmse_over_floor``: the RMSE after the found effects over the discrepancy floor of the error
   model (``residual.floor_K`` of the JSON);
 * ``wall_s``: wall time of the command (the machine may be shared: see ``load_avg``).
 
-Usage: ``python benchmarks/bench_independent.py [--records NAME ...] [--workers N] [--jobs J]
-[--out FILE]``. ``--workers`` is passed to ``diagnose`` (processes per record), ``--jobs`` records
+``--plants K`` adds K healthy records of genthermal's own nonlinear model with its convection,
+flow, losses, conductivities and heat capacities 10-30 % off, each diagnosed with its own healthy
+baseline (any claim on them is false).
+
+Usage: ``python benchmarks/bench_independent.py [--records NAME ...] [--plants K] [--workers N]
+[--jobs J] [--out FILE]``. ``--workers`` is passed to ``diagnose`` (processes per record), ``--jobs`` records
 run side by side. Prints one JSON line per record, then a summary line (``"summary": true``).
 """
 
@@ -40,7 +45,7 @@ EFFECT_NAMES = {"coolant_blockage": "coolant_flow_reduction", "inter_turn_short"
                 "insulation_degradation": "winding_insulation_degradation",
                 "fan_flow_reduction": "coolant_flow_reduction", "frame_radiation": "frame_cooling_change"}
 #: Healthy and load-only records: the false-claim set (the baseline itself is the calibration record).
-NO_CLAIM_CATEGORIES = ("healthy", "step", "varying")
+NO_CLAIM_CATEGORIES = ("healthy", "step", "varying", "plant")
 
 
 def expected_effects(truth: dict) -> set:
@@ -96,7 +101,8 @@ def score(name: str, truth: dict, document: dict) -> dict:
             verdict = "wrong"
         false_claims = sorted(confident_other) + sensors
     elif not expected:
-        if not machine and not sensors:
+        false_claims += [f"open search: {t}" for t in claims["open_terms"]]
+        if not machine and not sensors and not claims["open_terms"]:
             verdict = "right" if not claims["unexplained"] or category == "control" else "partly"
         else:
             verdict = "wrong"
@@ -153,6 +159,65 @@ def run_record(name: str, workers: int, timeout_s: float) -> dict:
     return result
 
 
+#: Parameters of genthermal's own plants drawn 10-30 % off the model (``--plants``): the uncertain
+#: convection, flow, losses and conductivities, of which the baseline calibrates only some.
+PLANT_PARAMETERS = ("h_ambient", "h_top_air", "h_end_air", "h_air_gap", "m_dot_fan", "air_gap_flow_share", "R0",
+                    "P_iron", "k_cr", "k_sa", "k_l", "c_steel", "c_copper")
+
+
+def make_plant_records(index: int, folder: Path) -> tuple[Path, Path, dict]:
+    """A healthy baseline and a healthy test record of genthermal's nonlinear model with every
+    :data:`PLANT_PARAMETERS` 10-30 % off (random sign and size, seed ``index``), driven by the
+    inputs of ``healthy_baseline`` and ``healthy_mission_B``: (baseline CSV, record CSV, the
+    factors)."""
+    import numpy as np
+    import pandas as pd
+
+    from genthermal.machines import build_model
+    from genthermal.synth import synthesize
+
+    rng = np.random.default_rng(1000 + index)
+    model = build_model()
+    factors = {n: float(1 + rng.choice([-1, 1]) * rng.uniform(0.1, 0.3)) for n in PLANT_PARAMETERS
+               if n in model.parameters}
+    plant = model.with_parameters(source=f"bench_independent plant {index}",
+                                  **{n: model.parameters.value(n) * f for n, f in factors.items()})
+    paths = []
+    for k, name in enumerate(("healthy_baseline", "healthy_mission_B")):
+        frame = pd.read_csv(RECORDS / "data" / f"{name}.csv")
+        inputs = frame[["time_s", *[c for c in frame.columns if c.startswith("I_")], "T_inlet", "T_ambient"]]
+        inputs = inputs.iloc[::5].reset_index(drop=True)  # 10 s
+        record = synthesize(plant, inputs, seed=10 * index + k)
+        path = folder / f"plant{index}_{name}.csv"
+        record.to_csv(path, index=False)
+        paths.append(path)
+    return paths[0], paths[1], factors
+
+
+def run_plant(index: int, workers: int, timeout_s: float) -> dict:
+    """Diagnose a healthy record of one of genthermal's own plants 10-30 % off, with its own healthy
+    baseline: any claim is a false one."""
+    with tempfile.TemporaryDirectory() as folder:
+        baseline, data, factors = make_plant_records(index, Path(folder))
+        out = Path(folder) / "diagnosis.json"
+        command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline", str(baseline),
+                   "--iterate", "--json", str(out), "--workers", str(workers)]
+        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        start = time.perf_counter()
+        process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
+        wall = time.perf_counter() - start
+        name = f"plant_{index}_healthy"
+        if process.returncode != 0 or not out.exists():
+            return {"record": name, "category": "plant", "verdict": "wrong", "wall_s": wall,
+                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        document = json.loads(out.read_text())
+    truth = {"category": "plant", "effects": []}
+    result = score(name, truth, document)
+    result.update(wall_s=round(wall, 1), duration_h=document["samples"] * document["dt_s"] / 3600.0,
+                  plant_factors=factors, load_avg=round(os.getloadavg()[0], 2))
+    return result
+
+
 def summary(results: list) -> dict:
     """Counts over the records: verdicts, false claims on the no-claim set, onset and RMSE figures."""
     verdicts = {k: sum(r["verdict"] == k for r in results) for k in ("right", "partly", "wrong")}
@@ -178,6 +243,8 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=1, help="records run side by side (default 1)")
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per record before it is failed")
     parser.add_argument("--out", help="also write the JSON lines to this file")
+    parser.add_argument("--plants", type=int, default=0,
+                        help="also diagnose this many healthy records of genthermal plants 10-30 %% off")
     args = parser.parse_args(argv)
     if not RECORDS.is_dir():
         print(json.dumps({"error": f"records not found: {RECORDS.resolve()}"}))
@@ -188,8 +255,9 @@ def main(argv=None) -> int:
         print(json.dumps({"error": f"unknown record {unknown[0]}"}))
         return 2
     lines = []
+    tasks = [(run_record, n) for n in names] + [(run_plant, k) for k in range(args.plants)]
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        for result in pool.map(lambda n: run_record(n, args.workers, args.timeout), names):
+        for result in pool.map(lambda task: task[0](task[1], args.workers, args.timeout), tasks):
             line = json.dumps(result)
             print(line, flush=True)
             lines.append(result)

@@ -74,7 +74,9 @@ def run(args) -> int:
     print(f"verdict: {document['verdict']}")
     if document.get("open_search"):
         terms = document["open_search"]["terms"]
-        print(f"not explained by the catalogue; open search ({document['open_search']['library_size']} terms): "
+        lead = ("not explained by the catalogue" if not document["found"] else
+                f"{' + '.join(f['effect'] for f in document['found'])} leaves the residual unexplained")
+        print(f"{lead}; open search ({document['open_search']['library_size']} terms): "
               + ("; ".join(t["text"] for t in terms) if terms else "no term is significant either"))
         for term in terms:
             print(f"  to keep {term['term']} as an effect:\n" + "".join(f"    {line}\n" for line in

@@ -357,9 +357,17 @@ AMBIGUITY_BIC = 10.0
 AMBIGUITY_RMSE = 0.02
 
 
-def look_alike(chosen, other) -> bool:
+#: With an error model, two explanations that both leave at most this many discrepancy floors
+#: explain the data equally well: the model's own error cannot rank them.
+AMBIGUITY_FLOOR = 1.5
+
+
+def look_alike(chosen, other, floor: float | None = None) -> bool:
     """True when ``other`` (a Candidate or JointCandidate) explains the data about as well as
-    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`."""
+    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`, or, with
+    the discrepancy ``floor`` (K), both within :data:`AMBIGUITY_FLOOR` floors."""
+    if floor is not None and max(chosen.rmse_after, other.rmse_after) <= AMBIGUITY_FLOOR * floor:
+        return implausible_reason(other) is None
     return bool(other.delta_bic - chosen.delta_bic < AMBIGUITY_BIC
                 or other.rmse_after <= (1 + AMBIGUITY_RMSE) * chosen.rmse_after)
 
@@ -369,13 +377,14 @@ def _explanations(candidate) -> dict:
     return dict(candidate.values) if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.values}
 
 
-def rival(iteration: "Iteration"):
-    """The best other explanation that looks alike the one ``iteration`` added, or None."""
+def rival(iteration: "Iteration", floor: float | None = None):
+    """The best other explanation that looks alike the one ``iteration`` added (:func:`look_alike`
+    with the discrepancy ``floor``, K), or None."""
     chosen = iteration.added_pair or iteration.added
     if chosen is None:
         return None
     pool = iteration.pairs if iteration.added_pair else iteration.ranked
-    others = [c for c in pool if c is not chosen and look_alike(chosen, c)]
+    others = [c for c in pool if c is not chosen and look_alike(chosen, c, floor)]
     return min(others, key=lambda c: c.delta_bic) if others else None
 
 

@@ -36,14 +36,15 @@ from .criterion import BIC
 from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
                        choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, series_for)
-from .error_model import baseline_error_model, check_baseline_length, check_same_sensors, widened_calibration
+from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, check_baseline_length,
+                          check_same_sensors, widened_calibration)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
 from .onset_profile import refine_verdict
 from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
-from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
+from .residual import LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
 from .sensor_screen import SensorScreen, corrected_record
 
@@ -192,7 +193,8 @@ class Discovery:
                                       fitter=dataclasses.replace(self.fitter, pair_starts=starts))
         resolved._error_model = error_model
         diagnosis = resolved.fit(model, measured, dt_s=dt_s)
-        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0]) is not None:
+        floor = None if error_model is None else error_model.floor_K
+        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0], floor) is not None:
             return None
         diagnosis.iterations[0].explanation += (
             f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
@@ -348,7 +350,9 @@ class Discovery:
                                   viewed.spec.interface,
                                   "the sensor noise" if error_model is None else "the discrepancy floor",
                                   None if error_model is None else
-                                  {e.sensor: max(e.level_K, noise) for e in error_model.sensors})
+                                  {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
+                                  (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR) if error_model is None else
+                                  (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
         residual["noise_K"] = noise
         if error_model is not None:
             residual["floor_K"] = error_model.floor_K
@@ -360,7 +364,7 @@ class Discovery:
                     f"{NOISE_FLOOR_FACTOR:g}× the discrepancy floor ({error_model.floor_K:.3f} K, the calibrated "
                     "model's error on the healthy baseline): there is nothing for an effect to explain.")
         self._report(residual["summary"])
-        experiment, other = None, rival(iterations[0])
+        experiment, other = None, rival(iterations[0], None if error_model is None else error_model.floor_K)
         if other is not None and not residual["level_ok"]:
             # neither explanation accounts for the data: separating them would tell nothing
             self._report(f"{' + '.join(_explanations(other))} fits about as well, but neither explains the data: "

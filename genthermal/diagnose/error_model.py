@@ -41,6 +41,13 @@ from .criterion import BIC
 MIN_BASELINE_S = 3600.0
 #: ... and it must span this many correlation times of its residual.
 MIN_CORRELATION_TIMES = 10.0
+#: Against the floor, the residual after the findings is "unexplained" above this many floors over
+#: every sensor, or above :data:`STRUCTURE_OVER_FLOOR` of its own floor on one sensor with structure
+#: (:func:`~genthermal.diagnose.residual.residual_tests`): a calibrated model's error on another
+#: mission than its baseline's is larger than on the baseline (up to 3 × on the healthy
+#: independent records), which is not missing physics.
+UNEXPLAINED_OVER_FLOOR = 3.0
+STRUCTURE_OVER_FLOOR = 4.0
 #: Largest lag-1 autocorrelation used (a residual that never decorrelates has no effective samples).
 MAX_PHI = 0.995
 

@@ -57,7 +57,8 @@ def _regressors(series: MeasuredSeries, output_names, interface) -> dict:
 
 
 def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names, interface,
-                   reference: str = "the sensor noise", levels: dict | None = None) -> dict:
+                   reference: str = "the sensor noise", levels: dict | None = None,
+                   factors: tuple = (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR)) -> dict:
     """Run the three tests of the module docstring on ``predicted - series.outputs``.
 
     Parameters
@@ -76,6 +77,10 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     levels : dict, optional
         Sensor → its own level (K, its discrepancy floor) for the per-sensor tests; default
         ``noise`` for every sensor.
+    factors : (float, float)
+        The level test's factor on ``noise`` and the structure test's on each sensor's level
+        (default :data:`LEVEL_FACTOR`, :data:`STRUCTURE_LEVEL_FACTOR`; against the discrepancy
+        floor the diagnosis uses those of :mod:`genthermal.diagnose.error_model`).
 
     Returns
     -------
@@ -89,7 +94,8 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     window = max(1, int(round(SMOOTHING_S / series.dt_s)))
     per_sensor, largest = {}, None
     overall = float(np.sqrt(np.nanmean(residual ** 2)))
-    level_ok = bool(overall <= LEVEL_FACTOR * noise)
+    level_factor, structure_factor = factors
+    level_ok = bool(overall <= level_factor * noise)
     levels = levels or {}
     for name, e in zip(output_names, residual):
         own = max(float(levels.get(name, noise)), 1e-12)
@@ -99,7 +105,7 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
         lag1 = float(centred[1:] @ centred[:-1] / max(centred @ centred, 1e-300))
         correlations = {r: correlation(e, v) for r, v in regressors.items()}
         follows = max(correlations, key=lambda r: abs(correlations[r]))
-        structured = (rmse > STRUCTURE_LEVEL_FACTOR * own and lag1 > MAX_AUTOCORRELATION
+        structured = (rmse > structure_factor * own and lag1 > MAX_AUTOCORRELATION
                       and abs(correlations[follows]) > MAX_CORRELATION)
         per_sensor[name] = {"rmse_K": rmse, "rmse_over_noise": rmse / own,
                             "lag1_autocorrelation": lag1, "correlations": correlations, "follows": follows,
@@ -112,7 +118,7 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     unexplained = not level_ok or any(s["structured"] for s in per_sensor.values())
     return {"unexplained": bool(unexplained), "rmse_K": overall, "rmse_over_noise": overall / noise if noise > 0
             else float("inf"), "level_ok": level_ok, "per_sensor": per_sensor, "largest": largest,
-            "thresholds": {"rmse_over_noise_at_most": LEVEL_FACTOR, "structure_rmse_over_noise": STRUCTURE_LEVEL_FACTOR,
+            "thresholds": {"rmse_over_noise_at_most": level_factor, "structure_rmse_over_noise": structure_factor,
                            "lag1_autocorrelation_at_most": MAX_AUTOCORRELATION,
                            "abs_correlation_at_most": MAX_CORRELATION},
             "summary": _summary(per_sensor, largest, overall / noise if noise > 0 else float("inf"), unexplained,
