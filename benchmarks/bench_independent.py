@@ -16,7 +16,8 @@ the record's truth file:
   model (``residual.floor_K`` of the JSON);
 * ``wall_s``: wall time of the command (the machine may be shared: see ``load_avg``).
 
-``--plants K`` adds K healthy records of genthermal's own nonlinear model with its convection,
+``--faults`` adds ``healthy_mission_B`` with each sensor fault of :data:`INJECTED_FAULTS` injected
+(right: that sensor blamed, no machine effect). ``--plants K`` adds K healthy records of genthermal's own nonlinear model with its convection,
 flow, losses, conductivities and heat capacities 10-30 % off, each diagnosed with its own healthy
 baseline (any claim on them is false).
 
@@ -218,6 +219,51 @@ def run_plant(index: int, workers: int, timeout_s: float) -> dict:
     return result
 
 
+#: Sensor faults injected into ``healthy_mission_B`` (``--faults``): (sensor, kind, value, onset s).
+INJECTED_FAULTS = (("T_iron", "drift", 1.6, 5400.0), ("T_winding_v", "bias", 2.5, 4300.0),
+                   ("T_inlet", "bias", 3.0, 7200.0), ("T_ambient", "drift", -2.0, 3600.0),
+                   ("T_outlet", "stuck", 0.0, 7900.0))
+
+
+def run_fault(index: int, workers: int, timeout_s: float) -> dict:
+    """Diagnose ``healthy_mission_B`` with one sensor fault of :data:`INJECTED_FAULTS` injected:
+    right when that sensor is blamed and no machine effect is claimed."""
+    import pandas as pd
+
+    from genthermal.sensor_faults import SensorFault, inject_sensor_faults
+
+    sensor, kind, value, onset = INJECTED_FAULTS[index]
+    fault = SensorFault(sensor, kind, value, onset)
+    name = f"healthy_mission_B+{sensor}_{kind}"
+    with tempfile.TemporaryDirectory() as folder:
+        data = Path(folder) / "record.csv"
+        inject_sensor_faults(pd.read_csv(RECORDS / "data" / "healthy_mission_B.csv"), [fault]).to_csv(data, index=False)
+        out = Path(folder) / "diagnosis.json"
+        command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline",
+                   str(RECORDS / "data" / "healthy_baseline.csv"), "--iterate", "--json", str(out),
+                   "--workers", str(workers)]
+        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        start = time.perf_counter()
+        process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
+        wall = time.perf_counter() - start
+        if process.returncode != 0 or not out.exists():
+            return {"record": name, "category": "sensor_fault", "verdict": "wrong", "wall_s": wall,
+                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        document = json.loads(out.read_text())
+    claims = claims_of(document)
+    blamed = claims["sensors"]
+    right_sensor = any(b == sensor for b in blamed)
+    others = [b for b in blamed if b != sensor]
+    verdict = "right" if right_sensor and not claims["machine"] and not others else \
+        "partly" if right_sensor else "wrong"
+    return {"record": name, "category": "sensor_fault", "injected": fault.describe(), "verdict": verdict,
+            "claimed_machine": claims["machine"], "claimed_sensors": blamed,
+            "false_claims": claims["machine"] + others, "n_false_claims": len(claims["machine"]) + len(others),
+            "rmse_after_K": document.get("rmse_final"), "floor_K": document.get("residual", {}).get("floor_K"),
+            "wall_s": round(wall, 1), "duration_h": document["samples"] * document["dt_s"] / 3600.0,
+            "load_avg": round(os.getloadavg()[0], 2)}
+
+
 def summary(results: list) -> dict:
     """Counts over the records: verdicts, false claims on the no-claim set, onset and RMSE figures."""
     verdicts = {k: sum(r["verdict"] == k for r in results) for k in ("right", "partly", "wrong")}
@@ -238,24 +284,28 @@ def summary(results: list) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--records", nargs="*", help="record names (default: all of independent_batch1)")
+    parser.add_argument("--records", nargs="*", help="record names (default: all of independent_batch1; "
+                        "none with an empty list, to run only --plants or --faults)")
     parser.add_argument("--workers", type=int, default=1, help="diagnose --workers (default 1)")
     parser.add_argument("--jobs", type=int, default=1, help="records run side by side (default 1)")
     parser.add_argument("--timeout", type=float, default=1800.0, help="seconds per record before it is failed")
     parser.add_argument("--out", help="also write the JSON lines to this file")
+    parser.add_argument("--faults", action="store_true",
+                        help="also diagnose healthy_mission_B with each sensor fault of INJECTED_FAULTS injected")
     parser.add_argument("--plants", type=int, default=0,
                         help="also diagnose this many healthy records of genthermal plants 10-30 %% off")
     args = parser.parse_args(argv)
     if not RECORDS.is_dir():
         print(json.dumps({"error": f"records not found: {RECORDS.resolve()}"}))
         return 2
-    names = args.records or sorted(p.stem for p in (RECORDS / "data").glob("*.csv"))
+    names = sorted(p.stem for p in (RECORDS / "data").glob("*.csv")) if args.records is None else args.records
     unknown = [n for n in names if not (RECORDS / "data" / f"{n}.csv").exists()]
     if unknown:
         print(json.dumps({"error": f"unknown record {unknown[0]}"}))
         return 2
     lines = []
-    tasks = [(run_record, n) for n in names] + [(run_plant, k) for k in range(args.plants)]
+    tasks = ([(run_record, n) for n in names] + [(run_plant, k) for k in range(args.plants)]
+             + [(run_fault, k) for k in range(len(INJECTED_FAULTS) if args.faults else 0)])
     with ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         for result in pool.map(lambda task: task[0](task[1], args.workers, args.timeout), tasks):
             line = json.dumps(result)

@@ -2,7 +2,8 @@
 
 Fast tests build residuals and readings by hand; those on the independent records of
 ``../shared/records/independent_batch1`` run the command line and are marked slow (a few minutes
-each on a shared machine); they skip when ``../shared`` is absent.
+each on a shared machine, the bad-input ones 20-40 s for loading the model); they skip when
+``../shared`` is absent.
 """
 
 from __future__ import annotations
@@ -194,6 +195,7 @@ def _diagnose(tmp_path, name: str, *extra) -> tuple[int, dict]:
     return code, (json.loads(out.read_text()) if out.exists() else {})
 
 
+@pytest.mark.slow
 def test_cli_refuses_a_baseline_of_another_sensor_set(tmp_path, capsys):
     from genthermal.cli import main
 
@@ -207,6 +209,7 @@ def test_cli_refuses_a_baseline_of_another_sensor_set(tmp_path, capsys):
     assert not (tmp_path / "d.json").exists()
 
 
+@pytest.mark.slow
 def test_cli_refuses_a_baseline_too_short_for_the_error_model(tmp_path, capsys):
     from genthermal.cli import main
 
@@ -237,3 +240,6 @@ def test_blockage_is_named_without_an_absurd_sensor_fault(tmp_path):
     assert any("beyond" in r["refused"] for r in document["refused_sensor_faults"])
     onset = document["found"][0]["onset_s"]
     assert abs(onset - 3900.0) <= 600.0
+    machine = [c for c in document["claims"] if c["kind"] == "machine_effect"]
+    assert machine and all(c["evidence"] and c["confidence"] in ("strong", "moderate") for c in machine)
+    assert {c["kind"] for c in document["claims"]} <= {"machine_effect", "unexplained"}
