@@ -27,6 +27,10 @@ An effect is *significant* when all four hold:
   :math:`RMSE_{before}^2 - RMSE_{after}^2 \ge \tfrac12(RMSE_{before}^2 - \hat\sigma^2)`: an effect
   that only nibbles at a misfit is not the missing physics.
 
+With a healthy baseline the score is the BIC on effective samples of the calibrated model's
+error and :math:`\hat\sigma` is the discrepancy floor (:mod:`genthermal.diagnose.error_model`);
+an effect fitted outside its plausible range (:func:`implausible_reason`) is never significant.
+
 The verdict is the best-ranked significant effect, else ``"none"``. When the phase sensors are
 fitted one by one (:mod:`genthermal.diagnose.phase_winding`), the three practical tests pass on
 every sensor or on the design sensors, the phase sensors averaged

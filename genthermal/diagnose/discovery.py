@@ -237,8 +237,12 @@ class Discovery:
         data : MeasurementData, pandas.DataFrame or path
             The measurements to explain.
         baseline : MeasurementData, pandas.DataFrame or path, optional
-            Healthy measurements of the same machine: ``baseline_parameters`` are calibrated on
-            them first, so that what remains in ``data`` is the effect.
+            Healthy measurements of the same machine and sensors: ``baseline_parameters`` are
+            calibrated on them first, so that what remains in ``data`` is the effect; the
+            calibrated model's error on them (:mod:`~genthermal.diagnose.error_model`) then scores
+            every hypothesis (effective samples, tests against the discrepancy floor) and widens
+            the calibration's intervals. A baseline of other sensors, or shorter than the error
+            model needs, is refused (InputError).
         dt_s : float, optional
             Resample the data (and baseline) to this period first, s.
 

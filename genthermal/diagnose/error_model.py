@@ -40,7 +40,7 @@ from .criterion import BIC
 #: Shortest healthy baseline the error model is estimated from, s.
 MIN_BASELINE_S = 3600.0
 #: ... and it must span this many correlation times of its residual.
-MIN_CORRELATION_TIMES = 10.0
+MIN_CORRELATION_TIMES = 5.0
 #: Against the floor, the residual after the findings is "unexplained" above this many floors over
 #: every sensor, or above :data:`STRUCTURE_OVER_FLOOR` of its own floor on one sensor with structure
 #: (:func:`~genthermal.diagnose.residual.residual_tests`): a calibrated model's error on another
