@@ -112,6 +112,10 @@ def score(name: str, truth: dict, document: dict) -> dict:
         else:
             verdict = "wrong"
         false_claims = sorted(confident - nearest) + sensors
+    elif category == "control":
+        # the record lacks what the model has (the copper resistance rise): no catalogue effect can
+        # remove it, an open-search term may describe it
+        verdict = "right" if not machine and not sensors else "wrong"
     elif not expected:
         false_claims += [f"open search: {t}" for t in claims["open_terms"]]
         if not machine and not sensors and not claims["open_terms"]:
@@ -138,7 +142,7 @@ def score(name: str, truth: dict, document: dict) -> dict:
     rmse = document.get("rmse_final")
     return {"record": name, "category": category, "expected": sorted(expected), "verdict": verdict,
             "claimed_machine": sorted(machine), "claimed_sensors": sensors, "unexplained": claims["unexplained"],
-            "open_terms": claims["open_terms"], "false_claims": false_claims, "n_false_claims": len(false_claims),
+            "open_terms": claims["open_terms"], "lookalike": sorted(lookalike), "false_claims": false_claims, "n_false_claims": len(false_claims),
             "onset_error_min": onset_error, "rmse_after_K": rmse, "floor_K": floor,
             "rmse_over_floor": (rmse / floor) if (rmse is not None and floor) else None}
 
