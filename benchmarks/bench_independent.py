@@ -5,8 +5,8 @@ record of ``../shared/records/independent_batch1/`` (or ``--records``) and score
 the record's truth file:
 
 * ``verdict``: ``right`` (the machine effects claimed are the true ones, mapped to genthermal's
-  names, and no sensor is blamed; for a single effect, a flagged look-alike that contains the true
-  effect counts too; for the stretch records, "not explained by the catalogue" with an open-search
+  names, and no sensor is blamed; for a single effect, a single effect claimed with a flagged look-alike that contains the true effect counts
+  too; for the stretch records, "not explained by the catalogue" with an open-search
   term and no confident catalogue verdict other than the nearest one), ``partly`` (some true effect
   named, or a healthy record with only an "unexplained" flag), ``wrong``;
 * ``false_claims``: claims (machine effects or sensor faults; on a record without an effect also
@@ -124,7 +124,7 @@ def score(name: str, truth: dict, document: dict) -> dict:
             verdict = "wrong"
     elif machine == expected and not sensors:
         verdict = "right"
-    elif len(expected) == 1 and expected <= lookalike and machine & lookalike and not sensors:
+    elif len(expected) == 1 and len(machine) == 1 and expected <= lookalike and machine <= lookalike and not sensors:
         verdict = "right"
         false_claims = sensors
     elif machine & expected:
