@@ -5,10 +5,12 @@ record of ``../shared/records/independent_batch1/`` (or ``--records``) and score
 the record's truth file:
 
 * ``verdict``: ``right`` (the machine effects claimed are the true ones, mapped to genthermal's
-  names, and no sensor is blamed; for a single effect, a single effect claimed with a flagged look-alike that contains the true effect counts
-  too; for the stretch records, "not explained by the catalogue" with an open-search
-  term and no confident catalogue verdict other than the nearest one), ``partly`` (some true effect
-  named, or a healthy record with only an "unexplained" flag), ``wrong``;
+  names, and no sensor is blamed; for a single-effect record, one effect claimed with a flagged
+  look-alike that contains the true one counts too; for the stretch records, "not explained by
+  the catalogue" with an open-search term in the right node group (:data:`STRETCH_GROUPS`) and no
+  confident catalogue verdict, a flagged look-alike being none; for the control record without
+  the copper resistance rise, no catalogue or sensor claim), ``partly`` (some true effect named or
+  flagged, or a healthy record with only an "unexplained" flag), ``wrong``;
 * ``false_claims``: claims (machine effects or sensor faults; on a record without an effect also
   open-search terms) that are not in the truth;
 * ``onset_error_min``: per true effect with an onset after the start, |fitted - true| onset, min;
