@@ -1,9 +1,10 @@
 """The open search as the diagnosis' next step: when the catalogue leaves the residual unexplained.
 
 :func:`open_followup` searches the generic library of heat flows and conductance changes
-(:func:`~genthermal.diagnose.open_search.heat_flow_library`) on the model with the catalogue's
-findings (and the baseline's calibration), with the same error model and criterion, single terms
-with their onsets. It returns the JSON section ``open_search`` of ``genthermal diagnose``: each
+(:func:`~genthermal.diagnose.open_search.heat_flow_library`) in place of the catalogue, on the
+model as calibrated on the baseline, with the same error model and criterion, single terms with
+their onsets: an alternative to the catalogue's findings, not a term on top of them (a model with
+the findings applied would hold them from the first sample, not from their onsets). It returns the JSON section ``open_search`` of ``genthermal diagnose``: each
 significant term with its node group, form, size, onset, plain-language text and the Python code
 that keeps it as an effect.
 """
@@ -29,7 +30,7 @@ def _group_and_form(effect_name: str) -> tuple[str, str]:
 
 
 def open_followup(discovery, diagnosis, data, dt_s=None) -> dict:
-    """Search the open library on ``diagnosis.improved_model()`` against ``data``.
+    """Search the open library on ``diagnosis.model`` (the calibrated model) against ``data``.
 
     Parameters
     ----------
@@ -48,7 +49,7 @@ def open_followup(discovery, diagnosis, data, dt_s=None) -> dict:
         ``ran``, ``terms`` (``term``, ``group``, ``form``, ``params``, ``onset_s``, ``text``,
         ``code``), ``rmse_before``, ``rmse_after``, ``verdict``, ``unexplained`` after the terms.
     """
-    model = diagnosis.improved_model()
+    model = diagnosis.model
     library = Catalogue.of(list(heat_flow_library(model).values()))
     follow = discovery.with_settings(candidates=library, iterate=False, sensor_faults=False,
                                      design_experiment=False,
