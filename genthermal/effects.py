@@ -56,6 +56,10 @@ class EffectParameter:
         Physical bounds (inclusive), also the bounds used when the parameter is fitted.
     typical : float or None
         A clearly-active value, used to start a fit and in examples.
+    plausible : (float, float) or None
+        The range a real machine's effect can take (documented in ``docs/guide/evidence.md``):
+        a diagnosis claims no effect fitted outside it (the fit's ``lower``/``upper`` are wider,
+        so that a misfit pushed to an absurd value shows as such). None: the physical bounds.
     """
 
     name: str
@@ -64,6 +68,12 @@ class EffectParameter:
     lower: float
     upper: float
     typical: float | None = None
+    plausible: tuple | None = None
+
+    def is_plausible(self, value: float) -> bool:
+        """Whether ``value`` lies in :attr:`plausible` (the physical bounds when None)."""
+        low, high = self.plausible if self.plausible is not None else (self.lower, self.upper)
+        return bool(low <= value <= high)
 
     def as_parameter(self, value: float, effect: str, provenance: str, source: str) -> Parameter:
         """The :class:`~genthermal.parameters.Parameter` carrying ``value`` for ``effect``."""
@@ -122,6 +132,17 @@ class Effect:
     def all_parameters(self) -> tuple[EffectParameter, ...]:
         """The switching parameters followed by the shape parameters."""
         return self.parameters + self.shape_parameters
+
+    def implausible(self, values) -> str | None:
+        """Why fitted ``values`` (parameter name -> value) are no finding for a real machine: the
+        first parameter outside its plausible range, in plain language; None when all are in."""
+        for parameter in self.parameters:
+            value = values.get(parameter.name)
+            if value is not None and not parameter.is_plausible(float(value)):
+                low, high = parameter.plausible or (parameter.lower, parameter.upper)
+                return (f"{self.name}: {parameter.name} = {float(value):.4g} {parameter.unit} lies outside its "
+                        f"plausible range [{low:g}, {high:g}]")
+        return None
 
     def unavailable_reason(self, model) -> str | None:
         """Why this effect cannot be added to ``model``, or None when it can."""
@@ -288,18 +309,18 @@ def _end_winding_stray(network, roles, R_stray):
 for _effect in (
     Effect("copper_resistance_temperature", "winding resistance rises with its own temperature",
            r"R = R_{ref}\,(1 + \alpha_R(\theta_w - \theta_{ref}))",
-           (EffectParameter("alpha_R", 0.0, "1/K", 0.0, 0.02, 0.0039),), _resistance_temperature,
+           (EffectParameter("alpha_R", 0.0, "1/K", 0.0, 0.02, 0.0039, (0.002, 0.006)),), _resistance_temperature,
            "error grows with winding temperature at constant current: resistance rises with temperature",
            _needs_symbol("theta_ref", "temperature-dependent resistance"), needs=(Role.LOAD_CURRENTS,)),
     Effect("quadratic_copper_loss", "copper loss follows I^2 instead of the linearised a I + b",
            r"P = (1-\lambda)\,R(aI + b) + \lambda\,R I^2",
-           (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0),), _quadratic_copper,
+           (EffectParameter("lambda_I2", 0.0, "1", 0.0, 1.0, 1.0, (0.0, 1.0)),), _quadratic_copper,
            "error changes sign between low and high currents: the loss is quadratic in current",
            _needs_symbol("I2_slope", "the quadratic copper loss"), needs=(Role.LOAD_CURRENTS,)),
     Effect("coolant_flow_reduction",
            "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
            r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
-           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5),), _flow_reduction,
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.97)),), _flow_reduction,
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
            # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
            # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
@@ -307,27 +328,27 @@ for _effect in (
            needs=(Role.COOLANT_FLOW, Role.INTERNAL_CONVECTION)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",
-           (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3),), _phase_short,
+           (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3, (0.0, 2.0)),), _phase_short,
            "winding runs hot after an onset, in proportion to I^2, iron follows: an extra winding loss",
            needs=(Role.SLOT_WINDING, Role.PHASE_CURRENTS)),
     Effect("excitation_iron_loss", "iron loss grows with the excitation current squared",
            r"q_{iron} \mathrel{+}= k_{exc} I_{exc}^2",
-           (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0),), _excitation_iron,
+           (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0, (0.0, 100.0)),), _excitation_iron,
            "iron error follows I_exc^2 more than I^2: iron loss depends on excitation",
            needs=(Role.IRON, Role.EXCITATION_CURRENT)),
     Effect("winding_insulation_degradation", "winding-to-core conductance multiplied by a factor",
            r"G_{w,core} \to k_{ins}\,G_{w,core}",
-           (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5),), _scale_links(Role.WINDING_INSULATION),
+           (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5, (0.2, 0.97)),), _scale_links(Role.WINDING_INSULATION),
            "winding hotter and iron cooler than modelled, more so at high load: winding-to-core path changed",
            needs=(Role.WINDING_INSULATION,)),
     Effect("end_winding_stray_loss", "extra stray loss R_stray I^2 in the end windings",
            r"q_{ew} \mathrel{+}= R_{stray} \sum_p I_p^2",
-           (EffectParameter("R_stray", 0.0, "ohm", 0.0, 5.0, 0.2),), _end_winding_stray,
+           (EffectParameter("R_stray", 0.0, "ohm", 0.0, 5.0, 0.2, (0.0, 1.5)),), _end_winding_stray,
            "winding error proportional to I^2 from the start, iron barely affected: an extra end-winding loss",
            needs=(Role.END_WINDINGS, Role.LOAD_CURRENTS)),
     Effect("frame_cooling_change", "frame-to-ambient conductance multiplied by a factor",
            r"G_{f,amb} \to k_{frame}\,G_{f,amb}",
-           (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0),), _scale_links(Role.FRAME_TO_AMBIENT),
+           (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0, (0.5, 5.0)),), _scale_links(Role.FRAME_TO_AMBIENT),
            "slow error that follows ambient temperature and the frame: external cooling changed",
            needs=(Role.FRAME_TO_AMBIENT,)),
 ):

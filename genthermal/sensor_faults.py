@@ -37,6 +37,43 @@ from .errors import InputError
 SENSOR_FAULT_KINDS = {"bias": "K", "drift": "K/h", "stuck": "°C", "gain": "(relative)", "noise": "(factor)"}
 
 
+#: Largest fault a faulty but still reading resistance thermometer shows, by sensor kind and fault
+#: kind (bias K, drift K/h, gain relative; a stuck reading must lie in :data:`STUCK_RANGE_C`). A
+#: larger error is a broken element or lead, which reads open or short circuit (a stuck or absurd
+#: value the logger flags), not a slightly wrong temperature. Sources and reasoning:
+#: ``docs/guide/evidence.md``.
+SENSOR_FAULT_BOUNDS = {"air": {"bias": 10.0, "drift": 5.0, "gain": 0.05},
+                       "winding": {"bias": 15.0, "drift": 10.0, "gain": 0.05},
+                       "iron": {"bias": 15.0, "drift": 10.0, "gain": 0.05}}
+#: Readings a stuck sensor can hold, °C (beyond: an open or shorted element, not a temperature).
+STUCK_RANGE_C = (-40.0, 200.0)
+
+
+def sensor_kind(sensor: str) -> str:
+    """``"air"`` (inlet, ambient, outlet), ``"winding"`` or ``"iron"`` for a sensor's name
+    (column or model output); an unknown name is treated as ``"winding"`` (the widest bounds)."""
+    name = sensor.lower()
+    if any(word in name for word in ("inlet", "ambient", "outlet", "air", "coolant")):
+        return "air"
+    return "iron" if "iron" in name or "core" in name or "stator" in name else "winding"
+
+
+def fault_bound_reason(fault: "SensorFault") -> str | None:
+    """Why ``fault`` is larger than a sensor of its kind can be wrong (:data:`SENSOR_FAULT_BOUNDS`),
+    in plain language; None when it is within the bounds."""
+    if fault.kind == "stuck":
+        low, high = STUCK_RANGE_C
+        if fault.value != 0.0 and not low <= fault.value <= high:
+            return f"a reading stuck at {fault.value:.1f} °C is outside [{low:g}, {high:g}] °C"
+        return None
+    kind = sensor_kind(fault.sensor)
+    bound = SENSOR_FAULT_BOUNDS[kind].get(fault.kind)
+    if bound is not None and abs(fault.value) > bound:
+        return (f"{fault.describe()}: beyond the {bound:g} {fault.unit} a faulty {kind} sensor can be off "
+                f"({fault.kind})")
+    return None
+
+
 @dataclasses.dataclass(frozen=True)
 class SensorFault:
     """One sensor fault (module docstring).

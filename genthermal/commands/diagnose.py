@@ -29,6 +29,9 @@ def register(subparsers) -> None:
                         help="processes fitting candidates side by side (default: up to 2 cores)")
     parser.add_argument("--phases", choices=("auto", "resolved", "lumped"), default="auto",
                         help="fit one winding node per phase sensor: when they differ (auto), always, never")
+    parser.add_argument("--no-open-search", action="store_true",
+                        help="when the catalogue leaves the residual unexplained, do not search the open library "
+                             "of heat flows and conductance changes")
     parser.set_defaults(func=run)
 
 
@@ -44,8 +47,16 @@ def run(args) -> int:
         discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
                               progress=lambda line: say(f"  ... {line}"))
         result = discovery.fit(model, data, baseline=baseline, dt_s=data_step(args))
+    if result.unexplained and not args.no_open_search:
+        from ..diagnose.open_followup import open_followup
+
+        with working("open search"):
+            say("  ... the catalogue leaves the residual unexplained: searching the open library of heat flows")
+            result.open_search = open_followup(discovery, result, data, data_step(args))
     document = result.to_dict()
-    print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K")
+    floor = document["residual"].get("floor_K")
+    print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K"
+          + (f", discrepancy floor {floor:.3f} K (the calibrated model's error on the baseline)" if floor else ""))
     for c in document["ranked"]:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in c["params"].items())
         print(f"  {c['effect']:>32s}: {params:<22s} onset {c['onset_s'] / 3600:5.2f} h  RMSE "
@@ -58,7 +69,18 @@ def run(args) -> int:
         print(f"  round {k}: RMSE {iteration['rmse_before']:.3f} K, added {iteration['added'] or 'nothing'}")
     for fault in document["sensor_faults"]:
         print(f"  sensor fault: {fault['text']} (ΔBIC {fault['delta_ic']:.0f}, by {fault['evidence']})")
+    for refused in document.get("refused_sensor_faults", []):
+        print(f"  refused sensor fault: {refused['refused']}")
     print(f"verdict: {document['verdict']}")
+    if document.get("open_search"):
+        terms = document["open_search"]["terms"]
+        lead = ("not explained by the catalogue" if not document["found"] else
+                f"{' + '.join(f['effect'] for f in document['found'])} leaves the residual unexplained")
+        print(f"{lead}; open search ({document['open_search']['library_size']} terms): "
+              + ("; ".join(t["text"] for t in terms) if terms else "no term is significant either"))
+        for term in terms:
+            print(f"  to keep {term['term']} as an effect:\n" + "".join(f"    {line}\n" for line in
+                                                                        term["code"].splitlines()))
     print(document["explanation"])
     print(document["residual"]["summary"])
     if args.json:

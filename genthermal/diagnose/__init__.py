@@ -2,6 +2,9 @@
 
 * :func:`~genthermal.diagnose.compare.compare` — simulate on the measured inputs; metrics and where
   the model fails;
+* :class:`~genthermal.diagnose.error_model.ErrorModel` — the calibrated model's error on a healthy
+  baseline (AR(1) per sensor, the discrepancy floor) and :class:`~genthermal.diagnose.error_model.WhitenedBIC`,
+  the evidence on effective samples that scores every hypothesis of a diagnosis with a baseline;
 * :func:`~genthermal.diagnose.calibrate.calibrate` — least squares (IPOPT, exact derivatives) over
   named parameters with confidence intervals and identifiability warnings;
 * :class:`~genthermal.diagnose.discovery.Discovery` — candidates (a :class:`Catalogue`), a
@@ -22,6 +25,7 @@ from .calibrate import CalibrationResult, calibrate
 from .catalogue import Catalogue
 from .compare import Comparison, compare
 from .criterion import AIC, BIC
+from .error_model import ErrorModel, WhitenedBIC
 from .discover import Diagnosis, diagnose
 from .discovery import Discovery
 from .experiment import SeparatingExperiment, separating_experiment
@@ -32,7 +36,8 @@ from .phase_winding import phase_resolved
 from .sensor_view import SensorView
 from .report import run_discovery_demo, write_compare_report, write_diagnosis_report
 
-__all__ = ["AIC", "BIC", "CalibrationResult", "Catalogue", "Comparison", "Diagnosis", "Discovery", "HiddenEffectCase",
+__all__ = ["AIC", "BIC", "CalibrationResult", "Catalogue", "Comparison", "Diagnosis", "Discovery", "ErrorModel",
+           "HiddenEffectCase", "WhitenedBIC",
            "Injection", "OnsetFitter", "SensorView", "SeparatingExperiment", "calibrate", "compare", "describe_term", "diagnose", "effect_code", "heat_flow_library",
            "make_hidden_effect_case", "open_search", "phase_resolved", "run_discovery_demo", "separating_experiment",
            "write_compare_report", "write_diagnosis_report"]

@@ -27,6 +27,10 @@ An effect is *significant* when all four hold:
   :math:`RMSE_{before}^2 - RMSE_{after}^2 \ge \tfrac12(RMSE_{before}^2 - \hat\sigma^2)`: an effect
   that only nibbles at a misfit is not the missing physics.
 
+With a healthy baseline the score is the BIC on effective samples of the calibrated model's
+error and :math:`\hat\sigma` is the discrepancy floor (:mod:`genthermal.diagnose.error_model`);
+an effect fitted outside its plausible range (:func:`implausible_reason`) is never significant.
+
 The verdict is the best-ranked significant effect, else ``"none"``. When the phase sensors are
 fitted one by one (:mod:`genthermal.diagnose.phase_winding`), the three practical tests pass on
 every sensor or on the design sensors, the phase sensors averaged
@@ -87,11 +91,25 @@ def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise:
                 and rmse_before ** 2 - rmse_after ** 2 >= MIN_EXCESS_EXPLAINED * (rmse_before ** 2 - noise ** 2))
 
 
+def implausible_reason(candidate) -> str | None:
+    """Why a Candidate or JointCandidate's fitted values are no finding: the first effect fitted
+    outside its plausible range (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    for name, values in _explanations(candidate).items():
+        effect = CATALOGUE.get(name)
+        reason = effect.implausible(values) if effect is not None else None
+        if reason:
+            return reason
+    return None
+
+
 def is_significant(candidate: Candidate, noise: float, evidence_limit: float = DELTA_BIC_LIMIT,
                    design: DesignSensorScale | None = None) -> bool:
     """The four tests of the module docstring, against the model without the candidate; with
     ``design`` (phase sensors fitted one by one), the practical tests pass on every sensor or on
-    the design sensors (:mod:`genthermal.diagnose.design_scale`)."""
+    the design sensors (:mod:`genthermal.diagnose.design_scale`). A candidate fitted outside its
+    plausible range (:func:`implausible_reason`) is never significant."""
+    if implausible_reason(candidate) is not None:
+        return False
     if passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise, evidence_limit):
         return True
     return design is not None and passes_tests(design.rmse_before, design.rmse(candidate.predicted),
@@ -122,6 +140,8 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
                                                    design.rmse(pair.predicted), delta, design.noise, evidence_limit)
 
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
+        if implausible_reason(pair) is not None:
+            continue
         rivals = [None] + [by_name[e] for e in pair.effects] + [best_single]
         if all(beats(pair, rival) for rival in rivals):
             return pair
@@ -217,6 +237,11 @@ class Diagnosis:
     output_names : list of str
         The sensors fitted, rows of ``series.outputs`` (the model's, or those of its phase-resolved
         winding view, :mod:`genthermal.diagnose.phase_winding`, when the record's phases differ).
+    error_model : ErrorModel or None
+        The calibrated model's error on the baseline (:mod:`genthermal.diagnose.error_model`).
+    open_search : dict or None
+        The open search run after the catalogue left the residual unexplained
+        (:func:`~genthermal.diagnose.open_followup.open_followup`).
     """
 
     model: ThermalModel
@@ -231,6 +256,8 @@ class Diagnosis:
     criterion: str = "BIC"
     output_names: list = dataclasses.field(default_factory=list)
     sensor_screen: object = None
+    error_model: object = None
+    open_search: dict | None = None
 
     def __post_init__(self):
         self.output_names = list(self.output_names) or list(self.model.output_names)
@@ -266,6 +293,36 @@ class Diagnosis:
         chosen = self.iterations[0].added_pair or self.iterations[0].added
         return list(chosen.onset_profiles) if chosen is not None else []
 
+    def claims(self) -> list:
+        """Every claim with its kind (``machine_effect``, ``sensor_fault``, ``unexplained``), what it
+        says, its evidence and its confidence (the criterion's change: ``strong`` below twice the
+        evidence limit, else ``moderate``; ``unexplained`` has the residual's level instead)."""
+        claims = []
+        rounds = {e: it for it in self.iterations for e in it.added_effects}
+        for found in self.found:
+            iteration = rounds.get(found.effect, self.iterations[0])
+            chosen = iteration.added_pair or iteration.added
+            delta = chosen.delta_bic if chosen is not None else float("nan")
+            claims.append({"kind": "machine_effect", "effect": found.effect, "params": found.values,
+                           "onset_s": found.onset_s, "evidence": f"{self.criterion} change {delta:.1f} on the record",
+                           "delta_ic": delta, "confidence": "strong" if delta < 2 * DELTA_BIC_LIMIT else "moderate"})
+        for fault in (self.sensor_screen.found if self.sensor_screen is not None else []):
+            claims.append({"kind": "sensor_fault", "sensor": fault.fault.sensor, "text": fault.fault.describe(),
+                           "evidence": fault.evidence, "delta_ic": fault.delta_bic,
+                           "confidence": "strong" if fault.evidence in ("redundancy", "frozen") or
+                           fault.delta_bic < 2 * DELTA_BIC_LIMIT else "moderate"})
+        if self.unexplained:
+            terms = (self.open_search or {}).get("terms", [])
+            text = "not explained by the catalogue" if not self.found else \
+                f"{' + '.join(f.effect for f in self.found)} leaves a residual the catalogue does not explain"
+            claims.append({"kind": "unexplained", "text": text, "residual": self.residual.get("summary", ""),
+                           "evidence": "residual tests", "rmse_K": self.residual.get("rmse_K"),
+                           "floor_K": self.residual.get("floor_K"),
+                           "open_search_terms": [{k: t[k] for k in ("group", "form", "params", "onset_s", "text")}
+                                                 for t in terms],
+                           "confidence": "level"})
+        return claims
+
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""
         first = self.iterations[0]
@@ -289,6 +346,9 @@ class Diagnosis:
             "experiment": self.experiment.to_dict() if self.experiment else None,
             "sensor_faults": self.sensor_screen.to_list() if self.sensor_screen is not None else [],
             "sensor_error_limits_K": dict(self.sensor_screen.limits) if self.sensor_screen is not None else {},
+            "open_search": self.open_search,
+            "refused_sensor_faults": self.sensor_screen.refused_list() if self.sensor_screen is not None else [],
+            "claims": self.claims(),
             "baseline_calibration": self.calibration.to_dict() if self.calibration else None,
         }
 
@@ -301,9 +361,17 @@ AMBIGUITY_BIC = 10.0
 AMBIGUITY_RMSE = 0.02
 
 
-def look_alike(chosen, other) -> bool:
+#: With an error model, two explanations that both leave at most this many discrepancy floors
+#: explain the data equally well: the model's own error cannot rank them.
+AMBIGUITY_FLOOR = 1.5
+
+
+def look_alike(chosen, other, floor: float | None = None) -> bool:
     """True when ``other`` (a Candidate or JointCandidate) explains the data about as well as
-    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`."""
+    ``chosen``: ΔBIC within :data:`AMBIGUITY_BIC` or RMSE within :data:`AMBIGUITY_RMSE`, or, with
+    the discrepancy ``floor`` (K), both within :data:`AMBIGUITY_FLOOR` floors."""
+    if floor is not None and max(chosen.rmse_after, other.rmse_after) <= AMBIGUITY_FLOOR * floor:
+        return implausible_reason(other) is None
     return bool(other.delta_bic - chosen.delta_bic < AMBIGUITY_BIC
                 or other.rmse_after <= (1 + AMBIGUITY_RMSE) * chosen.rmse_after)
 
@@ -313,13 +381,14 @@ def _explanations(candidate) -> dict:
     return dict(candidate.values) if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.values}
 
 
-def rival(iteration: "Iteration"):
-    """The best other explanation that looks alike the one ``iteration`` added, or None."""
+def rival(iteration: "Iteration", floor: float | None = None):
+    """The best other explanation that looks alike the one ``iteration`` added (:func:`look_alike`
+    with the discrepancy ``floor``, K), or None."""
     chosen = iteration.added_pair or iteration.added
     if chosen is None:
         return None
     pool = iteration.pairs if iteration.added_pair else iteration.ranked
-    others = [c for c in pool if c is not chosen and look_alike(chosen, c)]
+    others = [c for c in pool if c is not chosen and look_alike(chosen, c, floor)]
     return min(others, key=lambda c: c.delta_bic) if others else None
 
 
@@ -331,7 +400,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     residual = search.predicted_before - series.outputs
     if candidate is None:
         return (f"No effect is significant: the model explains the data to RMSE {search.rmse_before:.3f} K "
-                f"against an estimated sensor noise of {search.noise:.3f} K; no catalogue effect passes the "
+                f"against an estimated error level of {search.noise:.3f} K (sensor noise, or the discrepancy floor with a baseline); no catalogue effect passes the "
                 "tests of evidence (ΔBIC), size (RMSE reduction) and share of the misfit explained.")
     effect = search.effect(candidate.effect)
     after = np.arange(series.time_s.size) >= candidate.onset_index
@@ -359,7 +428,7 @@ def explain(candidate: Candidate | None, search: EffectSearch, runner_up: Candid
     return (f"{candidate.effect}: {effect.summary}. {when.capitalize()} the model ran {biases}; "
             f"{'; '.join(links)}. That is the signature of this effect: {effect.signature}. "
             f"Fitted {values} (neutral {neutral}); RMSE {candidate.rmse_before:.3f} → {candidate.rmse_after:.3f} K "
-            f"against an estimated noise of {search.noise:.3f} K (ΔBIC = {candidate.delta_bic:.0f})."
+            f"against an error level of {search.noise:.3f} K (ΔBIC = {candidate.delta_bic:.0f})."
             + _ambiguity(candidate, runner_up))
 
 
@@ -374,7 +443,7 @@ def explain_pair(pair: JointCandidate, search: EffectSearch, best_single: Candid
         parts.append(f"{name} ({effect.summary}; {values}, "
                      f"{'from the start' if pair.onset_indices[name] == 0 else f'from t = {onset / 3600:.2f} h'})")
     return (f"Two effects at once: {' and '.join(parts)}, fitted jointly (values and both onsets). RMSE "
-            f"{pair.rmse_before:.3f} → {pair.rmse_after:.3f} K against an estimated noise of {search.noise:.3f} K "
+            f"{pair.rmse_before:.3f} → {pair.rmse_after:.3f} K against an error level of {search.noise:.3f} K "
             f"(ΔBIC = {pair.delta_bic:.0f}); the best single effect, {best_single.effect}, only reached "
             f"{best_single.rmse_after:.3f} K (ΔBIC = {best_single.delta_bic:.0f}), and each effect of the pair is "
             f"needed: the pair passes the significance tests against either effect alone.")

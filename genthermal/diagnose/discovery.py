@@ -35,14 +35,16 @@ from .catalogue import Catalogue
 from .criterion import BIC
 from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
-                       choose_pair, explain, explain_pair, is_significant, rival, series_for)
+                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, series_for)
+from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, check_baseline_length,
+                          check_same_sensors, widened_calibration)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
 from .onset_profile import refine_verdict
 from .phase_winding import phase_sensor
 from .sensor_view import SensorView, view_for
-from .residual import STRUCTURE_LEVEL_FACTOR, residual_tests
+from .residual import LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR, residual_tests
 from .search import EffectSearch, FoundEffect, noise_std
 from .sensor_screen import SensorScreen, corrected_record
 
@@ -112,6 +114,8 @@ class Discovery:
         self.baseline_parameters = tuple(baseline_parameters)
         self.design_experiment, self.progress = bool(design_experiment), progress
         self._memo: dict = {}
+        #: Error model of a baseline calibrated earlier (a tie-break refit of the calibrated model).
+        self._error_model = None
 
     @property
     def memo(self) -> dict:
@@ -172,7 +176,8 @@ class Discovery:
         return (self.phases == "auto" and not (view and view.phases) and not isinstance(measured, MeasuredSeries)
                 and reader is not None and all(c in measured.frame for c in reader.columns))
 
-    def _phase_tie_break(self, model: ThermalModel, measured, dt_s, first: Iteration, other) -> Diagnosis | None:
+    def _phase_tie_break(self, model: ThermalModel, measured, dt_s, first: Iteration, other,
+                         error_model=None) -> Diagnosis | None:
         """Two explanations fit the lumped winding about equally well: refit their effects with one
         winding node per phase sensor (a loss in one phase heats that phase, one in every phase
         does not spread them). Returns that diagnosis when it has a verdict and no look-alike
@@ -186,8 +191,10 @@ class Discovery:
                        if isinstance(pair, JointCandidate) for a, b in [pair.effects])
         resolved = self.with_settings(candidates=self.candidates.only(names), phases="resolved", iterate=False,
                                       fitter=dataclasses.replace(self.fitter, pair_starts=starts))
+        resolved._error_model = error_model
         diagnosis = resolved.fit(model, measured, dt_s=dt_s)
-        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0]) is not None:
+        floor = None if error_model is None else error_model.floor_K
+        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0], floor) is not None:
             return None
         diagnosis.iterations[0].explanation += (
             f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
@@ -230,8 +237,12 @@ class Discovery:
         data : MeasurementData, pandas.DataFrame or path
             The measurements to explain.
         baseline : MeasurementData, pandas.DataFrame or path, optional
-            Healthy measurements of the same machine: ``baseline_parameters`` are calibrated on
-            them first, so that what remains in ``data`` is the effect.
+            Healthy measurements of the same machine and sensors: ``baseline_parameters`` are
+            calibrated on them first, so that what remains in ``data`` is the effect; the
+            calibrated model's error on them (:mod:`~genthermal.diagnose.error_model`) then scores
+            every hypothesis (effective samples, tests against the discrepancy floor) and widens
+            the calibration's intervals. A baseline of other sensors, or shorter than the error
+            model needs, is refused (InputError).
         dt_s : float, optional
             Resample the data (and baseline) to this period first, s.
 
@@ -255,8 +266,11 @@ class Discovery:
             if prior:
                 measured = corrected_record(measured, own, prior)
         view = self._view(model, measured)
-        calibration = None
+        calibration, error_model = None, self._error_model
         if baseline is not None:
+            baseline = as_measurements(baseline, model.spec.interface)
+            check_same_sensors(measured, baseline)
+            check_baseline_length(float(baseline.time_s[-1] - baseline.time_s[0]))
             names = [n for n in self.baseline_parameters if n in model.parameters]
             calibration = calibrate(model, baseline, names, dt_s)
             model = calibration.model
@@ -266,6 +280,13 @@ class Discovery:
             memo[("view", model, view)] = view(model)
         viewed = model if view is None else memo[("view", model, view)]
         series = series_for(viewed, measured, dt_s)
+        if calibration is not None:
+            error_model = baseline_error_model(model, viewed, baseline, dt_s, view, self.candidates)
+            calibration.fisher = widened_calibration(calibration.fisher, calibration.values, error_model)
+            self._report(error_model.summary())
+        criterion = self.criterion
+        if error_model is not None and type(self.criterion) is BIC:
+            criterion = error_model.criterion(series.dt_s, self.criterion.evidence_limit)
         if view is not None:
             self._report(f"fitting the record's sensors {', '.join(viewed.output_names)}"
                          + (" (one winding node per phase)" if view.phases else ""))
@@ -273,19 +294,24 @@ class Discovery:
         if self.sensor_faults:
             screen = SensorScreen(measured, series, viewed.spec.interface, prior)
             series = screen.corrected_series()
+        if screen is not None:
+            screen.use_error_model(error_model, criterion)
         catalogue = self.candidates
-        evidence = self.criterion.evidence_limit
+        evidence = criterion.evidence_limit
         found: list[FoundEffect] = []
         iterations: list[Iteration] = []
         while True:
-            search = EffectSearch(model, series, found, memo, catalogue, self.criterion, view).fit_found()
+            search = EffectSearch(model, series, found, memo, catalogue, criterion, view).fit_found()
+            if error_model is not None:
+                search.noise = max(search.noise, error_model.floor_K)
             ranked = self.fitter.singles(search)
             design = DesignSensorScale.of(search, phase_sensor(model).columns) if view and view.phases else None
             for candidate in ranked:
                 candidate.significant = is_significant(candidate, search.noise, evidence, design)
             self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
-            best = ranked[0] if ranked and ranked[0].significant else None
+            plausible = [c for c in ranked if implausible_reason(c) is None]
+            best = plausible[0] if plausible and plausible[0].significant else None
             runner_up = ranked[1] if len(ranked) > 1 else None
             if screen is not None and not screen.model_round_done and screen.against_model(search, ranked,
                                                                                             search.noise):
@@ -323,10 +349,26 @@ class Discovery:
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)
-        residual = residual_tests(series, iterations[-1].predicted_after, noise, viewed.output_names,
-                                  viewed.spec.interface)
+        level = noise if error_model is None else max(noise, error_model.floor_K)
+        residual = residual_tests(series, iterations[-1].predicted_after, level, viewed.output_names,
+                                  viewed.spec.interface,
+                                  "the sensor noise" if error_model is None else "the discrepancy floor",
+                                  None if error_model is None else
+                                  {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
+                                  (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR) if error_model is None else
+                                  (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+        residual["noise_K"] = noise
+        if error_model is not None:
+            residual["floor_K"] = error_model.floor_K
+            residual["rmse_over_floor"] = residual["rmse_K"] / error_model.floor_K
+            residual["error_model"] = error_model.to_dict()
+            if iterations[0].rmse_before <= NOISE_FLOOR_FACTOR * error_model.floor_K:
+                iterations[0].explanation += (
+                    f" The record's residual before any effect, {iterations[0].rmse_before:.3f} K, is already within "
+                    f"{NOISE_FLOOR_FACTOR:g}× the discrepancy floor ({error_model.floor_K:.3f} K, the calibrated "
+                    "model's error on the healthy baseline): there is nothing for an effect to explain.")
         self._report(residual["summary"])
-        experiment, other = None, rival(iterations[0])
+        experiment, other = None, rival(iterations[0], None if error_model is None else error_model.floor_K)
         if other is not None and not residual["level_ok"]:
             # neither explanation accounts for the data: separating them would tell nothing
             self._report(f"{' + '.join(_explanations(other))} fits about as well, but neither explains the data: "
@@ -335,7 +377,7 @@ class Discovery:
         phase_sensor_faulty = screen is not None and any(h.evidence == "redundancy" for h in screen.found)
         # a phase sensor already claimed faulty would be refitted as a phase's heat: no tie-break on it
         if other is not None and not phase_sensor_faulty and self._can_resolve_phases(model, measured, view):
-            separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other)
+            separated = self._phase_tie_break(model, measured, dt_s, iterations[0], other, error_model)
             if separated is not None:
                 return separated
         if other is not None and self.design_experiment:
@@ -354,4 +396,5 @@ class Discovery:
         if screen is not None and screen.limit_text():
             iterations[0].explanation += " " + screen.limit_text()
         return Diagnosis(model, series, noise, iterations, found, calibration, residual, catalogue, experiment,
-                         criterion=self.criterion.name, output_names=viewed.output_names, sensor_screen=screen)
+                         criterion=criterion.name, output_names=viewed.output_names, sensor_screen=screen,
+                         error_model=error_model)

@@ -56,7 +56,9 @@ def _regressors(series: MeasuredSeries, output_names, interface) -> dict:
     return regressors
 
 
-def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names, interface) -> dict:
+def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, output_names, interface,
+                   reference: str = "the sensor noise", levels: dict | None = None,
+                   factors: tuple = (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR)) -> dict:
     """Run the three tests of the module docstring on ``predicted - series.outputs``.
 
     Parameters
@@ -69,6 +71,16 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     output_names : sequence of str
     interface : MachineInterface
         The model's (``model.spec.interface``): the inputs the residual is correlated with.
+    reference : str
+        What ``noise`` is, for the summary ("the discrepancy floor" when it is the level of the
+        calibrated model's error, :mod:`genthermal.diagnose.error_model`).
+    levels : dict, optional
+        Sensor → its own level (K, its discrepancy floor) for the per-sensor tests; default
+        ``noise`` for every sensor.
+    factors : (float, float)
+        The level test's factor on ``noise`` and the structure test's on each sensor's level
+        (default :data:`LEVEL_FACTOR`, :data:`STRUCTURE_LEVEL_FACTOR`; against the discrepancy
+        floor the diagnosis uses those of :mod:`genthermal.diagnose.error_model`).
 
     Returns
     -------
@@ -82,17 +94,20 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     window = max(1, int(round(SMOOTHING_S / series.dt_s)))
     per_sensor, largest = {}, None
     overall = float(np.sqrt(np.nanmean(residual ** 2)))
-    level_ok = bool(overall <= LEVEL_FACTOR * noise)
+    level_factor, structure_factor = factors
+    level_ok = bool(overall <= level_factor * noise)
+    levels = levels or {}
     for name, e in zip(output_names, residual):
+        own = max(float(levels.get(name, noise)), 1e-12)
         ok = np.isfinite(e)
         rmse = float(np.sqrt(np.mean(e[ok] ** 2)))
         centred = e[ok] - e[ok].mean()
         lag1 = float(centred[1:] @ centred[:-1] / max(centred @ centred, 1e-300))
         correlations = {r: correlation(e, v) for r, v in regressors.items()}
         follows = max(correlations, key=lambda r: abs(correlations[r]))
-        structured = (rmse > STRUCTURE_LEVEL_FACTOR * noise and lag1 > MAX_AUTOCORRELATION
+        structured = (rmse > structure_factor * own and lag1 > MAX_AUTOCORRELATION
                       and abs(correlations[follows]) > MAX_CORRELATION)
-        per_sensor[name] = {"rmse_K": rmse, "rmse_over_noise": rmse / noise if noise > 0 else float("inf"),
+        per_sensor[name] = {"rmse_K": rmse, "rmse_over_noise": rmse / own,
                             "lag1_autocorrelation": lag1, "correlations": correlations, "follows": follows,
                             "structured": bool(structured)}
         smooth = pd.Series(e).rolling(window, center=True, min_periods=1).mean().to_numpy()
@@ -103,20 +118,22 @@ def residual_tests(series: MeasuredSeries, predicted: np.ndarray, noise: float, 
     unexplained = not level_ok or any(s["structured"] for s in per_sensor.values())
     return {"unexplained": bool(unexplained), "rmse_K": overall, "rmse_over_noise": overall / noise if noise > 0
             else float("inf"), "level_ok": level_ok, "per_sensor": per_sensor, "largest": largest,
-            "thresholds": {"rmse_over_noise_at_most": LEVEL_FACTOR, "structure_rmse_over_noise": STRUCTURE_LEVEL_FACTOR,
+            "thresholds": {"rmse_over_noise_at_most": level_factor, "structure_rmse_over_noise": structure_factor,
                            "lag1_autocorrelation_at_most": MAX_AUTOCORRELATION,
                            "abs_correlation_at_most": MAX_CORRELATION},
-            "summary": _summary(per_sensor, largest, overall / noise if noise > 0 else float("inf"), unexplained)}
+            "summary": _summary(per_sensor, largest, overall / noise if noise > 0 else float("inf"), unexplained,
+                                reference)}
 
 
-def _summary(per_sensor: dict, largest: dict, level: float, unexplained: bool) -> str:
+def _summary(per_sensor: dict, largest: dict, level: float, unexplained: bool, reference: str) -> str:
+    short = reference.replace("the ", "").replace("sensor ", "")
     if not unexplained:
-        return (f"The residual is {level:.1f}× the sensor noise and follows no input or temperature: nothing "
+        return (f"The residual is {level:.1f}× {reference} and follows no input or temperature: nothing "
                 "is left for another effect to explain.")
-    failing = [f"{name} (RMSE {s['rmse_over_noise']:.1f}× noise, lag-1 autocorrelation "
+    failing = [f"{name} (RMSE {s['rmse_over_noise']:.1f}× {short}, lag-1 autocorrelation "
                f"{s['lag1_autocorrelation']:.2f}, follows {s['follows']} r = {s['correlations'][s['follows']]:+.2f})"
                for name, s in per_sensor.items()]
-    return (f"Something is still missing: the residual is {level:.1f}× the sensor noise; {'; '.join(failing)}. "
+    return (f"Something is still missing: the residual is {level:.1f}× {reference}; {'; '.join(failing)}. "
             f"It is largest on {largest['sensor']} at t = {largest['time_h']:.2f} h "
             f"({'model hot' if largest['residual_K'] > 0 else 'model cold'} by {abs(largest['residual_K']):.2f} K, "
             f"{SMOOTHING_S / 60:.0f}-min average). Do not read the effects found as the whole answer.")

@@ -43,6 +43,7 @@ from .compare import MeasuredSeries, as_measurements
 from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
                                 misfit_from_start, on_series_grid, sensor_hypotheses)
 from .input_readings import screen_input_readings
+from .sensor_plausibility import refusal
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .shared_air import minimal_detectable_error, screen_ambient_against_inlet
@@ -135,12 +136,46 @@ class SensorScreen:
         self.limit_look_alikes: dict[str, str] = {}
         self._frame_for, self._frame = None, None  # the search the calibrated frame is of, and the frame
         self.model_round_done = False
+        self.interface = interface
+        #: Error model of the calibrated model and its criterion (:meth:`use_error_model`).
+        self.error_model, self.criterion = None, None
+        self._residuals = None  # output -> measured minus model of the search the faults are fitted on
+        #: (SensorHypothesis, reason) of the faults fitted but refused as implausible.
+        self.refused: list = []
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
         noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
                              self.columns)
         self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
         self.found += screen_input_readings(series.inputs, input_sensors(interface), self.elapsed_s)
+
+    def use_error_model(self, error_model, criterion) -> None:
+        """Score the faults fitted against the model with ``criterion`` (a
+        :class:`~genthermal.diagnose.error_model.WhitenedBIC`: effective samples) and refuse the
+        implausible ones against the discrepancy floors of ``error_model``
+        (:mod:`~genthermal.diagnose.sensor_plausibility`); None: white noise, bounds only."""
+        self.error_model = error_model
+        self.criterion = criterion if hasattr(criterion, "scale") else None
+
+    def _rescaled(self, delta_white: float, n: int) -> float:
+        """A white-noise ΔBIC of a two-parameter fault over ``n`` samples on effective samples."""
+        return delta_white if self.criterion is None else self.criterion.scale(delta_white, n, 2)
+
+    def _admit(self, hypothesis) -> bool:
+        """True when ``hypothesis`` is a plausible claim; else it is kept in :attr:`refused`."""
+        floors = {} if self.error_model is None else {s.sensor: s.level_K for s in self.error_model.sensors}
+        pooled = None if self.error_model is None else self.error_model.floor_K
+        readings = dict(self.readings)
+        for name in self.series.inputs.columns:
+            if name != "time_s":
+                readings.setdefault(name, self.series.inputs[name].to_numpy(float))
+        phases = tuple(c for c in ("T_winding_u", "T_winding_v", "T_winding_w") if c in readings)
+        reason = refusal(hypothesis, readings, self.elapsed_s, floors, pooled,
+                         getattr(self.interface, "coolant_input", None), getattr(self.interface, "ambient_input", None),
+                         "T_outlet", phases, self._residuals)
+        if reason:
+            self.refused.append((hypothesis, reason))
+        return reason is None
 
     def corrected_series(self) -> MeasuredSeries:
         """The series with the claimed sensor faults removed from its outputs."""
@@ -178,6 +213,7 @@ class SensorScreen:
         from .discover import passes_tests
 
         self.model_round_done = True
+        self._residuals = dict(zip(search.output_names, search.series.outputs - search.predicted_before))
         exclude = {h.fault.sensor for h in self.found}
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
                                          self.elapsed_s, self.output_names, self.columns, exclude,
@@ -190,6 +226,7 @@ class SensorScreen:
         self.alternative = candidate
         if candidate is None:
             return None
+        candidate.delta_bic = self._rescaled(candidate.delta_bic, search.n_valid)
         best_physical = ranked[0] if ranked else None
         alone = passes_tests(candidate.rmse_before, candidate.rmse_after, candidate.delta_bic, noise)
         if best_physical is None:
@@ -202,11 +239,15 @@ class SensorScreen:
                 on_top = screen_against_model(search.series.outputs, best_physical.predicted, self.readings,
                                               self.elapsed_s, self.output_names, self.columns, exclude,
                                               outputs, onsets)
+                if on_top is not None:
+                    on_top.delta_bic = self._rescaled(on_top.delta_bic, search.n_valid)
                 if on_top is not None and on_top.fault.sensor == candidate.fault.sensor and passes_tests(
                         on_top.rmse_before, on_top.rmse_after, on_top.delta_bic, noise):
                     on_top.alternative = (f"on top of {best_physical.effect}: RMSE {on_top.rmse_before:.3f} → "
                                           f"{on_top.rmse_after:.3f} K, ΔBIC {on_top.delta_bic:.0f}")
                     candidate, claimed = on_top, True
+        if claimed and not self._admit(candidate):
+            claimed = False
         if not claimed:
             return self._onset_signatures(search, ranked, noise) if outputs is None and onsets is None else None
         self.found.append(candidate)
@@ -240,9 +281,10 @@ class SensorScreen:
                                                       lambda: self._calibrated_frame(search, ranked, responses)[0],
                                                       responses[ambient], noise)
             claimed += [left_inlet] if left_inlet is not None else []
+        claimed = [h for h in claimed if self._admit(h)]
         if not claimed:
             calibrated = self._calibrated(search, ranked, noise, responses, exclude)
-            claimed += [calibrated] if calibrated is not None else []
+            claimed += [calibrated] if calibrated is not None and self._admit(calibrated) else []
         self.found += claimed
         return claimed[0] if claimed else None
 
@@ -261,6 +303,8 @@ class SensorScreen:
             return None
         best = min(hypotheses, key=lambda h: h.delta_bic)
         physical_bic, physical = best_physical(frame, ranked, search.coarse.time_s, search.series.time_s)
+        best.delta_bic = self._rescaled(best.delta_bic, frame.n)
+        physical_bic = self._rescaled(physical_bic, frame.n) if math.isfinite(physical_bic) else physical_bic
         best.alternative = f"calibrated: {physical or 'no physical effect'} ΔBIC {physical_bic:.0f}"
         claimed = passes_tests(best.rmse_before, best.rmse_after, best.delta_bic, noise) and \
             best.delta_bic < physical_bic - PREFERENCE_BIC
@@ -324,3 +368,7 @@ class SensorScreen:
     def to_list(self) -> list:
         """JSON list of the claimed sensor faults."""
         return [h.to_dict() for h in self.found]
+
+    def refused_list(self) -> list:
+        """JSON list of the sensor faults fitted but refused, each with its reason."""
+        return [{**h.to_dict(), "refused": reason} for h, reason in self.refused]
