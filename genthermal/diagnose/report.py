@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..outputs import write_json
-from ..plots import finish_figure, plt  # the Agg backend is chosen there
+from ..plots import finish_figure, plt
 from ..resources import DEMO_DATA_DIR
 from .compare import Comparison, compare
 from .discover import Diagnosis
