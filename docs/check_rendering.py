@@ -18,7 +18,7 @@ import tempfile
 from pathlib import Path
 
 #: page -> the least number of figures it shows
-PAGES = {"index.html": 1, "tutorials/thesis-blockage.html": 3}
+PAGES = {"index.html": 1, "tutorials/thesis-blockage.html": 2}
 CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run", "--hide-scrollbars")
 
