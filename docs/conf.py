@@ -44,6 +44,7 @@ nb_execution_timeout = 300
 nb_execution_show_tb = True
 nb_execution_in_temp = True  # files a page writes (my_motor.py) land in a temporary folder
 nb_merge_streams = True
+nb_render_markdown_format = "myst"  # Markdown a cell displays may hold tables
 
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
