@@ -40,6 +40,7 @@ def two_effect_case(plant_model):
     return make_hidden_effect_case(TWO_EFFECTS, mission="thesis_fig_7_7", dt_s=DT_S, seed=4, plant=plant_model)
 
 
+@pytest.mark.slow
 def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effect_case, discovery):
     """A blockage fitted from the start absorbs the stray loss's warming (it also lowers the internal
     convection); the joint search starts its onset descent from each effect's onset alone with the
@@ -56,6 +57,7 @@ def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effe
     assert not result.unexplained and result.to_dict()["verdict"] == result.verdict
 
 
+@pytest.mark.slow
 def test_two_workers_fit_the_pairs_of_one_process(plant_model, two_effect_case, discovery):
     """Every stage of the pair search runs in the worker pool with two workers (the singles and
     their polish, the pair grid, one descent per starting point, the polish of the best pairs, the
