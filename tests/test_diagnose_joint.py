@@ -142,6 +142,7 @@ TWO_TERMS = [Injection("heat_I_exc2_stator_iron", {"k_heat_I_exc2_stator_iron": 
              Injection("heat_constant_frame", {"k_heat_constant_frame": 150.0}, 2.3 * 3600)]
 
 
+@pytest.mark.slow
 def test_open_search_adds_a_second_term_in_another_node_group(plant_model, discovery):
     """Of the iron terms alone, ΣI² fits best (the excitation follows the load); the pair search
     picks the frame term as the partner that explains what the best single leaves, then swaps the
