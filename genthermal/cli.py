@@ -32,28 +32,36 @@ import warnings
 
 from . import __version__
 from .errors import GenthermalError
-from .measurements import DataWarning
 from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, check_output_paths
 
+#: Sub-commands in the order ``genthermal --help`` lists them: name -> (module under
+#: :mod:`genthermal.commands`, one-line summary, the documentation page that says more). Only the
+#: command that runs is imported, so ``genthermal --help`` loads no numerical library; the summary
+#: is the one the module's ``register`` gives (``tests/test_cli_help.py`` checks they agree).
+COMMANDS = {
+    "demo": ("demo", "run the thesis blockage mission end to end", "getting-started.md"),
+    "simulate": ("simulate", "simulate a mission scenario", "guide/simulation.md"),
+    "describe": ("describe", "list nodes, element formulas and parameters with provenance", "guide/model.md"),
+    "codegen": ("codegen", "generate C code of the model and compile it", "guide/embedded.md"),
+    "fmu": ("fmu", "export the model as an FMI 2.0 FMU (model exchange and co-simulation)", "guide/embedded.md"),
+    "cortex-m4": ("cortex_m4", "cross-compile the generated C for a Cortex-M4F and run it under QEMU",
+                  "guide/embedded.md"),
+    "synth": ("synth", "write synthetic rig data (measurement CSV schema) for a mission", "guide/estimation.md"),
+    "estimate": ("estimate", "Kalman filter and n-step prediction on rig data (thesis 6.3)", "guide/estimation.md"),
+    "sysid": ("sysid", "identify ARX models of the winding and iron temperatures (thesis 5.3)",
+              "guide/estimation.md"),
+    "compare-models": ("compare_models", "compare the physics models and an ARX model on validation data "
+                       "(thesis 5.4)", "guide/estimation.md"),
+    "compare": ("compare", "compare a model with measurements", "guide/calibration-diagnosis.md"),
+    "calibrate": ("calibrate", "fit model parameters to measurements", "guide/calibration-diagnosis.md"),
+    "diagnose": ("diagnose", "find the physical effect a model lacks", "guide/calibration-diagnosis.md"),
+    "plan": ("plan", "plan load displacement and rests (open loop, design model)", "guide/scheduling.md"),
+    "fly": ("fly", "fly a mission with closed-loop load management", "guide/scheduling.md"),
+    "sweep": ("sweep", "robustness grid of closed-loop flights on Dask", "results/robustness-grid.md"),
+}
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
-COMMAND_MODULES = (
-    "demo",
-    "simulate",
-    "describe",
-    "codegen",
-    "fmu",
-    "cortex_m4",
-    "synth",
-    "estimate",
-    "sysid",
-    "compare_models",
-    "compare",
-    "calibrate",
-    "diagnose",
-    "plan",
-    "fly",
-    "sweep",
-)
+COMMAND_MODULES = tuple(module for module, _, _ in COMMANDS.values())
+DOCS_HINT = "the docs/ folder of the source tree, or the documentation site built from it (docs/contributing.md)"
 EXIT_OK, EXIT_INTERNAL_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 BUG_REPORT_HINT = "this is a bug in genthermal; please report it with the command line you ran"
 
@@ -66,20 +74,31 @@ class _Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Return the argument parser with every available sub-command registered.
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """Return the argument parser; the sub-command ``argv`` names is registered in full.
 
-    Every sub-parser is a :class:`_Parser` (no abbreviations), and every sub-command with an
-    output option gets ``--force``.
+    The other sub-commands get a placeholder with their summary, so that ``genthermal --help``
+    lists them all without importing any (``argv`` None: every sub-command in full). Every
+    sub-parser is a :class:`_Parser` (no abbreviations), names its documentation page, and every
+    sub-command with an output option gets ``--force``.
     """
     parser = _Parser(prog="genthermal",
-                     description="Thermal models of electrical generators: simulate, estimate, generate C.",
-                     epilog="exit codes: 0 ok, 2 bad input, 130 interrupted, 1 internal error (a bug)")
+                     description="Thermal models of electrical generators: simulate, estimate, diagnose, plan "
+                     "and fly, generate C.",
+                     epilog="exit codes: 0 ok, 2 bad input, 130 interrupted, 1 internal error (a bug). "
+                     f"Each command: genthermal COMMAND --help. Read more: {DOCS_HINT}",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"genthermal {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subparsers.required = True
-    for name in COMMAND_MODULES:
-        importlib.import_module(f"genthermal.commands.{name}").register(subparsers)
+    wanted = set(COMMANDS) if argv is None else {word for word in argv if word in COMMANDS}
+    for name, (module, summary, page) in COMMANDS.items():
+        if name in wanted:
+            importlib.import_module(f"genthermal.commands.{module}").register(subparsers)
+            subparser = subparsers.choices[name]
+        else:
+            subparser = subparsers.add_parser(name, help=summary)
+        subparser.epilog = f"read more: docs/{page} in {DOCS_HINT}"
     for subparser in subparsers.choices.values():
         writes = {action.dest for action in subparser._actions} & {*FILE_OUTPUT_OPTIONS, *FOLDER_OUTPUT_OPTIONS}
         if writes and "--force" not in subparser._option_string_actions:
@@ -91,10 +110,15 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the process exit code (see the module docstring)."""
     command = "genthermal"
+    # Figures go to files: no window unless the user chose a backend (a library user keeps theirs).
+    os.environ.setdefault("MPLBACKEND", "Agg")
     try:
-        args = build_parser().parse_args(argv)
+        words = sys.argv[1:] if argv is None else list(argv)
+        args = build_parser(words[:1] if words[:1] and words[0] in COMMANDS else words).parse_args(words)
         command = f"genthermal {args.command}"
         check_output_paths(args, args.command)
+        from .measurements import DataWarning
+
         with warnings.catch_warnings():
             warnings.simplefilter("always", DataWarning)
             # A library's deprecation notice is for developers, not a line for the user (the floor

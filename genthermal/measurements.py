@@ -54,6 +54,7 @@ import pandas as pd
 from .errors import InputError
 from .machines import MACHINES, DEFAULT_MACHINE
 from .machines.interface import InputKind, MachineInterface
+from .resources import shipped_data_file
 from .sizes import check_grid
 
 #: Schema of the default machine (a machine's own: :func:`required_columns`).
@@ -184,6 +185,7 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None,
         temperature outside the PT100 range, or time not strictly increasing.
     """
     if isinstance(path_or_buffer, (str, os.PathLike)):
+        path_or_buffer = shipped_data_file(str(path_or_buffer), ".csv") or path_or_buffer  # a shipped record by name
         source = str(path_or_buffer)
         with open(path_or_buffer, "rb") as file:
             content = file.read()

@@ -44,7 +44,7 @@ from .yaml_input import load_user_yaml
 from .exciter import DEFAULT_POWER_FACTOR
 from .machines import DEFAULT_MACHINE, MACHINES
 from .machines.interface import GeneratorRole
-from .resources import SCENARIO_DIR
+from .resources import DEMO_DATA_DIR, SCENARIO_DIR, shipped_data_missions
 from .sizes import check_grid
 
 __all__ = [
@@ -360,8 +360,9 @@ def _mission_from_document(document: Any, source: str) -> Mission:
 
 
 def available_scenarios() -> list[str]:
-    """Return the names of the shipped scenario files in :data:`SCENARIO_DIR`, sorted."""
-    return sorted(path.stem for path in SCENARIO_DIR.glob("*.yaml"))
+    """Return the names of the shipped scenario files (:data:`SCENARIO_DIR`, and the missions beside
+    the shipped data), sorted."""
+    return sorted([*(path.stem for path in SCENARIO_DIR.glob("*.yaml")), *shipped_data_missions()])
 
 
 def _available_text() -> str:
@@ -395,6 +396,8 @@ def load_mission(name_or_path: str | os.PathLike) -> Mission:
     if looks_like_path or text.endswith((".yaml", ".yml")):
         return Mission.from_yaml(text)
     path = SCENARIO_DIR / f"{text}.yaml"
+    if not path.is_file() and text in shipped_data_missions():
+        path = DEMO_DATA_DIR / f"{text}.yaml"
     if not path.is_file():
         close = difflib.get_close_matches(text, available_scenarios(), n=1)
         hint = f"did you mean {close[0]!r}? " if close else ""

@@ -51,6 +51,7 @@ from .machines.registry import is_machine_reference
 from .model import ThermalModel
 from .outputs import write_text
 from .parameters import PROVENANCES
+from .resources import shipped_data_file, shipped_data_names
 
 VARIANTS = ("nonlinear", "linear")
 #: Shipped parameter sets: ``machine:name`` → model file inside the package.
@@ -64,6 +65,16 @@ _EFFECT_KEYS = ("name", "parameters", "provenance", "source", "onset_s")
 
 def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     """Build a model from a built-in name (``genco_rf201a[:linear|:chapter7]``) or a YAML model file.
+
+    Parameters
+    ----------
+    spec_or_path : str or path-like
+        A machine name with an optional variant (``genco_rf201a:linear``), a ``.py`` machine file,
+        or a model file written by :func:`save_model` (``calibrate --out``, ``diagnose --out``).
+
+    Returns
+    -------
+    ThermalModel
 
     Raises
     ------
@@ -81,11 +92,13 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     if variant not in PARAMETER_SETS and not (Path(text).is_file() and not name.endswith(".py")) \
             and is_machine_reference(name):
         return _build(name, variant or "nonlinear", from_file=False)
-    path = Path(text)
+    path = shipped_data_file(text, ".yaml") or Path(text)
     if not path.is_file():
         known = ", ".join(f"{m}, {m}:linear" for m in known_machines())
         sets = ", ".join(f"{m}:{v}" for m in MACHINES for v in PARAMETER_SETS)
-        raise InputError("model", text, f"neither a machine ({known}, {sets}, or a .py machine file) nor a model file")
+        plants = ", ".join(shipped_data_names(".yaml"))
+        raise InputError("model", text, f"neither a machine ({known}, {sets}, or a .py machine file), a shipped "
+                         f"stand-in plant ({plants}) nor a model file")
     try:
         document = load_user_yaml(path.read_text(encoding="utf-8"), str(path))
     except UnicodeDecodeError:
@@ -234,5 +247,20 @@ def model_document(model: ThermalModel, onsets: dict | None = None) -> dict:
 
 
 def save_model(model: ThermalModel, path: str | os.PathLike, onsets: dict | None = None) -> Path:
-    """Write ``model`` as a YAML model file (see :func:`model_document`); return the path."""
+    """Write ``model`` as a YAML model file (see :func:`model_document`); return the path.
+
+    Parameters
+    ----------
+    model : ThermalModel
+        The model to keep: its machine, variant, parameters with provenance, effects and
+        disturbance prior.
+    path : path-like
+        The YAML file to write (whole or not at all).
+    onsets : dict, optional
+        Effect name -> onset, s, for effects that switch on during a record.
+
+    Returns
+    -------
+    pathlib.Path
+    """
     return write_text(path, yaml.safe_dump(model_document(model, onsets), sort_keys=False))

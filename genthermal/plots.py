@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import matplotlib
+import matplotlib.pyplot as plt  # the backend is the user's (the command line picks Agg, genthermal.cli)
+import pandas as pd
 
-matplotlib.use("Agg")  # files, not windows: the CLI and the tests run headless
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from .machines.interface import InputKind  # noqa: E402
-from .outputs import replacing  # noqa: E402
+from .machines.interface import InputKind
+from .outputs import replacing
 
 def finish_figure(fig, path=None, close: bool = False):
     """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it.

@@ -1,10 +1,13 @@
 """Shared fixtures: the thesis generator models are built once per test session."""
 
 import importlib.util
+import os
 import sys
 from pathlib import Path
 
 import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")  # figures go to files in the tests, whatever the user's default
 
 from genthermal.design import linear_design_model
 from genthermal.machines import build_model

@@ -117,6 +117,7 @@ def test_a_rise_that_follows_the_load_cools_gen1_only_when_load_is_moved(problem
     assert following["managed_gen2_cruise_combat"] == pytest.approx(fixed["managed_gen2_cruise_combat"], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_minimax_holds_its_epigraph_and_its_cap(chapter7):
     """From the shipped set the least worst violation is lower than the start's with every value
     within its bounds, and a Pareto cap holds every managed peak at or below the cap at a cost to
@@ -211,6 +212,7 @@ def test_receiver_headroom_is_the_rated_current_less_each_conditions_highest_loa
         receiver_headroom_A(nominal, masks[:, :3], 7.0)
 
 
+@pytest.mark.slow
 def test_rated_reading_holds_the_receiver_to_rated_current_at_every_instant(chapter7):
     """With ``receiver_limit_A`` the receiver's current never exceeds it, at the start and at the
     solution: no displacement in landing (its first 5 min run at 100 %), and the other conditions'

@@ -121,6 +121,7 @@ def test_per_level_displacement_moves_current_only_in_its_level(chapter7):
     assert np.allclose(landing_continuous[:-1], none[:-1]) and landing_continuous[-1] < none[-1]
 
 
+@pytest.mark.slow
 def test_best_displacement_held_to_rated_current_never_exceeds_it(chapter7):
     """Held to 7 A per level, the receiver's current stays within it at every sample and nothing
     moves in landing's 5 min at 100 %; without the limit the same blockage sends gen2 past 7 A."""

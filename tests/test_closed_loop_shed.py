@@ -36,6 +36,7 @@ def _cycle_bound(system, settings):
     return math.ceil((system.mission.duration_s + budget) / settings.cycle_s) + 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheduler", ["heuristic", "engineer", "optimal"])
 def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_the_limit(tmp_path, scheduler):
     system = _system(tmp_path, HOT_AT_REST)
@@ -66,6 +67,7 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
     assert np.any(result.currents_A[1, shedding] > result.nominal_A[shedding] + 0.5)  # gen2 takes some of it
 
 
+@pytest.mark.slow
 def test_rest_budget_bounds_the_rest_and_the_cycles(tmp_path):
     """A plant that needs rest it is not allowed: the flight adds at most the budget."""
     # θmax 97 °C: within reach with 30 min of rest, out of reach with 2 min (the manager sheds); at

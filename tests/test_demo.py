@@ -2,9 +2,12 @@
 
 import json
 
+import pytest
+
 from genthermal.cli import main
 
 
+@pytest.mark.slow
 def test_demo_runs_end_to_end(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     summary = json.loads((tmp_path / "summary.json").read_text())
@@ -21,11 +24,14 @@ def test_demo_runs_end_to_end(tmp_path, capsys):
     flights = summary["load_management"]["summaries"]
     discovery = summary["discovery"]
     assert discovery["verdict"] != "none" and discovery["rmse_after"] < 0.2 * discovery["rmse_before"]
+    # before and after on the same sensors: the diagnosis's own first round, not compare's two sensors
+    diagnosis = json.loads((tmp_path / "discovery" / "diagnose" / "diagnosis.json").read_text())
+    assert discovery["rmse_before"] == diagnosis["iterations"][0]["rmse_before"]
     for picture in ("mission_healthy.png", "blockage.png", "design_vs_simulation.png", "prediction.png"):
         assert (tmp_path / picture).stat().st_size > 10_000
     assert "Kalman filter" in capsys.readouterr().out
     # the optimal scheduler plans on the flown model: it rests less than the thesis heuristic and
-    # keeps every generator below θmax (its rest against the engineer's baseline is in the README)
+    # keeps every generator below θmax (its rest against the engineer's baseline is in docs/guide/scheduling.md)
     assert flights["optimal"]["added_rest_s"] < flights["heuristic"]["added_rest_s"]
     assert set(flights) == {"heuristic", "engineer", "optimal"}
     assert all(flight["breach_s"] == 0.0 for flight in flights.values())

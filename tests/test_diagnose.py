@@ -60,6 +60,7 @@ def test_healthy_data_give_none(plant_model, discovery):
     assert result.to_dict()["ranked"] and not any(c["significant"] for c in result.to_dict()["ranked"])
 
 
+@pytest.mark.slow
 def test_iterate_finds_two_effects(plant_model, discovery):
     case = _case([Injection("coolant_flow_reduction", {"k_flow": 0.7}, 4200.0),
                   Injection("excitation_iron_loss", {"k_exc": 30.0}, 9000.0)], plant_model, seed=6)

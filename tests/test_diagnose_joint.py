@@ -40,6 +40,7 @@ def two_effect_case(plant_model):
     return make_hidden_effect_case(TWO_EFFECTS, mission="thesis_fig_7_7", dt_s=DT_S, seed=4, plant=plant_model)
 
 
+@pytest.mark.slow
 def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effect_case, discovery):
     """A blockage fitted from the start absorbs the stray loss's warming (it also lowers the internal
     convection); the joint search starts its onset descent from each effect's onset alone with the
@@ -56,6 +57,7 @@ def test_pair_fitted_jointly_names_both_effects_and_onsets(plant_model, two_effe
     assert not result.unexplained and result.to_dict()["verdict"] == result.verdict
 
 
+@pytest.mark.slow
 def test_two_workers_fit_the_pairs_of_one_process(plant_model, two_effect_case, discovery):
     """Every stage of the pair search runs in the worker pool with two workers (the singles and
     their polish, the pair grid, one descent per starting point, the polish of the best pairs, the
@@ -140,6 +142,7 @@ TWO_TERMS = [Injection("heat_I_exc2_stator_iron", {"k_heat_I_exc2_stator_iron": 
              Injection("heat_constant_frame", {"k_heat_constant_frame": 150.0}, 2.3 * 3600)]
 
 
+@pytest.mark.slow
 def test_open_search_adds_a_second_term_in_another_node_group(plant_model, discovery):
     """Of the iron terms alone, ΣI² fits best (the excitation follows the load); the pair search
     picks the frame term as the partner that explains what the best single leaves, then swaps the

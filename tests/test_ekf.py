@@ -96,6 +96,7 @@ def test_bad_inputs_name_the_field(plant_model, ekf):
         prediction_study(plant_model, data.frame.iloc[:300], starts_min=(20,))
 
 
+@pytest.mark.slow
 def test_compiled_ekf_update_and_prediction_equal_python(plant_model, ekf):
     from genthermal.codegen import model_library
     from genthermal.errors import CompilerNotFoundError

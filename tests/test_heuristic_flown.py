@@ -134,6 +134,7 @@ def test_closed_loop_flight_on_a_plant_off_from_the_model_holds_thetamax(tmp_pat
     assert flight["plans"] and all(plan["method"] == "heuristic" for plan in flight["plans"])
 
 
+@pytest.mark.slow
 def test_closed_loop_flight_on_the_nonlinear_model_holds_thetamax():
     """The thesis's large blockage with the heuristic predicting on the simulation model (thesis
     7.3.4: "a Kalman Filter containing the simulation model"), with the filter's back-off; the plant

@@ -157,6 +157,7 @@ def test_open_search_finds_a_copper_loss_in_I2_instead_of_its_line(design_model,
     assert kept["k_copper_in_I2_I2"].value == pytest.approx(found.values["k_loss_I2_copper_I2"], rel=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model_fixture", ["plant_model", "design_model"])
 def test_open_search_on_a_healthy_record_finds_no_term(model_fixture, request, discovery):
     """With the new terms in the library, a healthy record still gives "none" and nothing unexplained."""

@@ -126,6 +126,7 @@ def test_bad_inputs_name_field_and_value(forced_to_shed):
         ManagerSettings(own_shed="yes")
 
 
+@pytest.mark.slow
 def test_closed_loop_on_a_plant_hot_at_rest_sheds_less_with_the_own_plan(tmp_path):
     """The plant of tests/test_closed_loop_shed.py whose gen1 is above θmax (85 °C) even at rest:
     with the shared shed plan the optimal flight rests 15 min and leaves 1.10 A·h unserved (1116 min

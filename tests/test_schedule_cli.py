@@ -16,6 +16,7 @@ FLY_KEYS = {"mission_time_s", "added_rest_s", "max_T_winding", "max_T_iron", "br
             "median_solve_s", "displaced_Ah"}
 
 
+@pytest.mark.slow
 def test_closed_loop_keeps_the_true_plant_below_the_limit_on_the_large_blockage():
     system = PowerSystem.from_mission(load_mission("blockage_large"))
     summary = flight_summary(fly(system, "optimal"))

@@ -81,6 +81,7 @@ def test_healthy_flight_with_30_percent_mismatch_raises_no_alarm():
     assert summary["false_alarms"] == 0 and summary["identified"] == [] and summary["detected_at_s"] is None
 
 
+@pytest.mark.slow
 def test_blockage_is_detected_within_ten_minutes_and_identified():
     onset_min = 40.0
     system = PowerSystem.from_mission(_mission([{"generator": 2, "kind": "coolant_blockage", "onset_min": onset_min,

@@ -42,6 +42,7 @@ def test_planning_design_model_keeps_a_current_squared_fault_and_stays_affine(pl
     np.testing.assert_allclose(design_rise, plant_rise, rtol=0.35)
 
 
+@pytest.mark.slow
 def test_fly_reports_detection_keys_and_tell_fault_keeps_the_old_behaviour(tmp_path):
     scenario = tmp_path / "short.yaml"
     scenario.write_text(SHORT)

@@ -107,6 +107,7 @@ def test_no_phase_fault_is_claimed_on_healthy_or_heated_windings(healthy_record,
         assert _phase_screen(data, plant_model) == []
 
 
+@pytest.mark.slow
 def test_the_issue_case_iron_drift_is_a_sensor_fault_and_the_machine_is_healthy(healthy_record, plant_model,
                                                                                  discovery):
     data = inject_sensor_faults(healthy_record, [SensorFault("T_iron", "drift", 1.5, 1.6 * HOUR)])

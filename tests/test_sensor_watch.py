@@ -143,6 +143,7 @@ def test_a_stuck_winding_sensor_is_claimed_before_any_plan_change(tmp_path, heal
     assert result.monitor.beliefs[0] == () and not result.monitor.identifications
 
 
+@pytest.mark.slow
 def test_a_drifting_winding_sensor_is_claimed_and_moves_no_load(tmp_path, healthy_flight):
     """A 1.5 K/h drift is absorbed by the filter's disturbances (no innovation alarm) but forces
     opposite heat flows on the two nodes; the shorted turn the fault monitor identifies meanwhile is
@@ -161,6 +162,7 @@ def test_a_drifting_winding_sensor_is_claimed_and_moves_no_load(tmp_path, health
     np.testing.assert_allclose(result.currents_A, healthy_flight.currents_A)  # not one load change
 
 
+@pytest.mark.slow
 def test_a_winding_sensor_drifting_low_is_claimed_on_its_unit_and_moves_no_load(tmp_path, healthy_flight):
     """A -1.5 K/h drift of gen2's winding sensor makes the *healthy* gen1 look hot next to it: its
     fault test alarms (at 120 min) and the identification names a blockage. gen1's own record shows

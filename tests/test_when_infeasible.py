@@ -30,6 +30,7 @@ def _system(tmp_path, text):
     return PowerSystem.from_mission(load_mission(str(path)))
 
 
+@pytest.mark.slow
 def test_best_effort_displaces_and_rests_instead_of_shedding(tmp_path):
     """The plant hot at rest: with best_effort the heuristic sheds nothing, displaces gen1's load to
     gen2 within gen2's room, rests, and the flight reports the breach it could not avoid."""

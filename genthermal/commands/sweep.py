@@ -47,7 +47,8 @@ def register(subparsers) -> None:
                              "affine (default) or nonlinear")
     parser.add_argument("--no-hindsight", action="store_true", help="do not plan the faulty cases in hindsight "
                         "(the least rest with the true plant and fault known from the onset, a few seconds a case)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar (also off when stderr is not a "
+                        "terminal or GENTHERMAL_PROGRESS=0, as for every command)")
     parser.set_defaults(func=run)
 
 
@@ -68,7 +69,9 @@ def run(args) -> int:
             raise InputError(option, value, "must be a number of seconds > 0")
     documents = [robustness_case(i, args.seed) for i in case_indices(args.only, args.cases)]
     started = time.perf_counter()
-    records = run_sweep(documents, schedulers, args.cluster, args.workers, not args.no_progress,
+    from ..progress import enabled as progress_enabled
+
+    records = run_sweep(documents, schedulers, args.cluster, args.workers, progress_enabled() and not args.no_progress,
                         args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight)
     report = {**summarise(records, schedulers),
               "provenance": {"command": equivalent_command(args),

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..outputs import write_json
-from ..plots import finish_figure, plt  # the Agg backend is chosen there
+from ..plots import finish_figure, plt
 from ..resources import DEMO_DATA_DIR
 from .compare import Comparison, compare
 from .discover import Diagnosis
@@ -198,7 +198,9 @@ def run_discovery_demo(out_dir, data=None, model=None) -> dict:
     save_model(improved, out / "improved_model.yaml", {f.effect: f.onset_s for f in diagnosis.found})
     added = diagnosis.iterations[0].added
     summary = {"data": str(data), "verdict": diagnosis.verdict, "noise_std_K": diagnosis.noise_std,
-               "rmse_before": before.rmse(), "rmse_after": added.rmse_after if added else before.rmse(),
+               # before and after on the same sensors: the diagnosis's (compare's report has its own)
+               "rmse_before": diagnosis.iterations[0].rmse_before,
+               "rmse_after": added.rmse_after if added else diagnosis.iterations[0].rmse_before,
                "params": added.values if added else {}, "onset_s": added.onset_s if added else None,
                "explanation": diagnosis.iterations[0].explanation,
                "reports": [str(out / "compare" / "report.md"), str(out / "diagnose" / "report.md")],

@@ -1,90 +1,10 @@
 r"""Extended Kalman filter on the nonlinear model, with disturbance states (offset-free prediction).
 
-The filter state is :math:`z = (x, \theta, \delta)`: the node temperatures :math:`x` (°C), for
-each sensor node j (for the thesis generator: the stator winding and the stator iron) the
-coefficients :math:`\theta_{bj}` of an unknown heat flow on three bases :math:`b`, and an offset
-:math:`\delta` (K) of the coolant inlet temperature. They stand for what a calibrated model
-typically lacks, each scaled so its coefficient is a heat flow in W at a stated condition:
-
-* ``constant`` (:math:`\phi = 1`, state ``q_<node>``, W): a heat flow the model does not remove or
-  add at any load (a convection coefficient off at the operating point, a stray loss);
-* ``load`` (:math:`\phi = \ell(u) = \overline{I^2}/I_{rated}^2`, mean over the phases,
-  ``q_load_<node>``, W at rated current): a wrong copper or load-dependent iron loss, which a
-  constant heat flow cannot carry from one load to another;
-* ``coolant`` (:math:`\phi = (x_j - T_{in})/\Delta T_{ref}`, :math:`\Delta T_{ref}` =
-  :data:`COOLANT_REFERENCE_RISE_K`, ``q_coolant_<node>``, W at 50 K above the inlet): a wrong
-  conductance to the coolant. A cooling fault (a blockage) removes less heat the hotter the
-  machine gets, which neither a constant nor a load-scaled flow carries into the future;
-* ``dT_inlet`` (K): the coolant reaches the machine hotter than measured (less flow heats the
-  air more on its way), acting through every convective link of the model.
-
-They enter as :math:`\dot x_j \mathrel{+}= \sum_b \theta_{bj}\phi_b(x, u)/C_j` and
-:math:`T_{in} \to T_{in} + \delta`, and drift as random walks:
-
-.. math::
-    x_{k+1} = \Phi(x_k, u_k + \delta_k e_{in}, M q(x_k, u_k, \theta_k)) + w_k, \qquad
-    (\theta, \delta)_{k+1} = (\theta, \delta)_k + \eta_k, \qquad y_k = C x_k + e + v_k,
-
-:math:`\Phi` the *same* discrete step that simulation uses (:attr:`DiscreteModel.forced_step` of
-:mod:`genthermal.discretise`, forcing :math:`M q`, :math:`M_{ij} = 1/C_i` for node i of
-disturbance node j), so filter and simulation cannot drift apart. The Jacobian
-:math:`F_k = \partial z_{k+1}/\partial z_k` at :math:`(\hat z_k, u_k)` is exact (CasADi automatic
-differentiation of that step), as is :math:`H = \partial y/\partial z = (C, 0)`. Update and
-prediction are those of :mod:`genthermal.estimation.kalman` with :math:`F_k` in place of
-:math:`A` (Joseph-form covariance update; missing sensors drop their rows).
-
-Two time scales. What a calibrated model lacks on a healthy machine is a few W that change little
-from one flight to the next; a random walk fast enough to follow a fault would chase the sensor
-noise the rest of the time, and the disturbances it learns from a few noisy minutes cost more
-than they gain. So the walks are slow (an online calibration) and a fault is announced by the
-innovation change test of :mod:`genthermal.estimation.change_detection`, which adds
-:data:`DEFAULT_JUMP_STD` ² to the disturbance covariance when the exponentially weighted mean
-of the innovations (over about :data:`DEFAULT_CHANGE_WINDOW_MIN` minutes), normalised by its
-covariance, exceeds :data:`DEFAULT_CHANGE_THRESHOLD` (:meth:`RecursiveFilter.run`, and in the
-generated C update, :meth:`ExtendedKalmanFilter.update_function`).
-
-Process noise, in K² and W² (K² for :math:`\delta`) per step:
-
-* nodes: :math:`Q_x = \mathrm{diag}((T_s\sigma_P/C_i)^2)` with :math:`\sigma_P` =
-  :data:`DEFAULT_NODE_HEAT_NOISE_W` (an unmodelled heat flow at every node, as the linear filter,
-  but smaller because the systematic part has its own states);
-* each basis: :math:`\sigma_b^2\,T_s/3600`, a walk that moves by :math:`\sigma_b` in one hour:
-  :data:`DEFAULT_DISTURBANCE_DRIFT_W` (1 W), :data:`DEFAULT_LOAD_SCALED_DRIFT_W` (2 W),
-  :data:`DEFAULT_COOLANT_DRIFT_W` (1 W), :data:`DEFAULT_INLET_DRIFT_K` (0.2 K); initial standard
-  deviation :data:`DEFAULT_INITIAL_DISTURBANCE_W` (10 W) and :data:`DEFAULT_INITIAL_INLET_K` (2 K).
-  Scale: the winding's copper loss at rated current is about 180 W; a model calibrated on one
-  healthy record is a few W off at a load it was not fitted at.
-* a change: :data:`DEFAULT_JUMP_STD`, 10 W on the constant and load-scaled flows, 80 W (at 50 K)
-  on the coolant-scaled flows and 20 K on the inlet: the thesis's large blockage (flow to 20 %,
-  inlet +31 K) removes some tens of W of cooling and heats the air by tens of K. The coolant-scaled
-  flows the filter has learnt by the end of the large-blockage record are 29-51 W (both benchmark
-  plants, three noise draws), and at the alarm only part of the change is visible, so the jump
-  is about twice that: 80 W instead of 40 W brought the blockage's 30-min winding RMS from 1.97 to
-  1.93 K (rig, worst draw 2.02 to 1.98 K) and from 1.27 to 1.20 K (plant B); healthy records raise
-  no alarm, so they do not change. A 3-min test window scored lower still (1.93 K worst) but only
-  because it fires later (75-79 min instead of 72-74 on the rig): not adopted.
-* the starting point: a model written by ``calibrate`` carries the disturbances an EKF learnt on
-  its calibration record (:mod:`~genthermal.estimation.disturbance_prior`); the filter starts
-  its disturbance states from that mean and covariance instead of zero and the defaults above.
-
-Provenance: measured with ``benchmarks/bench_prediction.py`` on two plants (parameters off by
-15-30 % in opposite directions, each with a different effect the model lacks), a model calibrated
-on one healthy record of each and scored on three others (winding RMS at 15/30/60 min). With the
-earlier fast walks (8 and 15 W per hour on constant and load-scaled flows, no coolant states, no
-change test; kept for the flight filter, ``schedule.state_estimator.FLIGHT_EKF_SETTINGS``) the filter was
-worse than the open loop at 30-60 min on both healthy rig records (varying load 0.68/0.55 K
-against 0.48/0.49 K). Slowing the walks alone (1-2 W per hour) fixed that (0.46/0.43 K) but lost
-the blockage (30 min: 4.1 K, open loop 13.5 K); coolant-scaled flows with a fast walk (30 W per
-hour) followed the blockage (1.9 K) but chased noise on healthy records (varying load 0.76 K at
-30 min). Slow walks on all bases with the change test give both (module
-``benchmarks/bench_prediction.py`` figures in the README). The change threshold is a
-:math:`\chi^2_2` quantile at 1e-3 (13.8); on the benchmark's healthy records the statistic
-reached at most 8.7, on the blockages 20-38. The unmeasured inlet offset alone, without the
-coolant-scaled flows, barely helped (blockage 30 min: 2.5 K at 5 K per hour).
-
-Predictions hold the disturbances at their last estimate (:meth:`ExtendedKalmanFilter.forecast`):
-a constant model error is carried into the future, which is what makes them offset-free, and a
-coolant-scaled one grows with the temperature it multiplies.
+:class:`ExtendedKalmanFilter` estimates the node temperatures together with unknown heat flows at
+the sensor nodes (constant, load-scaled and coolant-scaled) and an offset of the coolant inlet. It
+steps the same discrete model as simulation, with exact CasADi Jacobians, and an innovation change
+test opens the disturbance covariance when a fault appears. Equations, noise settings and how
+they were measured: ``docs/guide/extended-kalman-filter.md``.
 """
 
 from __future__ import annotations
@@ -145,7 +65,7 @@ def node_heat_capacities(model: ThermalModel) -> np.ndarray:
 
 
 class ExtendedKalmanFilter(RecursiveFilter):
-    """Extended Kalman filter with disturbance heat flows (module docstring for the equations).
+    """Extended Kalman filter with disturbance heat flows (equations: docs/guide/extended-kalman-filter.md).
 
     Same interface as :class:`~genthermal.estimation.kalman.KalmanFilter`: :meth:`update`,
     :meth:`predict`, :meth:`run`, :meth:`forecast`; the state has the model's nodes (°C) first and

@@ -9,7 +9,6 @@ import numpy as np
 import pandas as pd
 
 from ..model import ThermalModel
-from ..plots import finish_figure, plt
 from ..simulate import results_frame
 
 
@@ -123,6 +122,8 @@ class FilterResult:
         """Measured and filtered outputs, the unmeasured states, and the filter error over time
         (thesis Figs 6.6/6.7); returns the matplotlib figure, saved to ``path`` if given."""
         minutes = (self.time_s - self.time_s[0]) / 60.0
+        from ..plots import finish_figure, plt
+
         fig, (ax_t, ax_e) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
         for i, name in enumerate(self.output_names):
             ax_t.plot(minutes, self.measured[:, i], ".", ms=2, alpha=0.4, label=f"{name} measured")

@@ -137,8 +137,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     Parameters
     ----------
     system : PowerSystem
+        The generators, the mission, its faults and the true plants (:meth:`PowerSystem.from_mission`).
     scheduler : {"heuristic", "engineer", "optimal", "milp"}
+        Who re-plans when a breach is predicted.
     settings : ManagerSettings
+        Management cycle, margin, filter, rest budget, noise seed and each scheduler's settings.
 
     Returns
     -------

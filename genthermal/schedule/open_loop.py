@@ -79,6 +79,22 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     The mission is flown as planned up to the first management cycle at or after the earliest
     fault onset; there every fault of the scenario is taken as known (conservative for later
     onsets) and one plan is made for the rest of the mission, which the same model then flies.
+
+    Parameters
+    ----------
+    system : PowerSystem
+        The generators, the mission and its faults (:meth:`PowerSystem.from_mission`).
+    scheduler : {"heuristic", "engineer", "optimal", "milp"}
+        Who plans: the thesis heuristic (Fig 7.2), the engineer's rule, the optimal scheduler
+        (IPOPT) or the MILP (HiGHS).
+    settings : ManagerSettings
+        Management cycle, margin, rest budget, planner model and each scheduler's settings.
+
+    Returns
+    -------
+    FlightResult
+        The design-model (or flown-model) temperatures and currents of the plan, with its
+        ``schedule_table``.
     """
     settings.check_scheduler(scheduler)
     dt = settings.dt_s

@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plots import finish_figure, plt  # the Agg backend is chosen there
+from ..plots import finish_figure, plt
 from .flight_result import FlightResult
 from .manager_settings import ManagerSettings
 from .power_system import PowerSystem
