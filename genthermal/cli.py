@@ -32,6 +32,7 @@ import warnings
 
 from . import __version__
 from .errors import GenthermalError
+from .machines.registry import trusted_machine_files
 from .measurements import DataWarning
 from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, check_output_paths
 
@@ -85,6 +86,11 @@ def build_parser() -> argparse.ArgumentParser:
         if writes and "--force" not in subparser._option_string_actions:
             subparser.add_argument("--force", action="store_true",
                                    help="replace output files (or fill an output folder) that already exist")
+        if {action.dest for action in subparser._actions} & {"model", "plant", "scenario", "mission"}:
+            subparser.add_argument("--trust-machine", action="append", default=[], metavar="FILE.py",
+                                   help="let a model file or scenario of this run name the Python machine file "
+                                   "FILE.py (machine files are code: by default a data file may only name a "
+                                   "registered machine); repeatable")
     return parser
 
 
@@ -102,7 +108,8 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", DeprecationWarning)
             warnings.simplefilter("ignore", PendingDeprecationWarning)
             warnings.showwarning = _warning_printer(command)
-            code = int(args.func(args) or 0)
+            with trusted_machine_files(getattr(args, "trust_machine", None) or []):
+                code = int(args.func(args) or 0)
         sys.stdout.flush()
         return code
     except GenthermalError as exc:
