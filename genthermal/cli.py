@@ -11,6 +11,7 @@ Exit codes (the same for every command)
 2    bad input: a bad option, file, scenario, model or data value; one line on stderr names the
      field and the value (argparse's own usage errors also exit 2)
 130  interrupted (Ctrl-C): one line on stderr, no partial output file (see :mod:`genthermal.outputs`)
+143  terminated (SIGTERM, or SIGHUP: 129): as Ctrl-C, no partial output file or folder
 141  the reader of the output went away (``genthermal describe | head``): ends quietly
 1    internal error: a bug in genthermal; one line on stderr, with the path of a file holding the
      traceback to attach to a bug report
@@ -25,6 +26,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 import tempfile
 import traceback
@@ -34,7 +36,7 @@ from . import __version__
 from .errors import GenthermalError
 from .machines.registry import trusted_machine_files
 from .measurements import DataWarning
-from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, check_output_paths
+from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, Terminated, check_output_paths, replacing_policy
 
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
 COMMAND_MODULES = (
@@ -56,6 +58,8 @@ COMMAND_MODULES = (
     "sweep",
 )
 EXIT_OK, EXIT_INTERNAL_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+#: Signals that stop a run the way Ctrl-C does (the temporary outputs are removed), exit 128 + number.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 BUG_REPORT_HINT = "this is a bug in genthermal; please report it with the command line you ran"
 
 
@@ -108,14 +112,18 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", DeprecationWarning)
             warnings.simplefilter("ignore", PendingDeprecationWarning)
             warnings.showwarning = _warning_printer(command)
-            with trusted_machine_files(getattr(args, "trust_machine", None) or []):
+            with trusted_machine_files(getattr(args, "trust_machine", None) or []), \
+                    replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals():
                 code = int(args.func(args) or 0)
         sys.stdout.flush()
         return code
     except GenthermalError as exc:
         _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, Terminated):
+            _error(f"\n{command}: {exc.args[0] if exc.args else 'terminated'}; no partial output file was left")
+            return 128 + (exc.args[1] if len(exc.args) > 1 else signal.SIGTERM)
         _error(f"\n{command}: interrupted; no partial output file was left")
         return EXIT_INTERRUPTED
     except BrokenPipeError:
@@ -135,6 +143,32 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: internal error: {type(exc).__name__}: {_one_line(exc)}\n{BUG_REPORT_HINT} "
                f"(genthermal {__version__}); traceback saved in {_save_traceback()}")
         return EXIT_INTERNAL_ERROR
+
+
+class _stopping_on_signals:
+    """Within the block, SIGTERM and SIGHUP raise :class:`~genthermal.outputs.Terminated` in this
+    process (forked workers keep the default: they just end), so cleanups run as for Ctrl-C."""
+
+    def __enter__(self):
+        self._pid, self._previous = os.getpid(), {}
+        try:
+            for number in STOP_SIGNALS:
+                self._previous[number] = signal.signal(number, self._handle)
+        except ValueError:  # not the main thread: leave the signals alone
+            pass
+        return self
+
+    def _handle(self, number, frame):
+        if os.getpid() != self._pid:
+            signal.signal(number, signal.SIG_DFL)
+            os.kill(os.getpid(), number)
+            return
+        raise Terminated(f"stopped by {signal.Signals(number).name}", int(number))
+
+    def __exit__(self, *exc):
+        for number, previous in self._previous.items():
+            signal.signal(number, previous)
+        return False
 
 
 def _warning_printer(command: str):
