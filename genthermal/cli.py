@@ -37,6 +37,7 @@ from .errors import GenthermalError
 from .machines.registry import trusted_machine_files
 from .measurements import DataWarning
 from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, Terminated, check_output_paths, replacing_policy
+from .unit_checks import parse_unit_options, stated_units
 
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
 COMMAND_MODULES = (
@@ -95,6 +96,11 @@ def build_parser() -> argparse.ArgumentParser:
                                    help="let a model file or scenario of this run name the Python machine file "
                                    "FILE.py (machine files are code: by default a data file may only name a "
                                    "registered machine); repeatable")
+        if {action.dest for action in subparser._actions} & {"data", "train", "validation"}:
+            subparser.add_argument("--unit", action="append", default=[], metavar="COLUMN=UNIT",
+                                   help="the unit of a record column, when it is not s, A or degC: time_s=min, "
+                                   "currents=kA, temperatures=K, or a column name (converted on reading; "
+                                   "time_s=s accepts the column as it is); repeatable")
     return parser
 
 
@@ -113,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", PendingDeprecationWarning)
             warnings.showwarning = _warning_printer(command)
             with trusted_machine_files(getattr(args, "trust_machine", None) or []), \
+                    stated_units(parse_unit_options(getattr(args, "unit", None) or [])), \
                     replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals():
                 code = int(args.func(args) or 0)
         sys.stdout.flush()

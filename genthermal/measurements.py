@@ -55,6 +55,7 @@ from .errors import InputError
 from .machines import MACHINES, DEFAULT_MACHINE
 from .machines.interface import InputKind, MachineInterface
 from .sizes import check_grid
+from .unit_checks import checked_units
 
 #: Schema of the default machine (a machine's own: :func:`required_columns`).
 DEFAULT_INTERFACE = MACHINES[DEFAULT_MACHINE].interface
@@ -282,6 +283,7 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: 
     present_sensors = [*interface.sensor_columns, *(c for c in interface.optional_columns if c in raw.columns)]
     columns = ["time_s", *interface.input_names, *present_sensors]
     frame = pd.DataFrame({name: _numeric_column(raw[name], name, from_file) for name in columns})
+    frame = checked_units(frame, interface, rated_current_A)  # s, A and °C, or the column is named
     for name in ("time_s", *interface.input_names):
         _check_input_column(frame[name].to_numpy(), name, from_file, interface)
     _check_time_increasing(frame["time_s"].to_numpy(), from_file)
