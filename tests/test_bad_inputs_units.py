@@ -126,3 +126,19 @@ def test_compare_refuses_minutes_and_runs_once_they_are_stated(records, tmp_path
     out = capsys.readouterr().out
     rmse = [float(line.split("RMSE")[1].split()[0]) for line in out.splitlines() if "RMSE" in line]
     assert rmse and max(rmse) < 2.0, out  # the true model on its own record, read in seconds
+
+
+def test_a_fit_at_its_bound_is_not_reported_as_converged(records, tmp_path, capsys):
+    """Currents in kA forced through as amperes (--unit currents=A): R0 runs to its upper bound."""
+    path = tmp_path / "rig_ka.csv"
+    frame = WRONG_UNITS["kA"][0](records[10.0])
+    frame.iloc[::6].to_csv(path, index=False)  # 60-s samples: a fast fit
+    assert main(["calibrate", str(path), "--params", "R0", "--unit", "currents=A",
+                 "--json", str(tmp_path / "fit.json")]) == 0
+    out = capsys.readouterr().out
+    first = out.splitlines()[0]
+    assert "stopped at a bound: R0 (upper bound" in first and "(converged)" not in first
+    import json
+
+    summary = json.loads((tmp_path / "fit.json").read_text())
+    assert summary["status"] != "converged" and summary["at_bounds"] and summary["at_bounds"][0].startswith("R0")
