@@ -24,6 +24,7 @@ refuses to replace existing ones unless given ``--force``.
 from __future__ import annotations
 
 import argparse
+import codecs
 import importlib
 import os
 import signal
@@ -104,9 +105,34 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: ASCII for the symbols genthermal prints, on a terminal that cannot show them (LANG=C).
+ASCII_SPELLING = {"°": "deg", "²": "^2", "³": "^3", "×": "x", "≈": "~", "Δ": "d", "θ": "theta", "σ": "sigma",
+                  "ρ": "rho", "→": "->", "←": "<-", "≤": "<=", "≥": ">=", "±": "+/-", "…": "...", "−": "-",
+                  "–": "-", "—": "-", "µ": "u", "Ω": "ohm", "·": "*", "√": "sqrt", "∞": "inf", "’": "'"}
+
+
+def _spell_in_ascii(error: UnicodeEncodeError):
+    text = error.object[error.start:error.end]
+    return "".join(ASCII_SPELLING.get(character, "?") for character in text), error.end
+
+
+codecs.register_error("genthermal-ascii", _spell_in_ascii)
+
+
+def _printable_anywhere() -> None:
+    """Let stdout and stderr print on any terminal: characters its encoding lacks are spelt in ASCII
+    (``°C`` as ``degC`` with LANG=C or PYTHONIOENCODING=ascii) instead of raising."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="genthermal-ascii")
+        except (AttributeError, ValueError, OSError):  # not a text stream that can be reconfigured
+            pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the process exit code (see the module docstring)."""
     command = "genthermal"
+    _printable_anywhere()
     try:
         args = build_parser().parse_args(argv)
         command = f"genthermal {args.command}"

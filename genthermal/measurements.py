@@ -52,6 +52,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
+from .input_limits import MAX_RECORD_BYTES, read_bounded
 from .machines import MACHINES, DEFAULT_MACHINE
 from .machines.interface import InputKind, MachineInterface
 from .sizes import check_grid
@@ -186,8 +187,7 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None,
     """
     if isinstance(path_or_buffer, (str, os.PathLike)):
         source = str(path_or_buffer)
-        with open(path_or_buffer, "rb") as file:
-            content = file.read()
+        content = read_bounded(path_or_buffer, "data file", MAX_RECORD_BYTES)  # no device, no endless pipe
     else:
         source = str(getattr(path_or_buffer, "name", "<buffer>"))
         content = path_or_buffer.read()
