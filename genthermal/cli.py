@@ -107,7 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: ASCII for the symbols genthermal prints, on a terminal that cannot show them (LANG=C).
 ASCII_SPELLING = {"°": "deg", "²": "^2", "³": "^3", "×": "x", "≈": "~", "Δ": "d", "θ": "theta", "σ": "sigma",
-                  "ρ": "rho", "→": "->", "←": "<-", "≤": "<=", "≥": ">=", "±": "+/-", "…": "...", "−": "-",
+                  "ρ": "rho", "→": "->", "←": "<-", "≤": "<=", "≥": ">=", "±": "+/-", "…": "...",
+                  "−": "-",
                   "–": "-", "—": "-", "µ": "u", "Ω": "ohm", "·": "*", "√": "sqrt", "∞": "inf", "’": "'"}
 
 

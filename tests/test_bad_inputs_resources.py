@@ -91,8 +91,9 @@ def test_a_shared_structure_a_billion_items_deep_is_shown_in_a_line():
 
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(digits=st.integers(300, 6000), sign=st.sampled_from(["", "-"]),
-       field=st.sampled_from(["parameters:\n  h_end_air: {{value: {n}}}", "effects:\n  - {{name: coolant_flow_reduction, "
-                                                                        "parameters: {{k_flow: {n}}}, onset_s: {n}}}"]))
+       field=st.sampled_from(["parameters:\n  h_end_air: {{value: {n}}}",
+                              "effects:\n  - {{name: coolant_flow_reduction, "
+                              "parameters: {{k_flow: {n}}}, onset_s: {n}}}"]))
 def test_huge_yaml_integers_are_refused_not_overflowed(tmp_path_factory, digits, sign, field):
     path = tmp_path_factory.mktemp("int") / "model.yaml"
     path.write_text("machine: genco_rf201a\n" + field.format(n=sign + "1" + "0" * digits) + "\n")

@@ -88,7 +88,8 @@ def test_the_independent_records_pass_the_unit_checks():
             load_measurements(path)
 
 
-@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(factor=st.sampled_from([1 / 60.0, 1000.0]), start=st.floats(0.0, 1e5), rows=st.integers(300, 1500))
 def test_time_rescaled_to_minutes_or_ms_is_never_taken_as_seconds(records, factor, start, rows):
     frame = records[1.0].iloc[:rows].copy()
@@ -97,7 +98,8 @@ def test_time_rescaled_to_minutes_or_ms_is_never_taken_as_seconds(records, facto
         read(frame)
 
 
-@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(load=st.floats(0.2, 1.5), scale=st.sampled_from([1e-3, 1e-4]))
 def test_currents_in_ka_are_never_taken_as_amperes(records, load, scale):
     frame = records[10.0].copy()

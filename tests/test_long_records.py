@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 
 from genthermal.errors import InputError
-from genthermal.long_records import FITTING_STEPS_S, MAX_FITTING_SAMPLES, block_average, decimate_for_fitting, fitting_step
+from genthermal.long_records import (FITTING_STEPS_S, MAX_FITTING_SAMPLES, block_average, decimate_for_fitting,
+                                      fitting_step)
 from genthermal.measurements import REQUIRED_COLUMNS, dataframe_to_measurements
 
 

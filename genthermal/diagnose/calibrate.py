@@ -242,7 +242,8 @@ class CalibrationResult:
             worst = max(self.residual_autocorrelation, key=self.residual_autocorrelation.get)
             problems.append(f"the residual of {worst} is not white (lag-1 autocorrelation "
                             f"{self.residual_autocorrelation[worst]:.2f} > {MAX_AUTOCORRELATION:g}): 95 % intervals "
-                            f"widened x{self.fisher.get('interval_widening', 1.0):.3g} for it, a model error may remain")
+                            f"widened x{self.fisher.get('interval_widening', 1.0):.3g} for it, a model error "
+                            "may remain")
         return "; ".join(problems) or "converged"
 
     @property
