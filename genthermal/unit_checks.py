@@ -190,7 +190,7 @@ def _check_time(frame: pd.DataFrame, sensors: list[str]) -> None:
         likely = "hours" if _whole(step * 3600.0) or step * 60.0 < MIN_STEP_S else "minutes or hours"
         raise _refuse("time_s", f"median step {step:.6g}", f"{likely} (no logger of a machine's temperatures "
                       f"samples every {step:.3g} s)", "multiply it by 3600 (hours) or 60 (minutes)", "time")
-    if step < 1.0 and _whole(step * 60.0) and not _whole(step * 100.0):
+    if step < 1.0 and _whole(step * 60.0, 1e-3) and not _whole(step * 100.0, 1e-3):  # stamps rounded to 4 digits
         raise _refuse("time_s", f"median step {step:.6g}", f"minutes (logging every {step * 60:.3g} s)",
                       "multiply it by 60", "time")
     rate, column = _fastest_change(frame, sensors, time_s, step)

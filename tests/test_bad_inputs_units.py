@@ -144,3 +144,11 @@ def test_a_fit_at_its_bound_is_not_reported_as_converged(records, tmp_path, caps
 
     summary = json.loads((tmp_path / "fit.json").read_text())
     assert summary["status"] != "converged" and summary["at_bounds"] and summary["at_bounds"][0].startswith("R0")
+
+
+@pytest.mark.parametrize("decimals", [4, 6])
+def test_minutes_written_with_few_decimals_are_still_minutes(records, decimals):
+    frame = records[10.0].copy()
+    frame["time_s"] = (frame["time_s"] / 60.0).round(decimals)
+    with pytest.raises(InputError, match="minutes"):
+        read(frame)
