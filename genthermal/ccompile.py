@@ -5,6 +5,12 @@ compiler's identity, the flags and the contents of the source and headers; the l
 under the keys of its objects. The cache lives in ``$GENTHERMAL_CACHE_DIR`` or
 ``~/.cache/genthermal`` (``codegen/obj`` and ``codegen/lib``), so a model that was compiled once
 loads in milliseconds. Files enter the cache by an atomic rename, so concurrent processes are safe.
+
+A library in the cache is code that will be loaded into the process, so the cache is guarded: its
+folders are created private to the user (mode 0700) and refused when another user owns them or may
+write in them, and every cached object and library has a record of its key (the hash of the
+sources, headers, compiler and flags it was built from) and of its own SHA-256. A file whose
+record is missing or does not match (changed, truncated, replaced) is built again before use.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import os
 import re
 import shlex
 import shutil
+import stat
 import subprocess
 import sys
 import uuid
@@ -69,6 +76,66 @@ def cache_dir() -> Path:
     """Directory of compiled objects and libraries: ``$GENTHERMAL_CACHE_DIR`` or ``~/.cache/genthermal``."""
     configured = os.environ.get("GENTHERMAL_CACHE_DIR", "").strip()
     return Path(configured).expanduser() if configured else Path.home() / ".cache" / "genthermal"
+
+
+def private_folder(path: Path) -> Path:
+    """``path`` under :func:`cache_dir`, created (with the missing folders up to it) with mode 0700.
+
+    Raises
+    ------
+    InputError
+        The cache folder or one below it is not a folder, belongs to another user, or other users
+        may write in it: a library found there could have been put there by them.
+    """
+    root = cache_dir()
+    chain = [root, *reversed([p for p in Path(path).parents if root in p.parents]), Path(path)]
+    for folder in dict.fromkeys(chain):
+        try:
+            folder.mkdir(mode=0o700, parents=folder == root, exist_ok=True)
+        except FileExistsError:
+            pass
+        info = os.stat(folder)
+        reason = None
+        if not stat.S_ISDIR(info.st_mode):
+            reason = "is not a folder"
+        elif hasattr(os, "getuid") and info.st_uid != os.getuid():
+            reason = f"belongs to another user (uid {info.st_uid})"
+        elif info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            reason = f"may be written by other users (mode {stat.S_IMODE(info.st_mode):o})"
+        if reason:
+            raise InputError("compiled-library cache (GENTHERMAL_CACHE_DIR)", str(folder),
+                             f"{reason}: a library loaded from it could be anyone's code; make it private "
+                             "(chmod 700) or set GENTHERMAL_CACHE_DIR to a folder of your own")
+    return Path(path)
+
+
+def _record(path: Path) -> Path:
+    return path.with_name(path.name + ".sha256")
+
+
+def _file_digest(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as file:
+        for block in iter(lambda: file.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _is_intact(path: Path, key: str) -> bool:
+    """True when ``path`` and its record exist and the record holds ``key`` and the file's SHA-256."""
+    try:
+        recorded = _record(path).read_text().split()
+        return recorded == [key, _file_digest(path)]
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def _enter(scratch: Path, target: Path, key: str) -> None:
+    """Move a complete ``scratch`` file onto ``target`` in the cache, with its record."""
+    record = _atomic_target(_record(target))
+    record.write_text(f"{key} {_file_digest(scratch)}\n")
+    os.replace(scratch, target)
+    os.replace(record, _record(target))
 
 
 @functools.lru_cache(maxsize=None)
@@ -124,17 +191,17 @@ def compile_objects(sources, headers=(), flags=COMPILE_FLAGS, compiler=None) -> 
         key.update(source.name.encode() + text)
         for name in sorted(set(_INCLUDE.findall(text.decode(errors="replace"))) & set(headers)):
             key.update(name.encode() + headers[name].read_bytes())
-        target = cache_dir() / "codegen" / "obj" / f"{source.stem}-{key.hexdigest()[:24]}.o"
+        target = private_folder(cache_dir() / "codegen" / "obj") / f"{source.stem}-{key.hexdigest()[:24]}.o"
         objects.append(target)
-        if not target.exists():
-            missing.append((source, target))
+        if not _is_intact(target, key.hexdigest()):
+            missing.append((source, target, key.hexdigest()))
 
     def build(item):
-        source, target = item
+        source, target, key = item
         scratch = _atomic_target(target)
         try:
             _run([*compiler, *flags, *include, "-c", str(source), "-o", str(scratch)], f"compiling {source.name}")
-            os.replace(scratch, target)
+            _enter(scratch, target, key)
         finally:
             scratch.unlink(missing_ok=True)
 
@@ -169,15 +236,15 @@ def compile_library(generated: GeneratedLibrary, out_dir=None) -> Path:
     """
     compiler = find_compiler()
     objects = compile_objects(generated.sources, generated.headers, COMPILE_FLAGS, compiler)
-    key = hashlib.sha256("\n".join(o.name for o in objects).encode()).hexdigest()[:24]
+    key = hashlib.sha256("\n".join(_record(o).read_text() for o in objects).encode()).hexdigest()
     name = f"lib{generated.prefix}{_LIBRARY_SUFFIX}"
-    cached = cache_dir() / "codegen" / "lib" / key / name
-    if not cached.exists():
+    cached = private_folder(cache_dir() / "codegen" / "lib" / key[:24]) / name
+    if not _is_intact(cached, key):
         scratch = _atomic_target(cached)
         try:
             _run([*compiler, "-shared", *COMPILE_FLAGS, "-o", str(scratch), *map(str, objects), "-lm"],
                  f"linking {name}")
-            os.replace(scratch, cached)
+            _enter(scratch, cached, key)
         finally:
             scratch.unlink(missing_ok=True)
     if out_dir is None:

@@ -11,6 +11,7 @@ Exit codes (the same for every command)
 2    bad input: a bad option, file, scenario, model or data value; one line on stderr names the
      field and the value (argparse's own usage errors also exit 2)
 130  interrupted (Ctrl-C): one line on stderr, no partial output file (see :mod:`genthermal.outputs`)
+143  terminated (SIGTERM, or SIGHUP: 129): as Ctrl-C, no partial output file or folder
 141  the reader of the output went away (``genthermal describe | head``): ends quietly
 1    internal error: a bug in genthermal; one line on stderr, with the path of a file holding the
      traceback to attach to a bug report
@@ -23,8 +24,10 @@ refuses to replace existing ones unless given ``--force``.
 from __future__ import annotations
 
 import argparse
+import codecs
 import importlib
 import os
+import signal
 import sys
 import tempfile
 import traceback
@@ -32,7 +35,7 @@ import warnings
 
 from . import __version__
 from .errors import GenthermalError
-from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, check_output_paths
+from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, Terminated, check_output_paths, replacing_policy
 
 #: Sub-commands in the order ``genthermal --help`` lists them: name -> (module under
 #: :mod:`genthermal.commands`, one-line summary, the documentation page that says more). Only the
@@ -63,6 +66,8 @@ COMMANDS = {
 COMMAND_MODULES = tuple(module for module, _, _ in COMMANDS.values())
 DOCS_HINT = "the docs/ folder of the source tree, or the documentation site built from it (docs/contributing.md)"
 EXIT_OK, EXIT_INTERNAL_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+#: Signals that stop a run the way Ctrl-C does (the temporary outputs are removed), exit 128 + number.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 BUG_REPORT_HINT = "this is a bug in genthermal; please report it with the command line you ran"
 
 
@@ -104,7 +109,42 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
         if writes and "--force" not in subparser._option_string_actions:
             subparser.add_argument("--force", action="store_true",
                                    help="replace output files (or fill an output folder) that already exist")
+        if {action.dest for action in subparser._actions} & {"model", "plant", "scenario", "mission"}:
+            subparser.add_argument("--trust-machine", action="append", default=[], metavar="FILE.py",
+                                   help="let a model file or scenario of this run name the Python machine file "
+                                   "FILE.py (machine files are code: by default a data file may only name a "
+                                   "registered machine); repeatable")
+        if {action.dest for action in subparser._actions} & {"data", "train", "validation"}:
+            subparser.add_argument("--unit", action="append", default=[], metavar="COLUMN=UNIT",
+                                   help="the unit of a record column, when it is not s, A or degC: time_s=min, "
+                                   "currents=kA, temperatures=K, or a column name (converted on reading; "
+                                   "time_s=s accepts the column as it is); repeatable")
     return parser
+
+
+#: ASCII for the symbols genthermal prints, on a terminal that cannot show them (LANG=C).
+ASCII_SPELLING = {"°": "deg", "²": "^2", "³": "^3", "×": "x", "≈": "~", "Δ": "d", "θ": "theta", "σ": "sigma",
+                  "ρ": "rho", "→": "->", "←": "<-", "≤": "<=", "≥": ">=", "±": "+/-", "…": "...",
+                  "−": "-",
+                  "–": "-", "—": "-", "µ": "u", "Ω": "ohm", "·": "*", "√": "sqrt", "∞": "inf", "’": "'"}
+
+
+def _spell_in_ascii(error: UnicodeEncodeError):
+    text = error.object[error.start:error.end]
+    return "".join(ASCII_SPELLING.get(character, "?") for character in text), error.end
+
+
+codecs.register_error("genthermal-ascii", _spell_in_ascii)
+
+
+def _printable_anywhere() -> None:
+    """Let stdout and stderr print on any terminal: characters its encoding lacks are spelt in ASCII
+    (``°C`` as ``degC`` with LANG=C or PYTHONIOENCODING=ascii) instead of raising."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="genthermal-ascii")
+        except (AttributeError, ValueError, OSError):  # not a text stream that can be reconfigured
+            pass
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -112,12 +152,16 @@ def main(argv: list[str] | None = None) -> int:
     command = "genthermal"
     # Figures go to files: no window unless the user chose a backend (a library user keeps theirs).
     os.environ.setdefault("MPLBACKEND", "Agg")
+    _printable_anywhere()
     try:
         words = sys.argv[1:] if argv is None else list(argv)
         args = build_parser(words[:1] if words[:1] and words[0] in COMMANDS else words).parse_args(words)
         command = f"genthermal {args.command}"
         check_output_paths(args, args.command)
+        # Imported only now: ``genthermal --help`` loads no numerical library.
+        from .machines.registry import trusted_machine_files
         from .measurements import DataWarning
+        from .unit_checks import parse_unit_options, stated_units
 
         with warnings.catch_warnings():
             warnings.simplefilter("always", DataWarning)
@@ -126,13 +170,19 @@ def main(argv: list[str] | None = None) -> int:
             warnings.simplefilter("ignore", DeprecationWarning)
             warnings.simplefilter("ignore", PendingDeprecationWarning)
             warnings.showwarning = _warning_printer(command)
-            code = int(args.func(args) or 0)
+            with trusted_machine_files(getattr(args, "trust_machine", None) or []), \
+                    stated_units(parse_unit_options(getattr(args, "unit", None) or [])), \
+                    replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals():
+                code = int(args.func(args) or 0)
         sys.stdout.flush()
         return code
     except GenthermalError as exc:
         _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
+        if isinstance(exc, Terminated):
+            _error(f"\n{command}: {exc.args[0] if exc.args else 'terminated'}; no partial output file was left")
+            return 128 + (exc.args[1] if len(exc.args) > 1 else signal.SIGTERM)
         _error(f"\n{command}: interrupted; no partial output file was left")
         return EXIT_INTERRUPTED
     except BrokenPipeError:
@@ -152,6 +202,32 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: internal error: {type(exc).__name__}: {_one_line(exc)}\n{BUG_REPORT_HINT} "
                f"(genthermal {__version__}); traceback saved in {_save_traceback()}")
         return EXIT_INTERNAL_ERROR
+
+
+class _stopping_on_signals:
+    """Within the block, SIGTERM and SIGHUP raise :class:`~genthermal.outputs.Terminated` in this
+    process (forked workers keep the default: they just end), so cleanups run as for Ctrl-C."""
+
+    def __enter__(self):
+        self._pid, self._previous = os.getpid(), {}
+        try:
+            for number in STOP_SIGNALS:
+                self._previous[number] = signal.signal(number, self._handle)
+        except ValueError:  # not the main thread: leave the signals alone
+            pass
+        return self
+
+    def _handle(self, number, frame):
+        if os.getpid() != self._pid:
+            signal.signal(number, signal.SIG_DFL)
+            os.kill(os.getpid(), number)
+            return
+        raise Terminated(f"stopped by {signal.Signals(number).name}", int(number))
+
+    def __exit__(self, *exc):
+        for number, previous in self._previous.items():
+            signal.signal(number, previous)
+        return False
 
 
 def _warning_printer(command: str):

@@ -4,6 +4,7 @@ Every error that reaches a user names the offending field and value; the CLI pri
 (no traceback) and exits with a non-zero code.
 """
 
+import reprlib
 
 #: Longest ``repr`` of a bad value an error message shows, characters.
 SHOWN_VALUE_CHARS = 120
@@ -31,10 +32,35 @@ class InputError(GenthermalError, ValueError):
         self.field = field
         self.value = value
         self.reason = reason
-        shown = repr(value)
-        if len(shown) > SHOWN_VALUE_CHARS:
-            shown = f"{shown[:SHOWN_VALUE_CHARS]}... ({len(shown)} characters)"
-        super().__init__(f"{field} = {shown}: {reason}")
+        super().__init__(f"{field} = {shown_value(value)}: {reason}")
+
+
+def shown_value(value) -> str:
+    """``repr(value)`` cut to :data:`SHOWN_VALUE_CHARS` characters, built without rendering more.
+
+    A text keeps its length in the message; a container is rendered a few items and levels deep
+    (:mod:`reprlib`), so a YAML alias bomb (a list of lists shared a thousand times) or a huge
+    number costs no more than its first characters.
+    """
+    if isinstance(value, str):
+        if len(value) <= SHOWN_VALUE_CHARS:
+            return repr(value)
+        return f"{repr(value[:SHOWN_VALUE_CHARS])[:SHOWN_VALUE_CHARS]}... ({len(value)} characters)"
+    shown = _SHORT.repr(value)
+    return shown if len(shown) <= SHOWN_VALUE_CHARS else f"{shown[:SHOWN_VALUE_CHARS]}..."
+
+
+class _ShortRepr(reprlib.Repr):
+    def repr_int(self, value, level):
+        if value.bit_length() > 256:  # rendering 10**5000 raises, 10**400 floods the line
+            return f"<an integer of {int(value.bit_length() * 0.30103) + 1} digits>"
+        return super().repr_int(value, level)
+
+
+_SHORT = _ShortRepr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 3, 8, 8, 8
+_SHORT.maxset, _SHORT.maxfrozenset, _SHORT.maxdeque, _SHORT.maxarray = 8, 8, 8, 8
+_SHORT.maxstring, _SHORT.maxother, _SHORT.maxlong = SHOWN_VALUE_CHARS, SHOWN_VALUE_CHARS, SHOWN_VALUE_CHARS
 
 
 class ParameterError(InputError):

@@ -8,13 +8,14 @@ iteration, so its cost grows with the number of samples. :func:`decimate_for_fit
 averages the record in blocks down to at most :data:`MAX_FITTING_SAMPLES` samples, on the first
 of :data:`FITTING_STEPS_S` that is long enough, and says so.
 
-Block averages keep what the model needs. Inputs are held over a step ``[t_k, t_k + step)`` by
-the simulation, so they are averaged over that block: currents as RMS values (the copper and
-excitation losses go with the current squared, so the mean loss of the block is kept), inlet and
-ambient temperatures as means. A sensor is compared with the state *at* ``t_k``, so it is averaged
-over the window centred on ``t_k`` (a linear trend cancels, the noise falls); a window without
-any valid sample is missing. A block inside a gap of the record holds the inputs of the block
-before it, as a resampling does (the gap is flagged when the record is loaded).
+Block averages keep what the model needs. Inputs are held over a step ``[t_k, t_k + step)`` by the
+simulation, so they are averaged over that block: currents as RMS values (the copper and excitation
+losses go with the current squared, so the mean loss of the block is kept), inlet and ambient
+temperatures as means. A sensor is compared with the state *at* ``t_k``, so it is averaged over the
+window of at most :data:`SENSOR_WINDOW_S` centred on ``t_k`` (a linear trend cancels, the noise
+falls, and a load change just after ``t_k``, which the state at ``t_k`` has not seen, reaches it
+less); a window without any valid sample is missing. A block inside a gap of the record holds the
+inputs of the block before it, as a resampling does (the gap is flagged when the record is loaded).
 Memory stays bounded: one pass of numpy reductions over the validated columns.
 """
 
@@ -27,12 +28,17 @@ from .errors import InputError
 from .measurements import MeasurementData
 
 #: Most samples a record given to calibration or diagnosis keeps: the diagnosis's cost grows with the
-#: samples (one week at 1 s, 300-s blocks: 2017 samples, about 3 min of diagnosis; 60-s blocks took
-#: over 9 min, ``benchmarks/bench_long_record.py``); two weeks fit, longer records are refused.
-MAX_FITTING_SAMPLES = 4_000
-#: Block lengths tried in order, s: 10 s is the thesis logging and filter step; the longest is the
-#: 5-minute management cycle, well below the 6.5-minute fastest slow mode of the thesis generator.
-FITTING_STEPS_S = (10.0, 15.0, 20.0, 30.0, 60.0, 120.0, 300.0)
+#: samples (``benchmarks/bench_long_record.py``); one week fits at 120-s blocks (5041 samples),
+#: records of more than 8.3 days are refused (split them).
+MAX_FITTING_SAMPLES = 6_000
+#: Longest window a sensor is averaged over around each grid time, s.
+SENSOR_WINDOW_S = 30.0
+#: Block lengths tried in order, s: 10 s is the thesis logging and filter step. The longest is a
+#: third of the 6.5-minute fastest slow mode of the thesis generator: the model holds a block's
+#: mean input over the whole block, and a load change inside it shifts that mode's response by up
+#: to a block. The true model fitted a week at 1 s to 0.05 K RMSE on 120-s blocks and to 0.29 K on
+#: 300-s blocks, which missed the truth by more than the sensor noise (docs/guide/safety.md).
+FITTING_STEPS_S = (10.0, 15.0, 20.0, 30.0, 60.0, 120.0)
 
 
 def fitting_step(data: MeasurementData) -> float | None:
@@ -68,6 +74,8 @@ def block_average(data: MeasurementData, step_s: float) -> MeasurementData:
     columns = {"time_s": time_s[0] + step_s * np.arange(n_blocks)}
     input_block = np.floor(elapsed / step_s + 1e-9).astype(np.int64)
     sensor_block = np.minimum(np.floor(elapsed / step_s + 0.5).astype(np.int64), n_blocks - 1)
+    half_window_s = min(step_s, SENSOR_WINDOW_S) / 2.0
+    in_window = np.abs(elapsed - sensor_block * step_s) <= half_window_s + 1e-9 * step_s
     inputs = data.interface.input_names
     rms_columns = data.interface.rms_currents  # losses go with their square
     for name in data.frame.columns:
@@ -75,7 +83,7 @@ def block_average(data: MeasurementData, step_s: float) -> MeasurementData:
             continue
         block = input_block if name in inputs else sensor_block
         values = data.frame[name].to_numpy(dtype=float)
-        valid = np.isfinite(values)
+        valid = np.isfinite(values) & (in_window | (name in inputs))
         squared = name in rms_columns
         sums = np.bincount(block, np.where(valid, values ** 2 if squared else values, 0.0), n_blocks)
         counts = np.bincount(block, valid, n_blocks)

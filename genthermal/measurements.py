@@ -52,10 +52,12 @@ import numpy as np
 import pandas as pd
 
 from .errors import InputError
+from .input_limits import MAX_RECORD_BYTES, read_bounded
 from .machines import MACHINES, DEFAULT_MACHINE
 from .machines.interface import InputKind, MachineInterface
 from .resources import shipped_data_file
 from .sizes import check_grid
+from .unit_checks import checked_units
 
 #: Schema of the default machine (a machine's own: :func:`required_columns`).
 DEFAULT_INTERFACE = MACHINES[DEFAULT_MACHINE].interface
@@ -187,8 +189,7 @@ def load_measurements(path_or_buffer, rated_current_A: float | None = None,
     if isinstance(path_or_buffer, (str, os.PathLike)):
         path_or_buffer = shipped_data_file(str(path_or_buffer), ".csv") or path_or_buffer  # a shipped record by name
         source = str(path_or_buffer)
-        with open(path_or_buffer, "rb") as file:
-            content = file.read()
+        content = read_bounded(path_or_buffer, "data file", MAX_RECORD_BYTES)  # no device, no endless pipe
     else:
         source = str(getattr(path_or_buffer, "name", "<buffer>"))
         content = path_or_buffer.read()
@@ -284,6 +285,7 @@ def _validate(raw: pd.DataFrame, source: str, from_file: bool, rated_current_A: 
     present_sensors = [*interface.sensor_columns, *(c for c in interface.optional_columns if c in raw.columns)]
     columns = ["time_s", *interface.input_names, *present_sensors]
     frame = pd.DataFrame({name: _numeric_column(raw[name], name, from_file) for name in columns})
+    frame = checked_units(frame, interface, rated_current_A)  # s, A and °C, or the column is named
     for name in ("time_s", *interface.input_names):
         _check_input_column(frame[name].to_numpy(), name, from_file, interface)
     _check_time_increasing(frame["time_s"].to_numpy(), from_file)

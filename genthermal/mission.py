@@ -40,7 +40,7 @@ import yaml
 
 from .conditions import Action, LoadCondition, checked_number, reject_unknown_keys
 from .errors import InputError
-from .yaml_input import load_user_yaml
+from .yaml_input import load_user_yaml, read_user_text
 from .exciter import DEFAULT_POWER_FACTOR
 from .machines import DEFAULT_MACHINE, MACHINES
 from .machines.interface import GeneratorRole
@@ -312,7 +312,7 @@ class Mission:
         """
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            text = read_user_text(path, "scenario")
         except FileNotFoundError:
             raise InputError("scenario", str(path), f"file not found; {_available_text()}") from None
         except (OSError, UnicodeDecodeError) as error:

@@ -21,8 +21,11 @@
 :func:`load_model` also takes a machine name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
 parameter set, ``genco_rf201a:chapter7``; a plug-in machine's name or the path of a ``.py`` machine
 file (:mod:`genthermal.machines.registry`), each optionally with ``:linear``. ``machine:`` in a
-model file takes the same names (the calibration fitted to the thesis's chapter-7 outcomes,
-:mod:`genthermal.machines.chapter7`; a model file inside the package).
+model file takes a registered machine only (built-in or plug-in, and the shipped parameter sets:
+the calibration fitted to the thesis's chapter-7 outcomes, :mod:`genthermal.machines.chapter7`):
+a model file is data, and loading one never runs code. A model file of a ``.py`` machine (what
+``calibrate --out`` writes for one) loads only when that file is trusted for the run
+(:func:`genthermal.machines.registry.trusted_machine_files`, ``--trust-machine FILE.py``).
 
 An effect with ``onset_s`` is loaded with its fitted values and the onset recorded on the model
 (``spec.onsets``): :func:`genthermal.simulate.simulate` and ``compare`` hold it at its neutral
@@ -45,7 +48,7 @@ import yaml
 from .design import linear_design_model
 from .effects import CATALOGUE, apply_effect
 from .errors import InputError
-from .yaml_input import load_user_yaml
+from .yaml_input import load_user_yaml, read_user_text
 from .machines import MACHINES, build_model, known_machines
 from .machines.registry import is_machine_reference
 from .model import ThermalModel
@@ -63,7 +66,7 @@ _PARAMETER_KEYS = ("value", "provenance", "source")
 _EFFECT_KEYS = ("name", "parameters", "provenance", "source", "onset_s")
 
 
-def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
+def load_model(spec_or_path: str | os.PathLike, from_data: bool = False) -> ThermalModel:
     """Build a model from a built-in name (``genco_rf201a[:linear|:chapter7]``) or a YAML model file.
 
     Parameters
@@ -71,6 +74,9 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     spec_or_path : str or path-like
         A machine name with an optional variant (``genco_rf201a:linear``), a ``.py`` machine file,
         or a model file written by :func:`save_model` (``calibrate --out``, ``diagnose --out``).
+    from_data : bool
+        ``spec_or_path`` was read from a data file (a scenario): a ``.py`` machine file is refused
+        unless trusted, as in a model file.
 
     Returns
     -------
@@ -79,8 +85,8 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     Raises
     ------
     InputError
-        Unknown machine or variant, unreadable file, or a bad entry (the field is named, e.g.
-        ``parameters.h_end_air.value`` or ``effects[0].parameters``).
+        Unknown machine or variant, unreadable or too large a file, an untrusted machine file, or a
+        bad entry (the field is named, e.g. ``parameters.h_end_air.value`` or ``effects[0].parameters``).
     """
     text = str(spec_or_path)
     head, sep, tail = text.rpartition(":")
@@ -91,7 +97,7 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
         return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
     if variant not in PARAMETER_SETS and not (Path(text).is_file() and not name.endswith(".py")) \
             and is_machine_reference(name):
-        return _build(name, variant or "nonlinear", from_file=False)
+        return _build(name, variant or "nonlinear", from_file=False, from_data=from_data)
     path = shipped_data_file(text, ".yaml") or Path(text)
     if not path.is_file():
         known = ", ".join(f"{m}, {m}:linear" for m in known_machines())
@@ -100,7 +106,7 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
         raise InputError("model", text, f"neither a machine ({known}, {sets}, or a .py machine file), a shipped "
                          f"stand-in plant ({plants}) nor a model file")
     try:
-        document = load_user_yaml(path.read_text(encoding="utf-8"), str(path))
+        document = load_user_yaml(read_user_text(path, "model file"), str(path))
     except UnicodeDecodeError:
         raise InputError("model file", str(path), "not a text file (UTF-8 YAML expected)") from None
     except yaml.YAMLError as exc:
@@ -111,12 +117,12 @@ def load_model(spec_or_path: str | os.PathLike) -> ThermalModel:
     return model_from_document(document, str(path))
 
 
-def _build(machine: str, variant: str, from_file: bool) -> ThermalModel:
+def _build(machine: str, variant: str, from_file: bool, from_data: bool = True) -> ThermalModel:
     if variant not in VARIANTS:
         raise InputError("variant" if from_file else "model variant", variant,
                          f"must be one of {', '.join(VARIANTS)}")
     try:
-        model = build_model(machine)
+        model = build_model(machine, from_data=from_data)
     except InputError as error:
         field = "machine" if from_file else "model"
         raise InputError(field if error.field == "machine" else f"{field} {error.field}", error.value,

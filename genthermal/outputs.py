@@ -5,13 +5,22 @@ Three rules, applied by every command:
 * **Nothing is replaced by surprise.** An output file that exists, or an output folder that is not
   empty, is refused unless the command was given ``--force`` (:func:`check_output_paths`, called
   by the CLI before any work starts, so a long run never ends in a refusal).
-* **Inputs are never outputs.** An output path that names one of the command's input files, or two
-  outputs that name the same file, is refused even with ``--force``.
+  ``--force`` replaces regular files only: a symbolic link, a device or a FIFO given as an output
+  is refused by name, with or without it (replacing a link would not write where it points;
+  writing a device or FIFO is not making a file).
+* **Inputs are never outputs.** An output path that names any file the command line names
+  otherwise (``--plant``, a baseline, a column map, a scenario, the data), or two outputs that name
+  the same file, is refused even with ``--force``.
 * **Nothing is left half-written.** Every file is written to a temporary file in the same folder
-  and moved into place only when it is complete (:func:`replacing`); an error or Ctrl-C leaves the
-  old file as it was and no partial file behind. A command that writes several files into a folder
-  (C sources and library, a report) builds them in a temporary folder next to it and moves them in
-  only when all are complete (:func:`replacing_folder`).
+  and moved into place only when it is complete (:func:`replacing`); an error, Ctrl-C or SIGTERM
+  (which the CLI turns into :class:`Terminated`) leaves the old file as it was and no partial file
+  behind. A command that writes several files into a folder (C sources and library, a report, the
+  demo, a firmware build) builds them in a temporary folder next to it and moves them in only when
+  all are complete (:func:`replacing_folder`).
+* **Two runs cannot both claim one output.** Without ``--force`` (:func:`replacing_policy`) a file
+  is moved into place only if none appeared meanwhile (an exclusive link), and a folder only if it
+  is still empty: the second of two concurrent runs fails with a clear message instead of
+  silently replacing the first one's result.
 
 JSON output holds finite numbers only: :func:`write_json` writes NaN and ±inf as ``null`` and
 returns where it did so, for the command to say.
@@ -19,10 +28,13 @@ returns where it did so, for the command to say.
 
 from __future__ import annotations
 
+import contextvars
+import errno
 import json
 import math
 import os
 import shutil
+import stat
 import tempfile
 from contextlib import contextmanager, suppress
 from pathlib import Path
@@ -37,9 +49,14 @@ FILE_OUTPUT_OPTIONS = ("out", "json", "plot")
 #: Option destinations that name folders a command writes (``--report DIR``).
 FOLDER_OUTPUT_OPTIONS = ("report",)
 #: Commands whose ``--out`` is a folder, not a file.
-FOLDER_OUT_COMMANDS = ("codegen", "demo")
-#: Option and argument destinations that name files a command reads.
-INPUT_OPTIONS = ("scenario", "data", "train", "validation", "model", "baseline")
+FOLDER_OUT_COMMANDS = ("codegen", "demo", "cortex-m4")
+#: Whether an output that exists when it is moved into place may be replaced (``--force``).
+_MAY_REPLACE: contextvars.ContextVar[bool] = contextvars.ContextVar("may_replace_outputs", default=True)
+
+
+class Terminated(KeyboardInterrupt):
+    """The process was asked to stop (SIGTERM, SIGHUP): unwinds like Ctrl-C, so that no partial
+    output is left behind."""
 #: Figure formats a ``--plot`` file may have (matplotlib's, without the raw buffer formats).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".eps", ".ps")
 
@@ -50,9 +67,9 @@ def check_output_paths(args, command: str) -> None:
     Parameters
     ----------
     args : argparse.Namespace
-        The parsed arguments; the destinations of :data:`FILE_OUTPUT_OPTIONS`,
-        :data:`FOLDER_OUTPUT_OPTIONS` and :data:`INPUT_OPTIONS` that it has are checked, and
-        ``args.force`` (absent = False) allows replacing existing outputs.
+        The parsed arguments; the destinations of :data:`FILE_OUTPUT_OPTIONS` and
+        :data:`FOLDER_OUTPUT_OPTIONS` are the outputs, every other argument naming an existing
+        path an input, and ``args.force`` (absent = False) allows replacing existing outputs.
     command : str
         The sub-command, which decides whether ``--out`` is a file or a folder.
 
@@ -60,11 +77,14 @@ def check_output_paths(args, command: str) -> None:
     ------
     InputError
         An output names an input or another output, an output file exists (or an output folder is
-        not empty) without ``--force``, an output file is a folder, or a ``--plot`` file has a
-        suffix matplotlib cannot write.
+        not empty) without ``--force``, an output is a link, device or FIFO, an output file is a
+        folder, or a ``--plot`` file has a suffix matplotlib cannot write.
     """
     force = bool(getattr(args, "force", False))
-    inputs = [Path(value) for name in INPUT_OPTIONS if isinstance(value := getattr(args, name, None), str)]
+    outputs = (*FILE_OUTPUT_OPTIONS, *FOLDER_OUTPUT_OPTIONS)
+    inputs = [Path(value) for name, given in vars(args).items() if name not in outputs
+              for value in (given if isinstance(given, list) else [given])
+              if isinstance(value, str) and value.strip() and _names_a_file(value)]
     seen: dict[Path, str] = {}
     for name in (*FILE_OUTPUT_OPTIONS, *FOLDER_OUTPUT_OPTIONS):
         value = getattr(args, name, None)
@@ -90,13 +110,46 @@ def check_output_paths(args, command: str) -> None:
                 raise InputError(option, value, f"a figure needs one of the suffixes {', '.join(FIGURE_SUFFIXES)}")
 
 
+def _names_a_file(value: str) -> bool:
+    """True when ``value`` (any argument) names an existing file or folder: an input to protect."""
+    try:
+        return os.path.lexists(value)
+    except (ValueError, OSError):  # a NUL byte, a name too long
+        return False
+
+
 def _same_file(a: Path, b: Path) -> bool:
     if a.exists() and b.exists():
         return os.path.samefile(a, b)
     return a.resolve() == b.resolve()
 
 
+def _not_regular(path: Path) -> str | None:
+    """What ``path`` is when it exists and is not a regular file or folder (a link, device, FIFO)."""
+    try:
+        mode = os.lstat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    if stat.S_ISLNK(mode):
+        return "a symbolic link"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return None
+
+
+def _refuse_special(option: str, path: Path) -> None:
+    kind = _not_regular(path)
+    if kind:
+        raise InputError(option, str(path), f"is {kind}, not a regular file or folder; genthermal replaces "
+                         "regular files only (even with --force): name the file itself, or remove it first")
+
+
 def _check_file(option: str, path: Path, force: bool) -> None:
+    _refuse_special(option, path)
     if path.is_dir():
         raise InputError(option, str(path), "is a folder; give a file name")
     _check_writable(option, path.parent, path)
@@ -105,6 +158,7 @@ def _check_file(option: str, path: Path, force: bool) -> None:
 
 
 def _check_folder(option: str, path: Path, force: bool) -> None:
+    _refuse_special(option, path)
     if path.exists() and not path.is_dir():
         raise InputError(option, str(path), "is a file; give a folder name")
     _check_writable(option, path, path)
@@ -121,12 +175,51 @@ def _check_writable(option: str, folder: Path, path: Path) -> None:
 
 
 @contextmanager
+def replacing_policy(may_replace: bool) -> Iterator[None]:
+    """Within the block, :func:`replacing` and :func:`replacing_folder` replace an output that
+    appeared since the command started only if ``may_replace`` (the command's ``--force``)."""
+    token = _MAY_REPLACE.set(bool(may_replace))
+    try:
+        yield
+    finally:
+        _MAY_REPLACE.reset(token)
+
+
+def _claimed_meanwhile(path: Path) -> InputError:
+    return InputError("output", str(path), "was written by another run while this one worked (without --force "
+                      "neither replaces the other): this run's result was not written; run it again with "
+                      "another output name, or with --force to replace it")
+
+
+def _move_file_into_place(temporary: str, path: Path) -> None:
+    """``os.replace``, refusing a link, device or FIFO at ``path`` and, without --force, any file."""
+    _refuse_special("output", path)
+    if _MAY_REPLACE.get():
+        os.replace(temporary, path)
+        return
+    try:
+        os.link(temporary, path)  # fails if a file appeared: an exclusive create, atomically
+    except FileExistsError:
+        raise _claimed_meanwhile(path) from None
+    except OSError as error:
+        if error.errno not in (errno.EPERM, errno.ENOTSUP, errno.EXDEV, errno.EOPNOTSUPP):
+            raise
+        if os.path.lexists(path):  # a file system without hard links: check, then move
+            raise _claimed_meanwhile(path) from None
+        os.replace(temporary, path)
+        return
+    os.unlink(temporary)
+
+
+@contextmanager
 def replacing(path) -> Iterator[Path]:
     """Yield a temporary file next to ``path``; move it onto ``path`` if the block completes.
 
     The temporary file keeps ``path``'s suffix (so matplotlib and pandas pick the right format)
-    and gets the usual permissions of a new file. On any exception, Ctrl-C included, it is deleted
-    and ``path`` is left untouched. Missing parent folders are created.
+    and gets the usual permissions of a new file. On any exception, Ctrl-C and SIGTERM included, it
+    is deleted and ``path`` is left untouched. Missing parent folders are created. ``path`` must
+    not be a link, device or FIFO; under ``replacing_policy(False)`` it must not exist when the
+    file is moved into place.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -135,7 +228,7 @@ def replacing(path) -> Iterator[Path]:
     try:
         os.chmod(temporary, 0o666 & ~_umask())
         yield Path(temporary)
-        os.replace(temporary, path)
+        _move_file_into_place(temporary, path)
     except BaseException:
         with suppress(FileNotFoundError):
             os.unlink(temporary)
@@ -149,8 +242,9 @@ def replacing_folder(path, stale_patterns: tuple[str, ...] = ()) -> Iterator[Pat
     When ``path`` does not exist (or is an empty folder) the temporary folder is renamed onto it in
     one step. Otherwise each file is moved into place with one atomic rename, after all of them
     were complete, and files of ``path`` matching ``stale_patterns`` (glob patterns) that the new
-    output does not hold are removed. On any exception, Ctrl-C included, the temporary folder is
-    deleted and ``path`` is left as it was.
+    output does not hold are removed. On any exception, Ctrl-C and SIGTERM included, the temporary
+    folder is deleted and ``path`` is left as it was. Under ``replacing_policy(False)`` a ``path``
+    that is no longer empty when the block completes (another run filled it) is refused.
 
     Parameters
     ----------
@@ -160,16 +254,27 @@ def replacing_folder(path, stale_patterns: tuple[str, ...] = ()) -> Iterator[Pat
         Glob patterns of files a previous run wrote that the new output replaces as a set.
     """
     path = Path(path)
+    _refuse_special("output", path)
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
     try:
         os.chmod(temporary, 0o777 & ~_umask())
         yield temporary
+        _refuse_special("output", path)
         if path.is_dir() and not any(path.iterdir()):
             path.rmdir()
         if not path.exists():
-            os.replace(temporary, path)
-            return
+            try:
+                os.rename(temporary, path)  # onto a missing path (a folder that appeared non-empty: ENOTEMPTY)
+            except OSError as error:
+                if error.errno in (errno.ENOTEMPTY, errno.EEXIST) and not _MAY_REPLACE.get():
+                    raise _claimed_meanwhile(path) from None
+                if error.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                    raise
+            else:
+                return
+        if not _MAY_REPLACE.get():
+            raise _claimed_meanwhile(path)
         new = {item.relative_to(temporary) for item in temporary.rglob("*") if not item.is_dir()}
         for name in new:
             (path / name).parent.mkdir(parents=True, exist_ok=True)

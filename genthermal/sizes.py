@@ -36,7 +36,8 @@ def check_grid(duration_s: float, step_s: float, field: str, value) -> int:
         The grid would have more than :data:`MAX_GRID_SAMPLES` samples (the estimated memory is
         given).
     """
-    samples = math.floor(duration_s / step_s + 1e-9) + 1 if step_s > 0 else math.inf
+    ratio = float(duration_s) / float(step_s) if step_s > 0 else math.inf  # inf for a step of 5e-324 s
+    samples = math.floor(ratio + 1e-9) + 1 if math.isfinite(ratio) else math.inf
     if not samples <= MAX_GRID_SAMPLES:
         gigabytes = samples * FLOATS_PER_SAMPLE * 8 / 1e9
         raise InputError(field, value, f"gives {samples:.3g} time samples ({duration_s:g} s at a {step_s:g} s step, "

@@ -1,16 +1,23 @@
 """Reading the YAML a user writes (scenarios, model files) without silent surprises.
 
 ``yaml.safe_load`` keeps the last of two equal keys without a word (``h_end_air`` given twice: the
-second wins) and overflows Python's stack on deeply nested brackets. :func:`load_user_yaml`
-refuses both with an :class:`~genthermal.errors.InputError`; YAML syntax errors stay
-``yaml.YAMLError`` for the caller to explain with its line.
+second wins), overflows Python's stack on deeply nested brackets, and reads an integer of 5000
+digits into one no message can show and no float can hold. :func:`load_user_yaml` refuses all
+three with an :class:`~genthermal.errors.InputError`; YAML syntax errors stay ``yaml.YAMLError``
+for the caller to explain with its line. :func:`read_user_text` reads the file with a size limit.
 """
 
 from __future__ import annotations
 
+import os
+
 import yaml
 
 from .errors import InputError
+from .input_limits import MAX_YAML_BYTES, read_bounded
+
+#: Most digits a YAML integer may have: more than a float holds (1.8e308) is not a physical value.
+MAX_INTEGER_DIGITS = 308
 
 
 class _UniqueKeyLoader(yaml.SafeLoader):
@@ -28,6 +35,29 @@ class _UniqueKeyLoader(yaml.SafeLoader):
             except TypeError:  # an unhashable key: SafeLoader's own error explains it
                 break
         return super().construct_mapping(node, deep)
+
+    def construct_yaml_int(self, node):
+        digits = sum(character.isalnum() for character in str(node.value))
+        if digits > MAX_INTEGER_DIGITS:
+            raise InputError(f"line {node.start_mark.line + 1}", f"an integer of {digits} digits",
+                             f"more than {MAX_INTEGER_DIGITS} digits: no physical value is that large")
+        return super().construct_yaml_int(node)
+
+
+_UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _UniqueKeyLoader.construct_yaml_int)
+
+
+def read_user_text(path: str | os.PathLike, what: str) -> str:
+    """The UTF-8 text of a scenario or model file, at most :data:`MAX_YAML_BYTES` bytes.
+
+    Raises
+    ------
+    InputError
+        A device, a folder or too large a file (:func:`genthermal.input_limits.read_bounded`).
+    UnicodeDecodeError
+        Not UTF-8 text (the caller names the file).
+    """
+    return read_bounded(path, what, MAX_YAML_BYTES).decode("utf-8")
 
 
 def load_user_yaml(text: str, source: str):

@@ -170,7 +170,8 @@ def test_the_command_line_runs_on_the_motor(motor, tmp_path, capsys):
     assert (tmp_path / "cmp" / "report.md").is_file()
     assert main(["calibrate", str(data), "--model", model, "--params", "G_yoke_coolant",
                  "--out", str(tmp_path / "fitted.yaml")]) == 0
-    assert main(["estimate", str(data), "--model", str(tmp_path / "fitted.yaml"), "--predict-from", "20"]) == 0
+    assert main(["estimate", str(data), "--model", str(tmp_path / "fitted.yaml"), "--predict-from", "20",
+                 "--trust-machine", model]) == 0  # a model file of a machine file: trusted explicitly
     assert main(["diagnose", str(data), "--model", model]) == 0
     out = capsys.readouterr().out
     assert "T_stator_winding: RMSE" in out and "estimated unmeasured temperatures at the end" in out

@@ -42,7 +42,7 @@ def run(args) -> int:
         result = calibrate(model, data, names, data_step(args))
     summary = result.to_dict()
     print(f"{model.name}: {len(names)} parameter(s) fitted to {args.data} "
-          f"({'converged' if result.converged else 'NOT converged'})")
+          f"({result.status})")
     for row in summary["parameters"]:
         low, high = row["ci95"]
         print(f"  {row['name']:>14s} = {row['value']:.6g} {row['unit']}  (start {row['start']:.6g}; "

@@ -7,10 +7,12 @@ Cross-compiles the model's step, the Kalman filter update and a 1 h prediction w
 stack and instruction counts. With ``--flight`` it also flies that two-generator fault scenario
 with the onboard manager in C and compares it with the manager's Python reference. A precision
 whose states differ from the host's by more than ``--tolerance`` K is an error. Everything is built
-in DIR (generated sources, objects, ELF files and link maps).
+in DIR (generated sources, objects, ELF files and link maps), which appears whole or not at all.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 
@@ -20,6 +22,7 @@ from ..embedded.mission import PRECISIONS, build_mission_program, check_accuracy
 from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
+from ..outputs import replacing_folder
 from ..schedule.power_system import PowerSystem
 from ..simulate import simulate
 from ._common import positive_float
@@ -44,13 +47,23 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    """Build, run, compare, report."""
+    """Build, run, compare, report; the build folder appears whole or not at all."""
     if args.precision not in PRECISIONS:
         raise InputError("--precision", args.precision, f"must be one of {', '.join(PRECISIONS)}")
     tolerance = positive_float("--tolerance", args.tolerance)
     model, mission = load_model(args.model), load_mission(args.mission)
+    with replacing_folder(args.out) as build:
+        _build_and_run(args, model, mission, tolerance, build)
+    return 0
+
+
+def _build_and_run(args, model, mission, tolerance: float, build: Path) -> None:
+    """The body of :func:`run`, building in ``build`` (moved to ``--out`` at the end)."""
+    def shown(path) -> Path:  # where a file of the build will be once it is moved into place
+        return Path(args.out) / Path(path).resolve().relative_to(build.resolve())
+
     inputs = mission.to_inputs(10.0)
-    program = build_mission_program(model, inputs, args.out, args.precision)
+    program = build_mission_program(model, inputs, str(build), args.precision)
     result = run_mission(program)
     host = simulate(model, inputs)[[f"T_{n}" for n in model.state_names]].to_numpy()[1:]
     sizes = toolchain.section_sizes(program.build.elf)
@@ -66,11 +79,11 @@ def run(args) -> int:
     counts = result.instructions
     print(f"  instructions: step {counts['step']:.0f}, filter update {counts['kalman_update']:.0f}, "
           f"1 h prediction {counts['predict']:.0f} (QEMU -icount; instructions, not cycles)")
-    print(f"  wrote {program.build.elf} and {program.build.link_map}")
+    print(f"  wrote {shown(program.build.elf)} and {shown(program.build.link_map)}")
     if args.flight:
         system = PowerSystem.from_mission(load_mission(args.flight))
         design, settings, flight = blockage_flight(system)
-        built = build_flight_program(design, settings, flight, f"{args.out}/flight")
+        built = build_flight_program(design, settings, flight, str(build / "flight"))
         target, reference = fly_on_target(built), fly_reference(design, settings, flight)
         same = np.array_equal(target.flags, reference.flags)
         gap = np.max(np.abs(target.plant_winding_C - reference.plant_winding_C))
@@ -90,4 +103,3 @@ def run(args) -> int:
               f"{target.instructions['manager_total']:.3g}, stack {target.stack_bytes} B used")
         if not same:
             return 1
-    return 0

@@ -14,7 +14,7 @@ import numpy as np
 from ..design import current_squared_fit, linear_design_model
 from ..errors import CompilerNotFoundError
 from ..mission import load_mission
-from ..outputs import write_csv, write_json
+from ..outputs import replacing_folder, write_csv, write_json
 from ..plots import plot_comparison, plot_simulation
 from ..simulate import simulate
 from ._common import add_model_arguments, model_from_args
@@ -46,11 +46,19 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    """Run every part of the demo and write ``summary.json``."""
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    """Run every part of the demo and write ``summary.json``; the folder appears whole or not at all."""
     started = time.perf_counter()
     plant = model_from_args(args)
+    with replacing_folder(args.out) as out:
+        summary = run_parts(plant, out, args.quick)
+        summary["elapsed_s"] = round(time.perf_counter() - started, 1)
+        write_json(out / "summary.json", summary)
+    print(f"\nwrote {Path(args.out) / 'summary.json'} and the plots in {args.out}/ ({summary['elapsed_s']} s)")
+    return 0
+
+
+def run_parts(plant, out: Path, quick: bool) -> dict:
+    """The demo's parts, writing their plots and data into ``out``; return the summary."""
     design = plant if plant.is_affine else linear_design_model(plant)
     summary = {"model": describe_model(plant, design)}
     mission = load_mission(DEMO_MISSION)
@@ -59,15 +67,12 @@ def run(args) -> int:
     summary["c_library"] = compiled_library(plant, inputs, out)
     summary["blockage"] = blockage(plant, inputs, out)
     summary["estimation"] = estimation(plant, inputs, out)
-    if args.quick:
+    if quick:
         summary["measurements"] = shipped_measurements(plant)
     else:
         summary["load_management"] = load_management(out)
         summary["discovery"] = discovery(out)
-    summary["elapsed_s"] = round(time.perf_counter() - started, 1)
-    write_json(out / "summary.json", summary)
-    print(f"\nwrote {out / 'summary.json'} and the plots in {out}/ ({summary['elapsed_s']} s)")
-    return 0
+    return summary
 
 
 def describe_model(plant, design) -> dict:

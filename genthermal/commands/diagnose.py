@@ -5,11 +5,15 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from ..errors import InputError
 from ..model_file import save_model
 from ..outputs import replacing_folder, report_json
 from ..progress import say, working
 from ._common import model_from_args
 from .compare import add_model_and_data_arguments, data_step, fitting_data
+
+#: Fewest samples a diagnosed record (and its baseline) may have.
+MIN_DIAGNOSIS_SAMPLES = 30
 
 
 def register(subparsers) -> None:
@@ -35,14 +39,25 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def _long_enough(data, args, option: str):
+    """``data``, or InputError when it has fewer than :data:`MIN_DIAGNOSIS_SAMPLES` (on ``--dt``'s grid)."""
+    time_s, step = data.time_s, data_step(args)
+    samples = time_s.size if step is None else int((time_s[-1] - time_s[0]) / step) + 1
+    if samples < MIN_DIAGNOSIS_SAMPLES:
+        raise InputError(option, data.source, f"{samples} sample(s): a diagnosis fits an effect's size and onset "
+                         f"and needs at least {MIN_DIAGNOSIS_SAMPLES} samples (e.g. 5 min at 10 s)")
+    return data
+
+
 def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
     from ..diagnose.discovery import Discovery
     from ..diagnose.fitter import OnsetFitter
 
     model = model_from_args(args)
-    data = fitting_data(args.data, model, args)
-    baseline = None if args.baseline is None else fitting_data(args.baseline, model, args)
+    data = _long_enough(fitting_data(args.data, model, args), args, "DATA")
+    baseline = None if args.baseline is None else _long_enough(fitting_data(args.baseline, model, args), args,
+                                                                "--baseline")
     with working("diagnose"):
         discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
                               progress=lambda line: say(f"  ... {line}"))

@@ -12,8 +12,9 @@ the others as :math:`z = (\theta - \theta_0)/s`. IPOPT minimises
 :math:`\tfrac12\sum_k\sum_j m_{jk}(\hat y_{jk} - y_{jk})^2` (:math:`m` masks missing samples; K²)
 within the parameters' physical bounds, with the exact gradient and the Gauss-Newton Hessian
 :math:`J_r^\top J_r` (exact Jacobian). Confidence intervals come from the Fisher information
-:math:`F = J^\top J/\hat\sigma^2`, :math:`\hat\sigma^2 = RSS/(N - n)`: they assume white noise and
-are optimistic when residuals are correlated in time.
+:math:`F = J^\top J/\hat\sigma^2`, :math:`\hat\sigma^2 = RSS/(N - n)`, inflated by
+:math:`N/N_{eff}` for residuals correlated in time. A fit that stops at a bound, or whose residual
+is not white, is reported as such (:attr:`CalibrationResult.status`), not as converged.
 """
 
 from __future__ import annotations
@@ -131,12 +132,15 @@ def fit_least_squares(simulator: ParametricSimulator, measured: np.ndarray, scal
                            bool(solver.stats()["success"]))
 
 
-def fisher_summary(fit: LeastSquaresFit, names: Sequence[str]) -> dict:
+def fisher_summary(fit: LeastSquaresFit, names: Sequence[str], residuals: np.ndarray | None = None) -> dict:
     """Standard errors, 95 % intervals, correlations and identifiability of a fit.
 
     The Fisher information of :math:`(\\theta, a, c)` is :math:`F = J^\\top J/\\hat\\sigma^2` with
     :math:`\\hat\\sigma^2 = RSS/(N - n)`; the covariance is :math:`F^{-1}` (pseudo-inverse when
-    singular). The condition number is that of F with columns scaled to unit norm.
+    singular). The condition number is that of F with columns scaled to unit norm. Given the
+    ``residuals`` (n_outputs, N; NaN missing), :math:`\hat\sigma^2` is inflated by
+    :math:`N/N_{eff}` (:func:`genthermal.diagnose.interval.effective_samples`): residuals that are
+    not white hold fewer independent samples, and intervals that ignore it exclude the truth.
 
     Returns
     -------
@@ -148,6 +152,12 @@ def fisher_summary(fit: LeastSquaresFit, names: Sequence[str]) -> dict:
     J = fit.jacobian
     dof = max(fit.n_valid - J.shape[1], 1)
     sigma2 = fit.rss / dof
+    inflation = 1.0
+    if residuals is not None:  # correlated residuals carry fewer independent samples than N
+        from .interval import effective_samples
+
+        inflation = max(fit.n_valid / max(effective_samples(residuals), J.shape[1] + 1.0), 1.0)
+        sigma2 *= inflation
     norms = np.linalg.norm(J, axis=0)
     norms[norms == 0] = 1.0
     Jn = J / norms
@@ -169,7 +179,8 @@ def fisher_summary(fit: LeastSquaresFit, names: Sequence[str]) -> dict:
                         f"the parameters {', '.join(names)} are not all identifiable from these data")
     ci = [(float(v - 1.96 * s), float(v + 1.96 * s)) for v, s in zip(fit.theta, std)]
     return {"std": std.tolist(), "ci95": ci, "correlation": correlation.tolist(),
-            "condition_number": condition, "sigma_K": math.sqrt(sigma2), "warnings": warnings}
+            "condition_number": condition, "sigma_K": math.sqrt(sigma2 / inflation), "warnings": warnings,
+            "interval_widening": math.sqrt(inflation)}
 
 
 @dataclasses.dataclass
@@ -191,6 +202,14 @@ class CalibrationResult:
         Comparison metrics (:func:`genthermal.diagnose.compare.compare`) of the model before and
         after the fit.
     converged : bool
+        IPOPT's own verdict; :attr:`status` is what to report.
+    at_bounds : list of str
+        Fitted parameters that stopped at a bound of their physical range (``"R0 (upper bound
+        1200)"``): the data would move them further, the fit did not converge to an optimum inside.
+    residual_autocorrelation : dict
+        Output name → lag-1 autocorrelation of the fit's residual. Above
+        :data:`~genthermal.diagnose.residual.MAX_AUTOCORRELATION` the residual is not white: the
+        intervals are widened for it (:func:`fisher_summary`) and :attr:`status` says so.
     """
 
     model: ThermalModel
@@ -201,6 +220,31 @@ class CalibrationResult:
     before: dict
     after: dict
     converged: bool
+    at_bounds: list = dataclasses.field(default_factory=list)
+    residual_autocorrelation: dict = dataclasses.field(default_factory=dict)
+
+    @property
+    def intervals_valid(self) -> bool:
+        """True when the residual passes the whiteness test the intervals assume."""
+        from .residual import MAX_AUTOCORRELATION
+
+        return all(rho <= MAX_AUTOCORRELATION for rho in self.residual_autocorrelation.values())
+
+    @property
+    def status(self) -> str:
+        """``converged``, or what went wrong: not converged, at a bound, intervals not valid."""
+        from .residual import MAX_AUTOCORRELATION
+
+        problems = [] if self.converged else ["NOT converged"]
+        if self.at_bounds:
+            problems.append(f"stopped at a bound: {', '.join(self.at_bounds)}")
+        if not self.intervals_valid:
+            worst = max(self.residual_autocorrelation, key=self.residual_autocorrelation.get)
+            problems.append(f"the residual of {worst} is not white (lag-1 autocorrelation "
+                            f"{self.residual_autocorrelation[worst]:.2f} > {MAX_AUTOCORRELATION:g}): 95 % intervals "
+                            f"widened x{self.fisher.get('interval_widening', 1.0):.3g} for it, a model error "
+                            "may remain")
+        return "; ".join(problems) or "converged"
 
     @property
     def warnings(self) -> list:
@@ -215,6 +259,8 @@ class CalibrationResult:
             rows.append({"name": name, "unit": parameter.unit, "start": self.start[i], "value": self.values[i],
                          "std": self.fisher["std"][i], "ci95": list(self.fisher["ci95"][i])})
         return {"model": self.model.name, "parameters": rows, "converged": self.converged,
+                "status": self.status, "at_bounds": self.at_bounds, "intervals_valid": self.intervals_valid,
+                "residual_lag1_autocorrelation": self.residual_autocorrelation,
                 "condition_number": self.fisher["condition_number"], "correlation": self.fisher["correlation"],
                 "residual_sigma_K": self.fisher["sigma_K"], "warnings": self.warnings,
                 "rmse_before": self.before["rmse_all_sensors"], "rmse_after": self.after["rmse_all_sensors"],
@@ -264,11 +310,37 @@ def calibrate(model: ThermalModel, data, names: Sequence[str], dt_s: float | Non
     simulator = ParametricSimulator(model, series.dt_s, series.input_matrix, names)
     scalings = [parameter_scaling(model, n) for n in names]
     fit = fit_least_squares(simulator, series.outputs, scalings, initial_coefficients(model, series))
-    fisher = fisher_summary(fit, names)
+    fisher = fisher_summary(fit, names, fit.predicted - series.outputs)
     values = {n: float(v) for n, v in zip(names, fit.theta)}
     source = (f"least squares on {series.source} ({series.time_s.size} samples, "
               f"{(series.time_s[-1] - series.time_s[0]) / 3600:.2f} h)")
     fitted = model.with_parameters(provenance="fitted", source=source, **values)
     after = compare(fitted, series)
     return CalibrationResult(fitted, names, [model.parameters.value(n) for n in names], list(values.values()),
-                             fisher, before.metrics, after.metrics, fit.converged)
+                             fisher, before.metrics, after.metrics, fit.converged, _at_bounds(names, scalings, fit),
+                             _residual_autocorrelation(fit, series.outputs, model.output_names))
+
+
+def _at_bounds(names, scalings, fit: LeastSquaresFit) -> list[str]:
+    """Fitted parameters within 1e-6 (relative) of a bound of their range."""
+    found = []
+    for name, scaling, value in zip(names, scalings, fit.theta):
+        for side, bound in (("lower", scaling.lower), ("upper", scaling.upper)):
+            if abs(value - bound) <= 1e-6 * max(abs(bound), abs(scaling.reference), 1e-12):
+                found.append(f"{name} ({side} bound {bound:.6g})")
+    return found
+
+
+def _residual_autocorrelation(fit: LeastSquaresFit, measured: np.ndarray, outputs) -> dict:
+    """Output → lag-1 autocorrelation of the residual over its valid samples (consecutive pairs)."""
+    result = {}
+    for name, predicted, data in zip(outputs, fit.predicted, measured):
+        residual = predicted - data
+        pairs = np.isfinite(residual[1:]) & np.isfinite(residual[:-1])
+        if pairs.sum() < 3:
+            continue
+        a, b = residual[:-1][pairs], residual[1:][pairs]
+        a, b = a - a.mean(), b - b.mean()
+        scale = math.sqrt(float(np.dot(a, a) * np.dot(b, b)))
+        result[name] = float(np.dot(a, b) / scale) if scale > 0 else 0.0
+    return result

@@ -22,7 +22,8 @@ __all__ = ["MACHINES", "DEFAULT_MACHINE", "GeneratorRole", "InputKind", "Machine
            "ModelInput", "Role", "Sensor", "build_model", "known_machines", "resolve_machine"]
 
 
-def build_model(machine: "str | Machine" = DEFAULT_MACHINE, parameters: ParameterSet | None = None) -> ThermalModel:
+def build_model(machine: "str | Machine" = DEFAULT_MACHINE, parameters: ParameterSet | None = None,
+                from_data: bool = False) -> ThermalModel:
     """Build the nonlinear simulation model of a machine.
 
     Parameters
@@ -32,13 +33,16 @@ def build_model(machine: "str | Machine" = DEFAULT_MACHINE, parameters: Paramete
         machine file, or a :class:`Machine`.
     parameters : ParameterSet, optional
         Parameter values; defaults to the machine's own (with provenance).
+    from_data : bool
+        ``machine`` was read from a data file: a machine file must be trusted
+        (:func:`~genthermal.machines.registry.resolve_machine`).
 
     Returns
     -------
     ThermalModel
         Use :func:`genthermal.design.linear_design_model` for the linear design model.
     """
-    definition = resolve_machine(machine)
+    definition = resolve_machine(machine, from_data)
     parameters = parameters if parameters is not None else definition.default_parameters()
     source = machine if isinstance(machine, str) else definition.name
     spec = ModelSpec(name=definition.name, interface=definition.interface, machine_source=source)

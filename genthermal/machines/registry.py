@@ -14,14 +14,23 @@
    ``path/to/file.py:ATTRIBUTE`` for another attribute name.
 
 Nothing under ``genthermal/`` changes when a user adds a machine.
+
+A machine file is code. A reference that comes from a data file (a model file's ``machine:``, a
+scenario's ``generators.machine``; ``from_data=True``) may name one only when the user trusted it
+for the run (:func:`trusted_machine_files`, the command line's ``--trust-machine FILE.py``): opening
+a data file never runs code it names.
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import importlib.metadata
 import importlib.util
+import os
 import types
 from pathlib import Path
+from typing import Iterable, Iterator
 
 from ..errors import InputError
 from . import genco_rf201a
@@ -33,6 +42,30 @@ ENTRY_POINT_GROUP = "genthermal.machines"
 BUILT_IN = {genco_rf201a.NAME: genco_rf201a.MACHINE}
 #: Attribute a machine file or module defines.
 MACHINE_ATTRIBUTE = "MACHINE"
+#: Machine files (resolved paths) a data file may name in this run.
+_TRUSTED_FILES: contextvars.ContextVar[frozenset] = contextvars.ContextVar("trusted_machine_files",
+                                                                          default=frozenset())
+
+
+@contextlib.contextmanager
+def trusted_machine_files(paths: Iterable[str | os.PathLike]) -> Iterator[frozenset]:
+    """Within the block, data files may name the machine files ``paths`` (and no other).
+
+    Raises
+    ------
+    InputError
+        A path that is not an existing ``.py`` file.
+    """
+    resolved = set()
+    for path in map(Path, paths):
+        if path.suffix != ".py" or not path.is_file():
+            raise InputError("--trust-machine", str(path), "must be an existing .py machine file")
+        resolved.add(path.resolve())
+    token = _TRUSTED_FILES.set(_TRUSTED_FILES.get() | resolved)
+    try:
+        yield _TRUSTED_FILES.get()
+    finally:
+        _TRUSTED_FILES.reset(token)
 
 
 def entry_point_names() -> list[str]:
@@ -50,14 +83,21 @@ def is_machine_reference(reference: str) -> bool:
     return reference in BUILT_IN or reference in entry_point_names() or _file_part(reference)[0] is not None
 
 
-def resolve_machine(reference) -> Machine:
+def resolve_machine(reference, from_data: bool = False) -> Machine:
     """The :class:`Machine` named by ``reference`` (see the module docstring).
+
+    Parameters
+    ----------
+    reference : str or Machine
+    from_data : bool
+        The reference was read from a data file: a machine file is refused (before it runs) unless
+        it is trusted (:func:`trusted_machine_files`).
 
     Raises
     ------
     InputError
-        Naming the reference for an unknown name, a missing or broken file, or an object that is
-        not a Machine.
+        Naming the reference for an unknown name, a missing, broken or untrusted file, or an object
+        that is not a Machine.
     """
     if isinstance(reference, Machine):
         return reference
@@ -77,6 +117,11 @@ def resolve_machine(reference) -> Machine:
     if path is None:
         raise InputError("machine", reference, f"unknown machine; known: {', '.join(known_machines())}, or "
                          "the path of a .py file defining MACHINE")
+    if from_data and path.resolve() not in _TRUSTED_FILES.get():
+        raise InputError("machine", reference, "a data file may only name a registered machine "
+                         f"({', '.join(known_machines())}); it names Python code, which genthermal does not "
+                         "run from a data file. Run the machine file with --model FILE.py, or trust it for "
+                         "this run with --trust-machine FILE.py (see docs/guide/safety.md)")
     if not path.is_file():
         raise InputError("machine file", str(path), "no such file")
     return _as_machine(getattr(_load_file(path), attribute, None), reference, f"{path} attribute {attribute}")

@@ -378,8 +378,8 @@ class AffineGenerator:
 @functools.lru_cache(maxsize=4)
 def _nominal_models(machine: str):
     """The nominal simulation model and its linear design model (built once per machine; models
-    are not changed after they are built)."""
-    model = load_model(machine)
+    are not changed after they are built). ``machine`` comes from a scenario: a data file."""
+    model = load_model(machine, from_data=True)
     return model, linear_design_model(model)
 
 
