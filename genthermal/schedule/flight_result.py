@@ -70,6 +70,9 @@ class FlightResult:
         ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
     sensor_watch : SensorWatch or None
         Sensor faults injected, claimed and masked (closed loop).
+    plant_fault : dict or None
+        The plant's failure that stopped the flight (closed loop): ``time_s``, ``cycle``, ``kind``,
+        ``message``, ``plant``, ``held``, ``rest_current_A``; None when the plant answered throughout.
     """
 
     system: PowerSystem
@@ -90,6 +93,7 @@ class FlightResult:
     rest_budget_s: float = np.inf
     shed_events: list = dataclasses.field(default_factory=list)
     sensor_watch: object = None
+    plant_fault: dict | None = None
 
 
 class FlightRecorder:
@@ -136,9 +140,14 @@ class FlightRecorder:
     def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None, cycles=0,
                rest_budget_s=np.inf) -> FlightResult:
         """The :class:`FlightResult`."""
+        n_gen = self.system.n_generators
+        nothing = not self.currents  # a plant that failed in the first cycle
         return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
-                            np.moveaxis(np.array(self.temperatures), 0, 2), np.hstack(self.currents),
-                            np.concatenate(self.nominal), np.concatenate(self.resting),
-                            np.concatenate(self.action), self.plans, self.warnings, table,
+                            np.moveaxis(np.array(self.temperatures), 0, 2),
+                            np.zeros((n_gen, 0)) if nothing else np.hstack(self.currents),
+                            np.zeros(0) if nothing else np.concatenate(self.nominal),
+                            np.zeros(0, dtype=bool) if nothing else np.concatenate(self.resting),
+                            np.zeros(0, dtype=int) if nothing else np.concatenate(self.action),
+                            self.plans, self.warnings, table,
                             monitor, settings, cycles, rest_budget_s, self.shed_events)
 
