@@ -42,7 +42,7 @@ class FmuPlant:
     """
 
     def __init__(self, path):
-        self.path = Path(path)
+        self.path, self._instances, self._unzipped = Path(path), [], None
         fmpy, self._slave = _fmpy(path)
         try:
             description = fmpy.read_model_description(str(self.path))
@@ -57,7 +57,6 @@ class FmuPlant:
         self._description = description
         self._variables = {v.name: v for v in description.modelVariables}
         self.sensor_names = tuple(v.name for v in description.modelVariables if v.causality == "output")
-        self._instances, self._unzipped = [], None
 
     def reset(self, setup: PlantSetup) -> None:
         """Instantiate one co-simulation slave per generator, its ``x_*`` states at ``setup.initial_C``."""
