@@ -95,6 +95,41 @@ class FlightResult:
     sensor_watch: object = None
     plant_fault: dict | None = None
 
+    def to_pandas(self):
+        """One row per sample (``time_s``, s): per generator its winding and iron temperatures (°C,
+        ``gen1_T_winding``) and the phase current applied over the step that starts there (A RMS,
+        ``gen1_current_A``), the nominal current, ``resting`` and the mission ``action`` (1-based);
+        the step columns are empty on the last sample."""
+        import pandas as pd
+
+        n = self.currents_A.shape[1]
+        columns = {"time_s": self.time_s}
+        sensors = list(self.system.planning_model.output_names)
+        for g, name in enumerate(self.system.generator_names):
+            for k, sensor in enumerate(sensors):
+                columns[f"{name}_{sensor}"] = self.temperatures_C[g, k]
+        pad = np.full(self.time_s.size - n, np.nan)
+        for g, name in enumerate(self.system.generator_names):
+            columns[f"{name}_current_A"] = np.concatenate([self.currents_A[g], pad])
+        columns["nominal_A"] = np.concatenate([self.nominal_A, pad])
+        frame = pd.DataFrame(columns)
+        frame["resting"] = pd.array(list(self.resting) + [pd.NA] * pad.size, dtype="boolean")
+        frame["action"] = pd.array([int(a) + 1 for a in self.action_index] + [pd.NA] * pad.size, dtype="Int64")
+        return frame
+
+    def summary(self) -> dict:
+        """The summary keys of ``genthermal plan`` / ``fly`` (:func:`~genthermal.schedule.report.flight_summary`)."""
+        from .report import flight_summary
+
+        return flight_summary(self)
+
+    def plot(self, path=None, title: str = ""):
+        """Currents and temperatures of every generator (:func:`~genthermal.schedule.report.plot_flight`),
+        written to ``path`` when given; returns the figure."""
+        from .report import plot_flight
+
+        return plot_flight(self, title=title, path=path)
+
 
 class FlightRecorder:
     """Collects the steps flown, from a cold machine (every node at the ambient temperature)."""
