@@ -46,6 +46,9 @@ def run(args) -> int:
     system, settings = settings_from_args(args)
     plant = external_plant(args.plant) if is_external_plant(args.plant) else None
     print(system.describe() + (f"\n  plant: {args.plant}" if plant is not None else ""))
+    if plant is not None and any(f.effect for f in system.faults):
+        print("note: genthermal applies no fault effect to this plant; its inputs carry the faults' inlet rises and "
+              "its reset is told the faults (PlantSetup.faults): what they do inside is the plant's", file=sys.stderr)
     try:
         result = fly(system, args.scheduler, settings, plant)
     finally:

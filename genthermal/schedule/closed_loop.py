@@ -25,8 +25,11 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
    :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
-The true plant is the nonlinear model with the faults from their onsets and parameters that differ
-from the design model (``PowerSystem.plant_mismatch``). The back-off ``margin_K`` absorbs the
+The true plant is by default the nonlinear model with the faults from their onsets and parameters
+that differ from the design model (``PowerSystem.plant_mismatch``,
+:class:`~genthermal.plants.model_plant.ModelPlant`), or any plant of the protocol of
+:mod:`genthermal.plants` (an FMU, a user's simulator), given the machine's inputs each cycle
+(:func:`plant_inputs`) and answering with its sensors' readings. The back-off ``margin_K`` absorbs the
 mismatch; its cost in mission time is measured by flying with and without it. The nonlinear planner
 replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
