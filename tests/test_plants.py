@@ -243,3 +243,34 @@ def test_a_flight_against_an_fmu_plant_holds_theta_max_and_matches_the_model_pla
     assert main(["fly", str(mission), "--scheduler", "optimal", "--planner-model", "nonlinear",
                  "--plant", str(mismatched_fmu), "--json", str(out)]) == 0
     assert json.loads(out.read_text())["breach_s"] == 0.0
+
+
+class RaisesAtReset(LumpedPlant):
+    def reset(self, setup):
+        raise OSError("rig not connected")
+
+
+class LateClock(LumpedPlant):
+    def step(self, t_s, dt_s, inputs):
+        readings = super().step(t_s, dt_s, inputs)
+        return Readings(readings.time_s + 5.0, readings.values, readings.sensor_names)
+
+
+class OneGenerator(LumpedPlant):
+    def step(self, t_s, dt_s, inputs):
+        readings = super().step(t_s, dt_s, inputs)
+        return Readings(readings.time_s, readings.values[:1], readings.sensor_names)
+
+
+def test_a_plant_that_raises_at_reset_is_a_clear_error(tmp_path):
+    system, _ = _system(tmp_path, SHORT_MISSION)
+    with pytest.raises(InputError, match="raised at its reset: OSError: rig not connected"):
+        fly(system, "engineer", ManagerSettings(), RaisesAtReset())
+
+
+@pytest.mark.parametrize("plant, kind", [(LateClock(), "timestamps"), (OneGenerator(), "shape")])
+def test_readings_at_other_times_or_of_other_generators_are_a_recorded_fault(tmp_path, plant, kind):
+    system, _ = _system(tmp_path, SHORT_MISSION)
+    result = fly(system, "engineer", ManagerSettings(), plant)
+    assert result.plant_fault["kind"] == kind and result.plant_fault["time_s"] == 0.0
+    assert result.time_s.tolist() == [0.0] and flight_summary(result)["feasible"] is False
