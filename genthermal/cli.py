@@ -60,7 +60,7 @@ COMMANDS = {
     "diagnose": ("diagnose", "find the physical effect a model lacks", "guide/calibration-diagnosis.md"),
     "plan": ("plan", "plan load displacement and rests (open loop, design model)", "guide/scheduling.md"),
     "fly": ("fly", "fly a mission with closed-loop load management", "guide/scheduling.md"),
-    "sweep": ("sweep", "robustness grid of closed-loop flights on Dask", "results/robustness-grid.md"),
+    "sweep": ("sweep", "robustness grid of closed-loop flights in worker processes", "results/robustness-grid.md"),
 }
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
 COMMAND_MODULES = tuple(module for module, _, _ in COMMANDS.values())

@@ -158,7 +158,7 @@ def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsy
 
     import genthermal.schedule.sweep as sweep
     records = [{"name": "a", "faulty": False, "runs": {"engineer": run(0, 0.0)}}]
-    monkeypatch.setattr(sweep, "run_sweep", lambda documents, schedulers, *rest: records)
+    monkeypatch.setattr(sweep, "run_sweep", lambda documents, schedulers, *rest, **options: records)
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer"]) == 0
     printed = json.loads(capsys.readouterr().out)
     assert printed["cases"] == records and printed["robustness"]["cases"] == 1
@@ -192,7 +192,7 @@ def test_sweep_only_flies_the_named_cases_of_the_grid_and_checks_them(monkeypatc
     import genthermal.schedule.sweep as sweep
     flown = {}
 
-    def fake(documents, schedulers, *rest):
+    def fake(documents, schedulers, *rest, **options):
         flown["names"], flown["planner"], flown["hindsight"] = [d["name"] for d in documents], rest[-2], rest[-1]
         return [{"name": d["name"], "faulty": bool(d["faults"]), "runs": {"engineer": run(0, 0.0)}} for d in documents]
     monkeypatch.setattr(sweep, "run_sweep", fake)

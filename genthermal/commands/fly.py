@@ -6,11 +6,16 @@ to the end of the mission and a re-plan when a violation is predicted. The true 
 the planning model (scenario ``generators.plant_mismatch`` or ``--plant``); the manager is not told
 the faults unless ``--tell-fault``. With ``--planner-model nonlinear`` the optimal scheduler (or the
 thesis heuristic, per K-condition) plans on the filter's nonlinear model with a back-off from the
-filter's covariance instead of ``--margin``.
+filter's covariance instead of ``--margin``. ``--plant`` also takes an FMI 2.0 co-simulation FMU or a
+Python file defining ``make_plant()`` (:mod:`genthermal.plants`); a plant that fails in flight stops
+the flight with the fault recorded and the record so far written (exit code 3).
 """
 
 from __future__ import annotations
 
+import sys
+
+from ..plants import external_plant, is_external_plant
 from ..schedule.manager_settings import ManagerSettings
 from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.report import flight_summary
@@ -20,7 +25,9 @@ from .plan import add_schedule_arguments, settings_from_args, write_outputs
 def register(subparsers) -> None:
     """Add the ``fly`` sub-command."""
     parser = subparsers.add_parser("fly", help="fly a mission with closed-loop load management",
-                                   description=__doc__.split("\n\n")[1])
+                                   description=__doc__.split("\n\n")[1],
+                                   epilog="exit codes: 0 flown, 2 bad input, 3 the plant failed in flight (the fault "
+                                   "and the record so far are in --json)")
     add_schedule_arguments(parser)
     parser.add_argument("--seed", default=0, type=int, help="seed of the measurement noise (default 0)")
     parser.add_argument("--tell-fault", action="store_true", help="hand the manager each fault's effect and "
@@ -37,9 +44,20 @@ def run(args) -> int:
     from ..schedule.closed_loop import fly
 
     system, settings = settings_from_args(args)
-    print(system.describe())
-    result = fly(system, args.scheduler, settings)
+    plant = external_plant(args.plant) if is_external_plant(args.plant) else None
+    print(system.describe() + (f"\n  plant: {args.plant}" if plant is not None else ""))
+    if plant is not None and any(f.effect for f in system.faults):
+        print("note: genthermal applies no fault effect to this plant; its inputs carry the faults' inlet rises and "
+              "its reset is told the faults (PlantSetup.faults): what they do inside is the plant's", file=sys.stderr)
+    try:
+        result = fly(system, args.scheduler, settings, plant)
+    finally:
+        getattr(plant, "close", lambda: None)()
     summary = flight_summary(result)
     summary["plans"] = result.plans
     write_outputs(args, summary, result, system.limit_C)
+    if result.plant_fault is not None:
+        print(f"genthermal fly: plant fault at {result.plant_fault['time_s']:g} s: {result.plant_fault['message']}; "
+              "the flight stopped there (the record so far is written)", file=sys.stderr)
+        return 3
     return 0

@@ -16,6 +16,7 @@ from ..errors import InputError
 from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
+from ..plants import is_external_plant
 from ..schedule.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
                                          ManagerSettings)
 from ..schedule.open_loop import plan_mission
@@ -61,7 +62,9 @@ def add_schedule_arguments(parser) -> None:
     parser.add_argument("--model", help="planning model: a built-in name (genco_rf201a) or a model file "
                         "(genthermal.model_file); default the scenario's machine")
     parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
-                        "a model file; default the planning model with the scenario's plant_mismatch")
+                        "a model file; default the planning model with the scenario's plant_mismatch. fly also "
+                        "takes an FMI 2.0 co-simulation FMU (model.fmu) or a Python file defining make_plant() "
+                        "(my_plant.py: running it is your decision; see docs/guide/flights.md)")
 
 
 def _number_in(option: str, text: str, low: float, high: float, what: str) -> float:
@@ -125,6 +128,8 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
         system = dataclasses.replace(system, when_infeasible=None)
     models = {}
     for option in ("model", "plant"):
+        if option == "plant" and is_external_plant(getattr(args, option, None)):
+            continue  # flown by fly (genthermal.plants), not loaded as a model
         if getattr(args, option, None):
             model = load_model(getattr(args, option))
             if model.spec.variant == "linear":
@@ -156,6 +161,9 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Plan, print the schedule table and the summary."""
+    if is_external_plant(args.plant):
+        raise InputError("--plant", args.plant, "plan flies its plan on the planning model; an FMU or a Python "
+                         "plant is flown with genthermal fly")
     system, settings = settings_from_args(args)
     print(system.describe())
     result = plan_mission(system, args.scheduler, settings)

@@ -2,7 +2,9 @@
 
 Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweep`): N seeded cases (missions
 of 2-8 h, 2-4 generators, plant parameters off by up to ±30 %, a fault the manager is not told)
-flown with each scheduler on Dask — a local cluster by default, or an existing Dask scheduler.
+flown with each scheduler in local worker processes of one thread each (no port opened), or on
+Dask (``--cluster``, or ``--dashboard`` for a local Dask cluster with its dashboard; both need the
+extra genthermal[sweep]).
 """
 
 from __future__ import annotations
@@ -22,15 +24,19 @@ from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, FLOWN_
 
 def register(subparsers) -> None:
     """Add the ``sweep`` sub-command."""
-    parser = subparsers.add_parser("sweep", help="robustness grid of closed-loop flights on Dask",
+    parser = subparsers.add_parser("sweep", help="robustness grid of closed-loop flights in worker processes",
                                    description=__doc__.split("\n\n")[1])
     parser.add_argument("--cases", default=60, type=int, help="number of cases (default 60)")
     parser.add_argument("--schedulers", default="heuristic,engineer,optimal",
                         help=f"comma-separated, of {', '.join(SWEEP_SCHEDULERS)} (default heuristic,engineer,optimal; "
                         f"{FLOWN_HEURISTIC}: the thesis heuristic on the flown model, a third baseline; "
                         f"{FLOWN_OPTIMAL}: the optimal scheduler on the flown model, whatever --planner-model)")
-    parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: a local cluster)")
-    parser.add_argument("--workers", default=2, type=int, help="workers of the local cluster (default 2)")
+    parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: local worker processes, "
+                        "no Dask; needs genthermal[sweep])")
+    parser.add_argument("--dashboard", nargs="?", const=":8787", metavar="ADDRESS",
+                        help="fly on a local Dask cluster serving its dashboard at ADDRESS (default :8787; "
+                        "needs genthermal[sweep]); without it no port is opened")
+    parser.add_argument("--workers", default=2, type=int, help="local worker processes, one thread each (default 2)")
     parser.add_argument("--seed", default=0, type=int, help="seed of the cases (default 0)")
     parser.add_argument("--json", metavar="FILE", help="write the summary and every case to FILE as well "
                         "(default: the whole document goes to standard output)")
@@ -62,6 +68,9 @@ def run(args) -> int:
         raise InputError("--schedulers", args.schedulers, f"each must be one of {', '.join(SWEEP_SCHEDULERS)}")
     if args.cases < 1:
         raise InputError("--cases", args.cases, "must be a whole number >= 1")
+    if args.cluster and args.dashboard:
+        raise InputError("--dashboard", args.dashboard, "is the dashboard of a local Dask cluster: the cluster at "
+                         "--cluster serves its own")
     if args.workers < 1:
         raise InputError("--workers", args.workers, "must be a whole number >= 1")
     for option, value in (("--flight-limit-s", args.flight_limit_s), ("--timeout-s", args.timeout_s)):
@@ -72,11 +81,12 @@ def run(args) -> int:
     from ..progress import enabled as progress_enabled
 
     records = run_sweep(documents, schedulers, args.cluster, args.workers, progress_enabled() and not args.no_progress,
-                        args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight)
+                        args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight,
+                        dashboard=args.dashboard)
     report = {**summarise(records, schedulers),
               "provenance": {"command": equivalent_command(args),
                              "commit": source_commit(), "workers": None if args.cluster else args.workers,
-                             "cluster": args.cluster, "seed": args.seed, "only": args.only,
+                             "cluster": args.cluster, "dashboard": args.dashboard, "seed": args.seed, "only": args.only,
                              "optimal_planner_model": args.planner_model, "hindsight": not args.no_hindsight,
                              "sweep_wall_s": time.perf_counter() - started},
               "cases": records}
@@ -128,6 +138,7 @@ def equivalent_command(args) -> str:
     words += ["--planner-model", args.planner_model]
     words += ["--no-hindsight"] if args.no_hindsight else []
     words += ["--cluster", args.cluster] if args.cluster else ["--workers", str(args.workers)]
+    words += ["--dashboard", args.dashboard] if args.dashboard else []
     words += ["--timeout-s", f"{args.timeout_s:g}"] if args.timeout_s is not None else []
     words += ["--json", args.json, "--force"] if args.json else []
     return " ".join(shlex.quote(w) for w in words)

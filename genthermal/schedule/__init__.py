@@ -7,10 +7,12 @@
 * :mod:`.optimal` — direct transcription in CasADi, IPOPT;
 * :mod:`.milp` — discrete rests and load chunks as a MILP, HiGHS;
 * :mod:`.closed_loop` — open-loop plans and the closed loop of thesis 7.2 (Kalman filter, re-plans);
-* :mod:`.report` — summary keys, plots and the demo.
+* :mod:`.report` — summary keys, plots and the demo;
+* :mod:`.flight` — ``Flight(plant, manager, mission).run()``, the flight as composed roles.
 """
 
 from .closed_loop import fly
+from .flight import Flight, Manager
 
 from .manager_settings import SCHEDULERS, ManagerSettings
 
@@ -23,7 +25,7 @@ from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
 from .plan import PlanningProblem, PlanResult, Schedule, Segment, mission_segments, predict
 from .power_system import AffineGenerator, Fault, PowerSystem
 
-__all__ = ["SCHEDULERS", "AffineGenerator", "Fault", "HeuristicSettings", "ManagerSettings", "MilpSettings",
+__all__ = ["SCHEDULERS", "AffineGenerator", "Fault", "Flight", "Manager", "HeuristicSettings", "ManagerSettings", "MilpSettings",
            "OptimalSettings", "PlanResult", "PlanningProblem", "PowerSystem", "Schedule", "Segment", "fly",
            "heuristic_plan", "lowest_reachable_peak", "milp_plan", "mission_segments", "optimal_plan",
            "plan_mission", "plan_with", "predict"]

@@ -25,8 +25,11 @@ Closed loop, every ``cycle_s`` (thesis: 5 min):
    :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
 4. **apply** the schedule to the true plant for one cycle.
 
-The true plant is the nonlinear model with the faults from their onsets and parameters that differ
-from the design model (``PowerSystem.plant_mismatch``). The back-off ``margin_K`` absorbs the
+The true plant is by default the nonlinear model with the faults from their onsets and parameters
+that differ from the design model (``PowerSystem.plant_mismatch``,
+:class:`~genthermal.plants.model_plant.ModelPlant`), or any plant of the protocol of
+:mod:`genthermal.plants` (an FMU, a user's simulator), given the machine's inputs each cycle
+(:func:`plant_inputs`) and answering with its sensors' readings. The back-off ``margin_K`` absorbs the
 mismatch; its cost in mission time is measured by flying with and without it. The nonlinear planner
 replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
 
@@ -43,7 +46,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.ekf import ExtendedKalmanFilter
-from ..simulate import simulate
+from ..plants.model_plant import ModelPlant
+from ..plants.protocol import PlantFault, PlantSetup, check_sensors, checked_readings
 from .flight_result import FlightRecorder, FlightResult, FlightTimeout
 from .flown import FlownPlanning
 from .input_watch import InputWatch
@@ -90,21 +94,26 @@ class TrustedHeatFlows:
         return planning_generator(estimator.generator, estimator.filter, state)
 
 
-def _plant_steps(system: PowerSystem, g: int, x0, timeline, t0: float):
-    """Run generator ``g``'s true plant over ``timeline`` from ``t0`` (faults switch in at their
-    onsets). Returns (outputs (2, n) after each step, state at the end)."""
-    n = timeline.n_steps
-    model = system.plant_model(g, system.faults_known_at(t0))
-    _, switches = system.plant_switches(g)
-    later = [(onset, m) for onset, m in switches if t0 < onset < t0 + n * timeline.dt_s]
-    # the frame's last row repeats the final input; so do the currents a load-following inlet rise reads
+def plant_inputs(system: PowerSystem, timeline, t0: float) -> dict:
+    """The machine's inputs over ``timeline`` from ``t0`` (s), as a plant is given them: input name →
+    (n_gen, n) (phase currents A RMS, the exciter current following the load, the coolant inlet with
+    the faults' rises and the ambient, °C)."""
+    role = system.planning_model.spec.interface.generator
+    # the currents a load-following inlet rise reads, the final one repeated for the frame's last row
     currents = np.hstack([timeline.currents_A, timeline.currents_A[:, -1:]])
-    frame = generator_inputs(timeline, g, t0, lambda t: system.inlet_C(g, t, currents), system.mission.T_ambient_C,
-                             system.mission.power_factor, system.rated_current_A,
-                             model.spec.interface.generator)
-    run = simulate(model, frame, x0=x0, switches=later)
-    states = run[[f"T_{name}" for name in model.state_names]].to_numpy()
-    return run[list(model.output_names)].to_numpy()[1:].T, states[-1]
+    frames = [generator_inputs(timeline, g, t0, lambda t, g=g: system.inlet_C(g, t, currents),
+                               system.mission.T_ambient_C, system.mission.power_factor, system.rated_current_A, role)
+              for g in range(system.n_generators)]
+    return {name: np.array([frame[name].to_numpy()[:-1] for frame in frames])
+            for name in system.planning_model.input_names}
+
+
+def plant_setup(system: PowerSystem, dt_s: float) -> PlantSetup:
+    """What a plant is told at take-off (:class:`~genthermal.plants.protocol.PlantSetup`)."""
+    faults = tuple({"generator": f.generator, "onset_s": f.onset_s, "kind": f.kind, "effect": f.effect,
+                    "values": dict(f.values), "inlet_rise_C": f.inlet_rise_C} for f in system.faults)
+    return PlantSetup(tuple(system.generator_names), tuple(system.planning_model.input_names),
+                      tuple(system.planning_model.output_names), dt_s, system.mission.T_ambient_C, faults)
 
 
 def true_inputs(system: PowerSystem, input_names, times, currents_A=None) -> dict:
@@ -131,7 +140,7 @@ def _filter_inputs(system: PowerSystem, inputs_C: dict, times, currents_A=None) 
     return inlet, ambient
 
 
-def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings()) -> FlightResult:
+def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings(), plant=None) -> FlightResult:
     """Fly the mission in closed loop on the true plant (module docstring).
 
     Parameters
@@ -142,6 +151,12 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         Who re-plans when a breach is predicted.
     settings : ManagerSettings
         Management cycle, margin, filter, rest budget, noise seed and each scheduler's settings.
+    plant : Plant, optional
+        What is flown (:mod:`genthermal.plants`); default the model plant of ``system``
+        (:class:`~genthermal.plants.model_plant.ModelPlant`). When it fails in flight (raises, or
+        reads other sensors, other timestamps or a non-finite value), the flight stops there: the
+        result holds what was flown and the fault (``plant_fault``), the manager holding the
+        minimum power mode.
 
     Returns
     -------
@@ -153,6 +168,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     ------
     FlightTimeout
         When ``settings.cpu_limit_s`` is set and a management cycle starts past it.
+    InputError
+        When the plant's sensors are not the machine's, or it raises at its reset.
     """
     started = time.process_time()
     dt = settings.dt_s
@@ -161,19 +178,19 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     noise_sd = np.sqrt(np.asarray(system.planning_model.spec.interface.noise_variances_K2))
     segments = flight_segments(system, settings, scheduler)
     schedule = Schedule.nominal(system.n_generators, len(segments))
-    x_true = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    cold = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
     settings.check_scheduler(scheduler)
     if settings.nonlinear and flight_filter(system, settings) != "ekf":
         raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
                          "filter's model and covariance: fly this scenario with --filter ekf")
-    estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
+    estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
                                  filter_cache, flight_filter(system, settings)) for g in range(system.n_generators)]
     # the fault detector reads an extended Kalman filter's disturbance states: with the linear
     # filter in the loop it gets parallel extended Kalman filters of its own
     detector_cache: dict = {}
     detectors = estimators if flight_filter(system, settings) == "ekf" or settings.tell_fault else [
-        StateEstimator(system.design_generator_for(()), lambda: system.planning_model, x_true[g], dt,
+        StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
                        detector_cache, "ekf") for g in range(system.n_generators)]
     monitor = FaultMonitor(system, settings.detection, dt)
     from ..diagnose.input_sensors import input_sensors
@@ -196,6 +213,15 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     recorder = FlightRecorder(system)
     budget = settings.rest_budget_for(system.mission.duration_s)
     own_shed = settings.sheds_on_flown_model(scheduler, flight_filter(system, settings))  # optimal_shed
+    plant = ModelPlant(system) if plant is None else plant
+    sensors = tuple(system.planning_model.output_names)
+    check_sensors(plant, "--plant", type(plant).__name__, sensors)
+    try:
+        plant.reset(plant_setup(system, dt))
+    except Exception as error:  # noqa: BLE001 - any failure of a user's plant is named, never a traceback
+        raise InputError("--plant", type(plant).__name__, f"the plant raised at its reset: "
+                         f"{type(error).__name__}: {error}") from None
+    plant_fault = None
     measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     carried_A = None  # (n_gen, 1) the currents of the last step flown: the inlet read when planning
     while segments:
@@ -248,18 +274,29 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
         n = min(cycle_steps, timeline.n_steps)
         applied = timeline.head(n)
-        outputs = np.empty((system.n_generators, 2, n))
         step_times = t + dt * np.arange(n)
         inputs_read = read_inputs(step_times, applied.currents_A)
         inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times,
                                           applied.currents_A)
+        sample_times = t + dt * np.arange(1, n + 1)
+        try:
+            try:
+                readings = plant.step(t, dt, plant_inputs(system, applied, t))
+            except Exception as error:  # noqa: BLE001 - a plant's failure is recorded, the flight so far kept
+                raise PlantFault("raised", f"the plant raised: {type(error).__name__}: {error}") from None
+            outputs = checked_readings(readings, sensors, system.n_generators, sample_times)
+        except PlantFault as fault:
+            plant_fault = {"time_s": float(t), "cycle": cycles, "kind": fault.kind, "message": str(fault),
+                           "plant": type(plant).__name__, "held": "minimum power mode",
+                           "rest_current_A": float(system.rest_current_A)}
+            recorder.warnings.append(f"plant fault at {t:g} s: {fault}; the flight stops there, the manager "
+                                     f"holding the minimum power mode ({system.rest_current_A:.2f} A)")
+            break
         for g, estimator in enumerate(estimators):
-            outputs[g], x_true[g] = _plant_steps(system, g, x_true[g], applied, t)
             estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
             if detectors is not estimators:
                 detectors[g].predict(applied.currents_A[g], inlets[g], ambients[g])
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
-        sample_times = t + dt * np.arange(1, n + 1)
         read = injector.apply(sample_times, sensed)
         monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
         measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
@@ -273,4 +310,5 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     result = recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles,
                              rest_budget_s=budget)
     result.sensor_watch = watch
+    result.plant_fault = plant_fault
     return result

@@ -70,6 +70,9 @@ class FlightResult:
         ``lowest_reachable_peak_C``, ``lowest_peak_action``, ``response``.
     sensor_watch : SensorWatch or None
         Sensor faults injected, claimed and masked (closed loop).
+    plant_fault : dict or None
+        The plant's failure that stopped the flight (closed loop): ``time_s``, ``cycle``, ``kind``,
+        ``message``, ``plant``, ``held``, ``rest_current_A``; None when the plant answered throughout.
     """
 
     system: PowerSystem
@@ -90,6 +93,42 @@ class FlightResult:
     rest_budget_s: float = np.inf
     shed_events: list = dataclasses.field(default_factory=list)
     sensor_watch: object = None
+    plant_fault: dict | None = None
+
+    def to_pandas(self):
+        """One row per sample (``time_s``, s): per generator its winding and iron temperatures (°C,
+        ``gen1_T_winding``) and the phase current applied over the step that starts there (A RMS,
+        ``gen1_current_A``), the nominal current, ``resting`` and the mission ``action`` (1-based);
+        the step columns are empty on the last sample."""
+        import pandas as pd
+
+        n = self.currents_A.shape[1]
+        columns = {"time_s": self.time_s}
+        sensors = list(self.system.planning_model.output_names)
+        for g, name in enumerate(self.system.generator_names):
+            for k, sensor in enumerate(sensors):
+                columns[f"{name}_{sensor}"] = self.temperatures_C[g, k]
+        pad = np.full(self.time_s.size - n, np.nan)
+        for g, name in enumerate(self.system.generator_names):
+            columns[f"{name}_current_A"] = np.concatenate([self.currents_A[g], pad])
+        columns["nominal_A"] = np.concatenate([self.nominal_A, pad])
+        frame = pd.DataFrame(columns)
+        frame["resting"] = pd.array(list(self.resting) + [pd.NA] * pad.size, dtype="boolean")
+        frame["action"] = pd.array([int(a) + 1 for a in self.action_index] + [pd.NA] * pad.size, dtype="Int64")
+        return frame
+
+    def summary(self) -> dict:
+        """The summary keys of ``genthermal plan`` / ``fly`` (:func:`~genthermal.schedule.report.flight_summary`)."""
+        from .report import flight_summary
+
+        return flight_summary(self)
+
+    def plot(self, path=None, title: str = ""):
+        """Currents and temperatures of every generator (:func:`~genthermal.schedule.report.plot_flight`),
+        written to ``path`` when given; returns the figure."""
+        from .report import plot_flight
+
+        return plot_flight(self, title=title, path=path)
 
     def to_pandas(self):
         """The flight as a table, one row per sample.
@@ -178,9 +217,14 @@ class FlightRecorder:
     def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None, cycles=0,
                rest_budget_s=np.inf) -> FlightResult:
         """The :class:`FlightResult`."""
+        n_gen = self.system.n_generators
+        nothing = not self.currents  # a plant that failed in the first cycle
         return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
-                            np.moveaxis(np.array(self.temperatures), 0, 2), np.hstack(self.currents),
-                            np.concatenate(self.nominal), np.concatenate(self.resting),
-                            np.concatenate(self.action), self.plans, self.warnings, table,
+                            np.moveaxis(np.array(self.temperatures), 0, 2),
+                            np.zeros((n_gen, 0)) if nothing else np.hstack(self.currents),
+                            np.zeros(0) if nothing else np.concatenate(self.nominal),
+                            np.zeros(0, dtype=bool) if nothing else np.concatenate(self.resting),
+                            np.zeros(0, dtype=int) if nothing else np.concatenate(self.action),
+                            self.plans, self.warnings, table,
                             monitor, settings, cycles, rest_budget_s, self.shed_events)
 

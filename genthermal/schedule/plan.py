@@ -560,4 +560,12 @@ def evaluate(problem: PlanningProblem, schedule: Schedule, method: str, solve_s:
     """Predict ``schedule`` on the design model and wrap it as a :class:`PlanResult`; feasible when
     the peak is within ``tolerance_K`` of the planning limit."""
     peak, g, k = predict(problem, schedule).peak()
-    return PlanResult(schedule, peak <= problem.limit_C + tolerance_K, peak, g, k, solve_s, method, list(warnings))
+    return PlanResult(schedule, within_limit(peak, problem.limit_C, tolerance_K), peak, g, k, solve_s, method,
+                      list(warnings))
+
+
+def within_limit(peak_C: float, limit_C: float, tolerance_K: float = FEASIBLE_TOLERANCE_K) -> bool:
+    """Whether a forecast peak (°C) keeps the planning limit ``limit_C`` (°C) within ``tolerance_K``:
+    the one test of feasibility, for a scheduler's prediction (:func:`evaluate`) and for the
+    open-loop plan's forecast (:func:`~genthermal.schedule.open_loop.judge_forecast`)."""
+    return bool(peak_C <= limit_C + tolerance_K)

@@ -25,6 +25,8 @@ Keys of :func:`flight_summary`:
                         carried by anyone, A·s / A·h), ``first_s`` / ``last_s`` of the load not
                         served (None without)
 ``management_cycles``   cycles of the closed loop (0 for a plan)
+``plant_fault``         the plant's failure that stopped the flight (time_s, cycle, kind, message, the
+                        mode the manager holds), None when it answered throughout (closed loop)
 
 Closed loop only (:mod:`genthermal.schedule.monitor`; judged against the scenario's faults, which
 the manager is not told unless ``tell_fault``):
@@ -73,7 +75,7 @@ def flight_summary(result: FlightResult) -> dict:
         "median_solve_s": float(np.median(solve_times)) if solve_times else 0.0,
         "displaced_Ah": float((moved_off.sum() - lost.sum()) * dt / 3600.0),
         "feasible": bool(all(plan["feasible"] for plan in result.plans) and not result.shed_events
-                         and not lost.any()),
+                         and not lost.any() and getattr(result, "plant_fault", None) is None),
         "lowest_reachable_peak_C": float(max(lowest)) if lowest else None,
         "manager_response": list(dict.fromkeys(plan["response"] for plan in result.plans if plan.get("response"))),
         "rest_budget_s": float(result.rest_budget_s),
@@ -81,6 +83,8 @@ def flight_summary(result: FlightResult) -> dict:
         "management_cycles": int(result.cycles),
         "warnings": list(dict.fromkeys(result.warnings)),
     }
+    if result.closed_loop:
+        summary["plant_fault"] = getattr(result, "plant_fault", None)
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
     if getattr(result, "sensor_watch", None) is not None:

@@ -1,12 +1,13 @@
-"""Robustness sweep: closed-loop flights on plants the manager does not know, run on Dask.
+"""Robustness sweep: closed-loop flights on plants the manager does not know, in worker processes.
 
 Each case draws (seeded) a mission of 2-8 h, 2-4 generators, plant parameters off by up to
 ±30 % (``h_end_air``, ``h_top_air``, ``R0``, ``P_iron``, ``m_dot_fan``, each up or down) and one
 fault the manager is not told, at a random onset on a random generator: a coolant blockage (flow
 factor 0.15-0.6 and an inlet rise), a shorted turn, an end-winding stray loss or an excitation
 iron loss; a share of the cases are healthy (for the false-alarm rate). Every case is flown with
-every scheduler, one Dask task per case (the longest expected first, so that the long cases do
-not finish last on an otherwise idle cluster). The closed loop calls the scheduler only to
+every scheduler, one task per case in a worker process of one thread
+(:mod:`~genthermal.schedule.sweep_workers`; on Dask when asked), the longest expected first (so
+that the long cases do not finish last on otherwise idle workers). The closed loop calls the scheduler only to
 re-plan (:func:`~genthermal.schedule.closed_loop.fly`); a flight that never re-planned is
 therefore the flight of every scheduler (same plant, same seeded noise, same detector), and the
 other schedulers' records are that flight's, marked ``same_flight_as`` (most cases of the grid:
@@ -145,8 +146,8 @@ def fly_case(document: dict, schedulers, cpu_limit_s: float | None = DEFAULT_FLI
     naming its scheduler, ``wall_s`` and ``cpu_s`` 0. With ``hindsight`` and a faulty case, one more
     record, scheduler :data:`HINDSIGHT`: :func:`hindsight_record`.
 
-    A Dask worker runs this beside its event loop's thread, so each flight runs with the cyclic
-    garbage collector kept in this thread (:func:`~genthermal.collector.collector_in_this_thread`)."""
+    A Dask worker (``--cluster``) runs this beside its event loop's thread, so each flight runs with
+    the cyclic garbage collector kept in this thread (:func:`~genthermal.collector.collector_in_this_thread`)."""
     flights, shared = [], {}
     if hindsight and document["faults"]:
         with collector_in_this_thread():
@@ -253,6 +254,7 @@ def case_records(documents, flights: list, schedulers) -> list:
                 runs[scheduler] = {"status": "ok", "wall_s": flight["wall_s"], "cpu_s": flight.get("cpu_s"),
                                    **({"planner_model": flight["planner_model"]} if "planner_model" in flight else {}),
                                    **({"same_flight_as": flight["same_flight_as"]} if "same_flight_as" in flight else {}),
+                                   **{k: flight[k] for k in ("worker_pid", "worker_threads") if k in flight},
                                    **flight["summary"]}
             else:
                 runs[scheduler] = {k: v for k, v in flight.items() if k not in ("case", "scheduler", "summary")}
@@ -269,10 +271,11 @@ def case_records(documents, flights: list, schedulers) -> list:
 
 def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 2, progress: bool = True,
               flight_cpu_limit_s: float | None = DEFAULT_FLIGHT_CPU_LIMIT_S, timeout_s: float | None = None,
-              optimal_planner_model: str = "affine", hindsight: bool = True) -> list:
-    """Fly every case with every scheduler on Dask: a :class:`distributed.LocalCluster` of
-    ``workers`` single-threaded processes, or the scheduler at ``cluster`` (``tcp://host:8786``);
-    a tqdm bar when ``progress``.
+              optimal_planner_model: str = "affine", hindsight: bool = True, dashboard: str | None = None) -> list:
+    """Fly every case with every scheduler in ``workers`` local processes of one thread each
+    (:func:`~genthermal.schedule.sweep_workers.fly_cases_in_processes`: no port opened, no worker
+    restarted), or on Dask: the scheduler at ``cluster`` (``tcp://host:8786``), or a local Dask
+    cluster serving its dashboard at ``dashboard`` (``:8787``); a tqdm bar when ``progress``.
 
     Parameters
     ----------
@@ -286,55 +289,36 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
         Processor-time limit of one flight, s (:func:`fly_flight`).
     timeout_s : float or None
         Wall-clock limit of the whole sweep, s: flights not done by then are recorded as
-        ``unfinished`` and cancelled.
+        ``unfinished`` and stopped.
     optimal_planner_model : str
         Model the optimal scheduler plans on (:func:`planner_model_of`), ``affine`` or ``nonlinear``.
     hindsight : bool
         Also plan each faulty case in hindsight (:func:`hindsight_record`, a few seconds a case).
+    dashboard : str, optional
+        Address of the dashboard of a local Dask cluster (``:8787``); None (default): no Dask.
 
     Returns
     -------
     list of dict
         :func:`case_records`, in the order of ``documents``.
     """
+    from tqdm import tqdm
+
     from .manager_settings import PLANNER_MODELS
+    from .sweep_workers import fly_cases_in_processes, fly_cases_on_dask
 
     if optimal_planner_model not in PLANNER_MODELS:
         raise InputError("optimal_planner_model", optimal_planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
-    import dask.config
-    from distributed import Client, LocalCluster, as_completed
-    from distributed.utils import TimeoutError as DaskTimeoutError
-    from tqdm import tqdm
-
     documents = list(documents)
-    local = None
-    if not cluster:
-        # No spilling and no pausing (the nanny still restarts a worker at 95 % of its memory): a
-        # case's result is a few kB, and both make the worker's event loop call gc.collect() in its
-        # own thread while a flight runs CasADi (genthermal.collector). The nanny hands its config on.
-        with dask.config.set({"distributed.worker.memory.target": False, "distributed.worker.memory.spill": False,
-                              "distributed.worker.memory.pause": False}):
-            local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-    client = Client(cluster or local)
-    flights = []
-    try:
-        order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
-        futures = [client.submit(fly_case, documents[i], tuple(schedulers), flight_cpu_limit_s,
-                                 optimal_planner_model, hindsight, pure=False,
-                                 priority=len(documents) - rank, key=f"case-{i}") for rank, i in enumerate(order)]
-        bar = tqdm(total=len(futures), disable=not progress, desc="cases")
-        try:
-            for future in as_completed(futures, timeout=timeout_s):
-                flights += future.result()
-                bar.update()
-        except (TimeoutError, DaskTimeoutError):
-            client.cancel([f for f in futures if not f.done()])
-        finally:
-            bar.close()
-    finally:
-        client.close()
-        if local is not None:
-            local.close()
+    order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
+    arguments = (tuple(schedulers), flight_cpu_limit_s, optimal_planner_model, hindsight)
+    with tqdm(total=len(documents), disable=not progress, desc="cases") as bar:
+        if cluster or dashboard:
+            flights = fly_cases_on_dask(fly_case, documents, order, arguments, cluster, workers, dashboard,
+                                        timeout_s, bar)
+        else:
+            flights = fly_cases_in_processes(fly_case, documents, order, arguments, schedulers, workers,
+                                             timeout_s, bar)
     return case_records(documents, flights, schedulers)
 
 

@@ -1,0 +1,30 @@
+"""Plants a flight flies (``genthermal fly --plant``): anything with the :class:`Plant` protocol.
+
+* :mod:`.protocol` — :class:`Plant`, :class:`PlantSetup`, :class:`Readings`, the checks of a plant's answers;
+* :mod:`.model_plant` — the genthermal model plant (the default);
+* :mod:`.fmu_plant` — an FMI 2.0 co-simulation FMU through FMPy (``--plant model.fmu``);
+* :mod:`.python_plant` — a user's plant in a Python file (``--plant my_plant.py``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .protocol import Plant, PlantFault, PlantSetup, Readings
+
+__all__ = ["Plant", "PlantFault", "PlantSetup", "Readings", "external_plant", "is_external_plant"]
+
+
+def is_external_plant(value) -> bool:
+    """Whether a ``--plant`` value names an FMU or a Python file rather than a genthermal model."""
+    return value is not None and Path(str(value)).suffix.lower() in (".fmu", ".py")
+
+
+def external_plant(value):
+    """The plant of ``--plant value``: an :class:`~.fmu_plant.FmuPlant` for ``.fmu``, the plant of a
+    Python file (:func:`~.python_plant.load_python_plant`) for ``.py``."""
+    if Path(str(value)).suffix.lower() == ".fmu":
+        from .fmu_plant import FmuPlant
+        return FmuPlant(value)
+    from .python_plant import load_python_plant
+    return load_python_plant(value)
