@@ -170,15 +170,22 @@ def test_two_concurrent_runs_on_one_output_cannot_both_succeed(tmp_path, monkeyp
     out = tmp_path / "mission.csv"
     meet = threading.Barrier(2, timeout=60)
     move = outputs._move_file_into_place
+    # CasADi's symbolic core is not thread-safe: the runs take turns at building and simulating
+    # the model (one holds ``computing`` until its file is ready) and meet only to move it.
+    computing = threading.Lock()
 
     def move_after_both_worked(temporary, path):
+        computing.release()
         meet.wait()
         move(temporary, path)
 
+    def one_run():
+        assert computing.acquire(timeout=120)
+        codes.append(main(["simulate", "step_rated", "--out", str(out), "--dt", "600"]))
+
     monkeypatch.setattr(outputs, "_move_file_into_place", move_after_both_worked)
     codes = []
-    runs = [threading.Thread(target=lambda: codes.append(main(["simulate", "step_rated", "--out", str(out),
-                                                               "--dt", "600"]))) for _ in range(2)]
+    runs = [threading.Thread(target=one_run) for _ in range(2)]
     for run in runs:
         run.start()
     for run in runs:
