@@ -138,7 +138,7 @@ def fisher_summary(fit: LeastSquaresFit, names: Sequence[str], residuals: np.nda
     The Fisher information of :math:`(\\theta, a, c)` is :math:`F = J^\\top J/\\hat\\sigma^2` with
     :math:`\\hat\\sigma^2 = RSS/(N - n)`; the covariance is :math:`F^{-1}` (pseudo-inverse when
     singular). The condition number is that of F with columns scaled to unit norm. Given the
-    ``residuals`` (n_outputs, N; NaN missing), :math:`\hat\sigma^2` is inflated by
+    ``residuals`` (n_outputs, N; NaN missing), :math:`\\hat\\sigma^2` is inflated by
     :math:`N/N_{eff}` (:func:`genthermal.diagnose.interval.effective_samples`): residuals that are
     not white hold fewer independent samples, and intervals that ignore it exclude the truth.
 
