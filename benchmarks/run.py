@@ -121,6 +121,12 @@ BENCHMARKS = (
               reason="an IPOPT calibration over the chapter-7 outcomes: minutes even at --quick"),
     Benchmark("fit_chapter7", "fit_chapter7.py", (), None, reason="the chapter-7 calibration: about 10 min"),
     Benchmark("managed_blockage", "managed_blockage.py", (), None, reason="managed blockage studies: about 5 min"),
+    Benchmark("independent", "bench_independent.py", ("--jobs", "2", "--plants", "2", "--faults"), None,
+              json_flag=False, reason="command-line diagnosis of 30 independent and injected 4-h records: "
+              "12-70 CPU-s each; needs ../shared/records"),
+    Benchmark("ipmsm", "bench_ipmsm.py", (), None, json_flag=False,
+              reason="cross-validated calibration over 12 real bench profiles (4 folds and one fit over all): "
+              "about 10 min; needs ../shared/records"),
 )
 #: Scripts of ``benchmarks/`` that are not benchmarks (helpers, report writers), with what they are.
 NOT_BENCHMARKS = {

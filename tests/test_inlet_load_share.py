@@ -89,10 +89,11 @@ def test_the_rise_falls_when_load_is_displaced_off_the_blocked_generator():
 
 
 def test_the_closed_loops_plant_flies_the_load_following_inlet():
-    """The plant step of the closed loop (``closed_loop._plant_steps``) reads the currents it flies:
-    with load moved off the blocked generator a load-following rise leaves it cooler than a fixed
-    one does; undisplaced the two are the same plant run."""
-    from genthermal.schedule.closed_loop import _plant_steps
+    """The plant step of the closed loop (``closed_loop.plant_inputs`` into the model plant) reads
+    the currents it flies: with load moved off the blocked generator a load-following rise leaves it
+    cooler than a fixed one does; undisplaced the two are the same plant run."""
+    from genthermal.plants.model_plant import ModelPlant
+    from genthermal.schedule.closed_loop import plant_inputs, plant_setup
     from genthermal.schedule.plan import Schedule, build_timeline, mission_segments
 
     def end_winding(share, displaced_A):
@@ -100,9 +101,10 @@ def test_the_closed_loops_plant_flies_the_load_following_inlet():
         segments = mission_segments(system.mission)
         schedule = Schedule(np.array([[displaced_A], [-displaced_A]]), np.zeros(1))
         timeline = build_timeline(segments, schedule, system.rest_current_A, 30.0)
-        x0 = np.full(system.nominal_model.n_states, 20.0)
-        outputs, _ = _plant_steps(system, 0, x0, timeline, 0.0)
-        return outputs[0, -1]
+        plant = ModelPlant(system)
+        plant.reset(plant_setup(system, 30.0))
+        readings = plant.step(0.0, 30.0, plant_inputs(system, timeline, 0.0))
+        return readings.values[0, 0, -1]
 
     assert end_winding(1.0, 0.0) == end_winding(0.0, 0.0)
     fixed, following = end_winding(0.0, 1.5), end_winding(1.0, 1.5)

@@ -139,9 +139,10 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
         return (f"{fault.describe()}: one fault on the phase sensors {', '.join(hypothesis.columns)} alike "
                 "would be several sensors failing the same way")
     if hypothesis.output and residuals and hypothesis.output in residuals and sensor not in phase_columns:
+        on_the_phases = hypothesis.output in phase_columns or bool(set(hypothesis.columns) & set(phase_columns))
         for name, residual in residuals.items():
-            if name == hypothesis.output or name.startswith("T_winding_") and hypothesis.output.startswith("T_winding"):
-                continue
+            if name == hypothesis.output or (on_the_phases and name in phase_columns):
+                continue  # the same quantity: the phase sensors of the winding the fault is on
             moved = shown_change(residual, elapsed_s, fault.kind, onset)
             if np.isfinite(moved) and abs(moved) >= AGREEMENT * abs(fault.value) and moved * fault.value > 0:
                 return (f"{fault.describe()}: but {name} leaves the model by {moved:+.2f} {fault.unit} at the same "

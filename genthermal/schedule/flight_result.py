@@ -96,10 +96,16 @@ class FlightResult:
     plant_fault: dict | None = None
 
     def to_pandas(self):
-        """One row per sample (``time_s``, s): per generator its winding and iron temperatures (°C,
-        ``gen1_T_winding``) and the phase current applied over the step that starts there (A RMS,
-        ``gen1_current_A``), the nominal current, ``resting`` and the mission ``action`` (1-based);
-        the step columns are empty on the last sample."""
+        """The flight as a table, one row per sample.
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``time_s`` (s); per generator its winding and iron temperatures (°C, ``gen1_T_winding``)
+            and the phase current applied over the step that starts there (A RMS,
+            ``gen1_current_A``); the nominal current, ``resting`` and the mission ``action``
+            (1-based). The step columns are empty on the last sample.
+        """
         import pandas as pd
 
         n = self.currents_A.shape[1]
@@ -124,45 +130,14 @@ class FlightResult:
         return flight_summary(self)
 
     def plot(self, path=None, title: str = ""):
-        """Currents and temperatures of every generator (:func:`~genthermal.schedule.report.plot_flight`),
-        written to ``path`` when given; returns the figure."""
-        from .report import plot_flight
-
-        return plot_flight(self, title=title, path=path)
-
-    def to_pandas(self):
-        """The flight as a table, one row per sample.
-
-        Returns
-        -------
-        pandas.DataFrame
-            ``time_s`` (s); per generator ``<name>.<output>`` (winding and iron, °C) and
-            ``<name>.I_A`` (applied phase current, A RMS); ``nominal_A`` and ``resting``. The
-            currents and flags hold over the step that starts at their row, so the last row has none.
-        """
-        import pandas as pd
-
-        n = len(self.time_s) - 1
-        columns = {"time_s": self.time_s}
-        outputs = list(self.system.planning_model.output_names)
-        padded = lambda values: np.append(np.asarray(values, dtype=float), np.nan)  # noqa: E731
-        for g, name in enumerate(self.system.generator_names):
-            for k, output in enumerate(outputs):
-                columns[f"{name}.{output}"] = self.temperatures_C[g, k]
-            columns[f"{name}.I_A"] = padded(self.currents_A[g, :n])
-        columns["nominal_A"] = padded(self.nominal_A[:n])
-        columns["resting"] = pd.array(list(np.asarray(self.resting[:n], dtype=bool)) + [pd.NA], dtype="boolean")
-        return pd.DataFrame(columns)
-
-    def plot(self, title: str = "", path=None):
         """Currents (rests shaded) and winding and iron temperatures of every generator.
 
         Parameters
         ----------
-        title : str
-            Figure title.
         path : path-like, optional
             PNG file to write the figure to.
+        title : str
+            Figure title.
 
         Returns
         -------
