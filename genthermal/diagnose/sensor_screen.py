@@ -172,7 +172,11 @@ class SensorScreen:
         phases = tuple(c for c in ("T_winding_u", "T_winding_v", "T_winding_w") if c in readings)
         reason = refusal(hypothesis, readings, self.elapsed_s, floors, pooled,
                          getattr(self.interface, "coolant_input", None), getattr(self.interface, "ambient_input", None),
-                         "T_outlet", phases, self._residuals)
+                         "T_outlet", phases,
+                         # other outputs leaving the model at the onset tell a machine change from one
+                         # sensor only against the floors of an error model: without one, a plant's
+                         # slowly moving misfit reads as such a change
+                         self._residuals if self.error_model is not None else None)
         if reason:
             self.refused.append((hypothesis, reason))
         return reason is None
