@@ -153,16 +153,22 @@ def score(name: str, truth: dict, document: dict) -> dict:
             "rmse_over_floor": (rmse / floor) if (rmse is not None and floor) else None}
 
 
+def diagnose_command(data: Path, out: Path, workers: int) -> tuple:
+    """The command line a user runs on ``data`` (the shared healthy baseline, ``--iterate``, JSON to
+    ``out``) and its environment (this source tree first on the path)."""
+    command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline",
+               str(RECORDS / "data" / "healthy_baseline.csv"), "--iterate", "--json", str(out),
+               "--workers", str(workers)]
+    return command, dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+
+
 def run_record(name: str, workers: int, timeout_s: float) -> dict:
     """Run the CLI on one record in a fresh process; its JSON scored (``error`` when it failed)."""
     data = RECORDS / "data" / f"{name}.csv"
     truth = json.loads((RECORDS / "truth" / f"{name}.json").read_text())
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "diagnosis.json"
-        command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline",
-                   str(RECORDS / "data" / "healthy_baseline.csv"), "--iterate", "--json", str(out),
-                   "--workers", str(workers)]
-        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        command, env = diagnose_command(data, out, workers)
         start = time.perf_counter()
         try:
             process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
@@ -262,10 +268,7 @@ def run_fault(index: int, workers: int, timeout_s: float) -> dict:
         data = Path(folder) / "record.csv"
         inject_sensor_faults(pd.read_csv(RECORDS / "data" / "healthy_mission_B.csv"), [fault]).to_csv(data, index=False)
         out = Path(folder) / "diagnosis.json"
-        command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline",
-                   str(RECORDS / "data" / "healthy_baseline.csv"), "--iterate", "--json", str(out),
-                   "--workers", str(workers)]
-        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        command, env = diagnose_command(data, out, workers)
         start = time.perf_counter()
         process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
         wall = time.perf_counter() - start

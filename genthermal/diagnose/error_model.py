@@ -1,30 +1,10 @@
 r"""The error a calibrated model leaves on a healthy record, and the evidence measured against it.
 
-After a baseline calibration the residual :math:`e = y_{model} - y_{meas}` of a healthy record is
-not white sensor noise but model error: on the independent records 1.5-4 × the noise, lag-1
-autocorrelation 0.8-0.98 at 10 s. :class:`ErrorModel` describes it per sensor as an AR(1)
-process, :math:`e_t = \phi e_{t-1} + \varepsilon_t`, with level (RMS, the *discrepancy floor*)
-:math:`s` and innovation variance :math:`s^2(1-\phi^2)`, fitted to the healthy baseline's residual
-after calibration (:meth:`ErrorModel.from_residual`).
-
-Evidence. The prediction-error (whitened) log-likelihood of a hypothesis that changes the outputs
-by a slowly varying shape :math:`d` (every effect, drift, bias after its onset, pair) gains
-:math:`\sum_t (d_t - \phi d_{t-1})^2 / (2 s^2 (1-\phi^2)) \approx \|d\|^2 (1-\phi)/(2 s^2 (1+\phi))`:
-the record counts as :math:`N_{eff} = N (1-\phi)/(1+\phi)` independent samples, not :math:`N`.
-:class:`WhitenedBIC` is the BIC of :mod:`genthermal.diagnose.criterion` on :math:`N_{eff}`
-(:attr:`ErrorModel.effective_fraction`, pooled over the sensors with their share of the RSS as
-weights), so every score of the diagnosis (effects, pairs, sensor faults, onsets and their
-intervals) is in effective samples. The practical tests of
-:func:`~genthermal.diagnose.discover.passes_tests` are taken against the floor instead of the
-sensor noise: "explained to the floor" replaces "explained to noise".
-
-Calibration intervals. The baseline fit's Fisher information assumes white residuals; under the
-AR(1) error each variance is larger by :math:`(1+\phi)/(1-\phi)` (the same effective-sample
-count), :func:`widened_calibration` applies it.
-
-The residual must span :data:`MIN_CORRELATION_TIMES` correlation times
-:math:`\tau = -\Delta t/\ln\phi` and at least :data:`MIN_BASELINE_S`, else the level and the
-correlation are not estimated (:class:`~genthermal.errors.InputError` naming the minimum).
+:class:`ErrorModel` describes each sensor's residual after the baseline calibration as an AR(1)
+process (level: the *discrepancy floor*; lag-1 correlation :math:`\phi`); :class:`WhitenedBIC`
+scores every hypothesis on :math:`N_{eff} = N (1-\phi)/(1+\phi)` effective samples, and
+:func:`widened_calibration` widens calibration intervals by the same factor. The derivation and
+the minimum baseline length: ``docs/guide/evidence.md``.
 """
 
 from __future__ import annotations

@@ -1,33 +1,10 @@
-r"""Is a fitted sensor fault a plausible claim? Physical bounds and the record's own redundancy.
+"""Is a fitted sensor fault a plausible claim? Physical bounds and the record's own redundancy.
 
-A sensor hypothesis fitted to a model residual can absorb any misfit, so fitting alone never
-makes a sensor claim here. :func:`refusal` returns why a :class:`SensorHypothesis` is no claim,
-checked in this order:
-
-1. **bound**: the fault is larger than a sensor of its kind can be wrong
-   (:data:`genthermal.sensor_faults.SENSOR_FAULT_BOUNDS`);
-2. faults observed in the reading itself (a disagreement with the redundant sensors of its
-   output, a frozen reading, a noise change: evidence ``redundancy``, ``frozen``, ``noise``) are
-   then admitted;
-3. **floor**: the error the fault makes over the record (a bias's size, a drift's size at the end)
-   is at least :data:`MIN_SIZE_OVER_FLOOR` × the discrepancy floor of its sensor (the calibrated
-   model's error on the healthy baseline, :mod:`genthermal.diagnose.error_model`): a smaller
-   "fault" cannot be told from model error;
-4. **redundancy**: the record's other readings of the same quantity must show it —
-
-   * coolant inlet and ambient read the same room air (the inlet through the machine's intake): a
-     fault of one moves their difference by the fault's size (a bias: the median difference
-     over :data:`WINDOW_S` after the onset against before; a drift: the change of the slope),
-     within :data:`AGREEMENT`;
-   * an inlet rise that the outlet air follows (outlet minus inlet unchanged within
-     :data:`AGREEMENT` of the rise) is warmer air (recirculation), not the inlet sensor;
-   * a phase winding sensor's fault moves it against the mean of the other two phases; one fault
-     on the three phase sensors of a lumped winding would be three sensors failing alike;
-   * the outlet air is never cooler than the inlet air (energy balance: the machine only adds
-     heat to its cooling air): a correction that makes it so is refused;
-   * a sensor with no redundant reading (iron, outlet, a lumped winding) is corroborated by the
-     others *not* moving: when another output leaves the model at the same onset by at least
-     :data:`AGREEMENT` of the fault's size, in the same direction, the machine changed.
+:func:`refusal` returns why a :class:`SensorHypothesis` is no claim: larger than a sensor of its
+kind can be wrong (:data:`genthermal.sensor_faults.SENSOR_FAULT_BOUNDS`), smaller than
+:data:`MIN_SIZE_OVER_FLOOR` discrepancy floors, or not shown by the record's redundant readings
+(inlet and ambient, the three phases, outlet and energy balance, the other outputs). The rules
+and their reasons: ``docs/guide/evidence.md``.
 """
 
 from __future__ import annotations
