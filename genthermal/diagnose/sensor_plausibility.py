@@ -112,8 +112,7 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
             if not _shows(difference, elapsed_s, fault.kind, onset, fault.value):
                 return (f"{fault.describe()}: but it does not move against the other phase sensors "
                         f"({', '.join(others)})")
-    on_phases = [c for c in hypothesis.columns if c in phase_columns]
-    if len(on_phases) > 1 and not _one_sensor(readings, on_phases):
+    if len([c for c in hypothesis.columns if c in phase_columns]) > 1:
         return (f"{fault.describe()}: one fault on the phase sensors {', '.join(hypothesis.columns)} alike "
                 "would be several sensors failing the same way")
     if hypothesis.output and residuals and hypothesis.output in residuals and sensor not in phase_columns:
@@ -131,13 +130,3 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
             return (f"{fault.describe()}: corrected, the outlet air would be cooler than the inlet air, which "
                     "the energy balance forbids")
     return None
-
-
-def _one_sensor(readings: dict, columns: list) -> bool:
-    """Whether ``columns`` hold one sensor's readings copied (a record that logs the winding once,
-    as a flight's does, fills every phase column with it): equal wherever any is read."""
-    present = [np.asarray(readings[c], dtype=float) for c in columns if c in readings]
-    if len(present) < 2:
-        return True
-    first = present[0]
-    return all(np.array_equal(first, other, equal_nan=True) for other in present[1:])

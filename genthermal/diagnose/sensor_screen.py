@@ -48,7 +48,8 @@ from .input_sensors import corrected_inputs, input_sensors, input_step_response,
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .shared_air import minimal_detectable_error, screen_ambient_against_inlet
 from .sensor_faults import (PREFERENCE_BIC, SensorHypothesis, corrected_readings, outputs_from,
-                            screen_against_model, screen_noise, screen_redundant, sensor_columns)
+                            screen_against_model, screen_noise, screen_redundant, sensor_columns,
+                            sensor_groups)
 
 
 def record_readings(data, series: MeasuredSeries, interface) -> dict:
@@ -169,7 +170,10 @@ class SensorScreen:
         for name in self.series.inputs.columns:
             if name != "time_s":
                 readings.setdefault(name, self.series.inputs[name].to_numpy(float))
-        phases = tuple(c for c in ("T_winding_u", "T_winding_v", "T_winding_w") if c in readings)
+        # the columns of an output read by several distinct sensors (the phase windings; copies of
+        # one reading, as a flight's record logs the winding, are one sensor)
+        phases = tuple(c for group in sensor_groups(self.readings, self.columns).values() if len(group) > 1
+                       for c in group)
         reason = refusal(hypothesis, readings, self.elapsed_s, floors, pooled,
                          getattr(self.interface, "coolant_input", None), getattr(self.interface, "ambient_input", None),
                          "T_outlet", phases,
