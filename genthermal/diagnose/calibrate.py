@@ -1,20 +1,10 @@
-r"""Least-squares calibration of named model parameters against measurements (CasADi + IPOPT).
+"""Least-squares calibration of named model parameters against measurements (CasADi + IPOPT).
 
-The trajectories and their exact Jacobians come from
-:class:`~genthermal.diagnose.trajectory.ParametricSimulator` (the discrete step of
-:mod:`genthermal.discretise` with the parameters symbolic, the parameter-only expressions hoisted
-out of the time loop).
-
-Fit and confidence
-------------------
-Decision variables are scaled: strictly positive parameters as :math:`z = \ln(\theta/\theta_0)`,
-the others as :math:`z = (\theta - \theta_0)/s`. IPOPT minimises
-:math:`\tfrac12\sum_k\sum_j m_{jk}(\hat y_{jk} - y_{jk})^2` (:math:`m` masks missing samples; K²)
-within the parameters' physical bounds, with the exact gradient and the Gauss-Newton Hessian
-:math:`J_r^\top J_r` (exact Jacobian). Confidence intervals come from the Fisher information
-:math:`F = J^\top J/\hat\sigma^2`, :math:`\hat\sigma^2 = RSS/(N - n)`, inflated by
-:math:`N/N_{eff}` for residuals correlated in time. A fit that stops at a bound, or whose residual
-is not white, is reported as such (:attr:`CalibrationResult.status`), not as converged.
+:func:`calibrate` fits the parameters with exact Jacobians from
+:class:`~genthermal.diagnose.trajectory.ParametricSimulator` and returns a
+:class:`CalibrationResult`: values, confidence intervals from the Fisher information (inflated for
+time-correlated residuals), identifiability warnings and a status that says whether the fit
+stopped at a bound or left a residual that is not white. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
