@@ -57,6 +57,16 @@ def fault_bound_reason(fault: "SensorFault") -> str | None:
     return None
 
 
+def fault_bounds(fault: "SensorFault") -> tuple[float, float]:
+    """The range of ``value`` a faulty but still reading sensor of the fault's kind can show
+    (:data:`SENSOR_FAULT_BOUNDS`, :data:`STUCK_RANGE_C` for a stuck reading, in the unit of the
+    fault's kind); NaN where no bound is set (a noise factor)."""
+    if fault.kind == "stuck":
+        return float(STUCK_RANGE_C[0]), float(STUCK_RANGE_C[1])
+    bound = SENSOR_FAULT_BOUNDS[sensor_kind(fault.sensor)].get(fault.kind)
+    return (-float(bound), float(bound)) if bound is not None else (math.nan, math.nan)
+
+
 @dataclasses.dataclass(frozen=True)
 class SensorFault:
     """One sensor fault (module docstring).

@@ -279,6 +279,38 @@ class Diagnosis:
                            "confidence": "level"})
         return claims
 
+    def to_pandas(self):
+        """The claims as a tidy table, one row per claimed size (:func:`~genthermal.diagnose.result_views.claims_frame`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``claim`` (index into ``to_dict()["claims"]``), ``kind``, ``subject``, ``quantity``,
+            ``size``, ``unit``, ``bound_low``, ``bound_high``, ``onset_s`` (s), ``evidence``,
+            ``delta_ic`` and ``confidence``.
+        """
+        from .result_views import claims_frame
+
+        return claims_frame(self)
+
+    def plot(self, path=None, ax=None):
+        """Residual (model − measurement, K) per sensor before the diagnosis and with its found effects.
+
+        Parameters
+        ----------
+        path : path-like, optional
+            PNG file to write the figure to.
+        ax : matplotlib.axes.Axes or sequence of Axes, optional
+            Draw into this Axes (every sensor) or these (one per sensor) instead of a new figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .result_views import plot_residual_change
+
+        return plot_residual_change(self, path=path, ax=ax)
+
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""
         first = self.iterations[0]
