@@ -56,6 +56,13 @@ def test_a_module_docstring_says_in_a_few_lines_what_the_module_does(path):
     assert not problems, f"{relative(path)}: {'; '.join(problems)}"
 
 
+@pytest.mark.parametrize("path", module_paths(), ids=relative)
+def test_the_pages_a_module_docstring_points_to_exist(path):
+    named = re.findall(r"\bdocs/[\w/.-]+\.md\b", module_docstring(path) or "")
+    missing = [page for page in named if not (PACKAGE.parent / page).is_file()]
+    assert not missing, f"{relative(path)} points to missing pages: {missing}"
+
+
 def test_the_allow_list_names_only_what_exists():
     """An entry of NOT_YET_TRIMMED that matches no module is stale and must go."""
     stale = [entry for entry in NOT_YET_TRIMMED if not any(relative(p).startswith(entry) for p in module_paths())]
