@@ -3,8 +3,9 @@ r"""Coolant flow through a partly blocked outlet: the outlet diameter → flow f
 :func:`outlet_flow_fraction` gives :math:`k_{flow}(d) = \sqrt{(1 + \beta)/(1 + \beta\,(d_0/d)^4)}` for a fan
 driving the air through quadratic resistances in series, the outlet an orifice of diameter
 :math:`d`; :math:`\beta` (:data:`OUTLET_LOSS_SHARE`, assumed) is the healthy outlet's share of the
-circuit's loss. Thesis section 7.3.1 (the 10 mm outlet plate); derivation:
-``docs/guide/methods.md``.
+circuit's loss. :func:`inlet_rise` and :func:`inlet_load_factor` give the coolant inlet's rise
+after a fault (recirculated outlet air). Thesis section 7.3.1 (the 10 mm outlet plate);
+derivation: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
