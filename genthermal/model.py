@@ -3,7 +3,7 @@
 :class:`ThermalModel` assembles the network (thesis eq. 4.44), eliminates the massless nodes
 exactly (Schur complement) and keeps everything symbolic in the parameters, so its Jacobians with
 respect to states, inputs and parameters are exact. Its discrete step is
-:mod:`genthermal.discretise`. Guide: ``docs/guide/model.md``.
+:mod:`genthermal.discretise`. Guide: ``docs/guide/model.md``; the assembly: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

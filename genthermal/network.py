@@ -5,6 +5,7 @@ r"""A lumped-parameter thermal network: nodes, links, air streams and heat sourc
 :math:`C_i \dot\theta_i` = conduction and convection (symmetric) + air streams entering it
 (directed) + its heat sources. :meth:`Network.replace` returns a modified copy, which is how a
 physical effect transforms a model; :mod:`genthermal.model` turns it into CasADi functions.
+Thesis section 4.2; the energy balance: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
