@@ -3,7 +3,8 @@
 :func:`synthesize` simulates the plant with the true inputs and writes what the rig's logger would
 record in the machine's :mod:`genthermal.measurements` schema: every sensor column with its own
 white noise (thesis eq. 6.10), measured currents with a relative noise (``current_noise``, default
-1 %), other inputs without noise. Guide: ``docs/guide/estimation.md``.
+1 %), other inputs without noise. Guide: ``docs/guide/estimation.md``; the noise model:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
