@@ -78,7 +78,7 @@ class _EntryPoint:
         return self.__wrapped__(*args, **kwargs)
 
     def __getattr__(self, name: str):
-        if name.startswith("__"):
+        if name.startswith("_"):  # dunder protocols, and this object's own state before it is set
             raise AttributeError(name)
         module = importlib.import_module(self._module_name)
         try:
