@@ -128,8 +128,6 @@ def test_the_sub_module_named_like_an_export_is_reachable_through_it():
     "import genthermal.diagnose.report as r; import genthermal; assert r.write_diagnosis_report; "
     "assert callable(genthermal.diagnose) and not isinstance(genthermal.diagnose, type(r))",
     "import genthermal; f = genthermal.diagnose; import genthermal.diagnose.report as r; assert genthermal.diagnose is f",
-    "from genthermal import simulate; import genthermal.simulate as s; assert s is simulate and s.simulate",
-    "from genthermal.diagnose import report, diagnose; import genthermal; assert genthermal.diagnose.__wrapped__ is diagnose",
 ])
 def test_both_spellings_work_in_a_fresh_interpreter(statement):
     """Whichever comes first, the entry point or the sub-module import, both work."""
