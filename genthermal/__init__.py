@@ -11,6 +11,7 @@ they are imported on first use, so ``import genthermal`` stays light.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import sys
 import types
@@ -56,8 +57,44 @@ def __getattr__(name: str):
     if module is None:
         raise AttributeError(f"module 'genthermal' has no attribute {name!r}")
     value = getattr(importlib.import_module(module), name)
+    namesake = f"{__name__}.{name}"
+    if module == namesake or module.startswith(namesake + "."):
+        value = _EntryPoint(value, namesake)
     globals()[name] = value  # later look-ups skip this function
     return value
+
+
+class _EntryPoint:
+    """An entry point named like a sub-module (``simulate``, ``diagnose``): calling it calls the
+    function, and its signature and docstring are the function's; every other attribute is the
+    sub-module's, so ``genthermal.diagnose.compare`` and ``import genthermal.diagnose.report as r``
+    reach the sub-package as well."""
+
+    def __init__(self, function, module_name: str):
+        functools.update_wrapper(self, function)
+        self._module_name = module_name
+
+    def __call__(self, *args, **kwargs):
+        return self.__wrapped__(*args, **kwargs)
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):  # dunder protocols, and this object's own state before it is set
+            raise AttributeError(name)
+        module = importlib.import_module(self._module_name)
+        try:
+            return getattr(module, name)
+        except AttributeError:
+            pass
+        try:
+            return importlib.import_module(f"{self._module_name}.{name}")
+        except ModuleNotFoundError:
+            raise AttributeError(f"{self._module_name!r} has no attribute {name!r}") from None
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | set(dir(importlib.import_module(self._module_name))))
+
+    def __repr__(self):
+        return f"<function {self.__wrapped__.__module__}.{self.__qualname__} (also the module {self._module_name})>"
 
 
 def __dir__():
@@ -66,8 +103,9 @@ def __dir__():
 
 class _Package(types.ModuleType):
     """The package module: an entry point named like a sub-module (``simulate``, ``diagnose``)
-    stays the function when that sub-module is imported (the import system would otherwise set the
-    package attribute to the sub-module); the sub-module itself stays in ``sys.modules``."""
+    stays the entry point when that sub-module is imported (the import system would otherwise set
+    the package attribute to the sub-module); the sub-module stays in ``sys.modules`` and is
+    reached through the entry point's attributes (:class:`_EntryPoint`)."""
 
     def __setattr__(self, name, value):
         if name in _EXPORTS and isinstance(value, types.ModuleType):

@@ -1,16 +1,9 @@
 """Compile generated C into a shared library with the system compiler, cache it, load it (ctypes).
 
-Objects are compiled in parallel, one per generated source, and cached under a key made of the
-compiler's identity, the flags and the contents of the source and headers; the library is cached
-under the keys of its objects. The cache lives in ``$GENTHERMAL_CACHE_DIR`` or
-``~/.cache/genthermal`` (``codegen/obj`` and ``codegen/lib``), so a model that was compiled once
-loads in milliseconds. Files enter the cache by an atomic rename, so concurrent processes are safe.
-
-A library in the cache is code that will be loaded into the process, so the cache is guarded: its
-folders are created private to the user (mode 0700) and refused when another user owns them or may
-write in them, and every cached object and library has a record of its key (the hash of the
-sources, headers, compiler and flags it was built from) and of its own SHA-256. A file whose
-record is missing or does not match (changed, truncated, replaced) is built again before use.
+:func:`compile_objects` and :func:`compile_library` build objects in parallel and cache objects and
+libraries under a key of compiler, flags and sources in ``$GENTHERMAL_CACHE_DIR`` (default
+``~/.cache/genthermal``); :class:`CompiledModel` loads a library (ctypes). The cache is private to the user and every entry is checked against its
+recorded SHA-256 before use: ``docs/guide/safety.md``.
 """
 
 from __future__ import annotations

@@ -1,25 +1,11 @@
 """C code of a ThermalModel: CasADi-generated arithmetic behind a small, stable, hand-written ABI.
 
-:func:`generate_c` writes, into one directory,
-
-* ``<prefix>_casadi_<name>.c`` -- one CasADi :class:`casadi.CodeGenerator` source per function
-  (``step``, ``rhs``, ``jac_x``, ``jac_u``, ``jac_p_row``, ``outputs`` and any extra function),
-  every input and output a dense row-major array, plus their common header ``<prefix>_casadi.h``;
-* ``<prefix>.c`` / ``<prefix>.h`` -- the ABI layer filled in from the templates
-  ``codegen/model.c.in`` and ``codegen/model.h.in``: ``<prefix>_step``, ``<prefix>_simulate``,
-  ``<prefix>_rhs`` ... and constant metadata (documented in ``codegen/ABI.md``).
-
-The step of an affine model is written as matrix products with its loss floors, every other SX
-function with its ``fmax``/``fmin`` in line (:mod:`genthermal.codegen_simplify`).
-Every public C symbol carries the prefix, so two models link into one program. The generated
-code is checked for mutable static data and heap use, which the reentrancy contract forbids.
-:func:`model_library` generates, compiles (cached) and loads a model in one call.
-
-Notes
------
-``jac_p`` is not generated as one matrix function: for the thesis generator its 54 000
-instructions take gcc -O2 about 45 s to compile. The C layer assembles it row by row from one
-reverse sweep ``seed^T d(dx/dt)/dp`` (12 000 instructions, about 6 s), exact to rounding.
+:func:`generate_c` writes one CasADi source per function (``step``, ``rhs``, ``jac_x``, ``jac_u``,
+``jac_p_row``, ``outputs``) and the ABI layer ``<prefix>.c`` / ``<prefix>.h`` from the templates in
+``codegen/`` (the ABI: ``codegen/ABI.md``); :func:`model_library` generates, compiles (cached) and
+loads a model in one call. Every public C symbol carries the prefix, and the code is checked for
+static mutable data and heap use. Guide: ``docs/guide/embedded.md``; method notes:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

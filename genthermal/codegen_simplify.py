@@ -1,16 +1,9 @@
-"""Rewrite CasADi SX functions into the form their generated C is fastest in, values unchanged.
+r"""Rewrite CasADi SX functions into the form their generated C is fastest in, values unchanged.
 
-:func:`inline_floors` rebuilds a function with every ``fmax``/``fmin`` against a constant as a
-comparison and select (a C ternary: CasADi writes ``fmax`` as a call of libm's, which the compiler
-may not inline) and shared subexpressions merged. :func:`affine_with_floors` writes an affine step
-with loss floors (:class:`~genthermal.losses.LossFloor`) as
-
-.. math:: x^+ = A x + B u + c + D \\max(R u + r, 0),
-
-one column of ``D`` per distinct floor argument: a matrix-vector product instead of the
-unsimplified network arithmetic (divisions by capacitances, the floors computed once per node
-they heat). Both read the function's instruction list, so they work on any SX function and fall
-back to the original wherever the form does not apply.
+:func:`inline_floors` writes every ``fmax``/``fmin`` against a constant as a C ternary;
+:func:`affine_with_floors` writes an affine step with loss floors as
+:math:`x^+ = A x + B u + c + D \max(R u + r, 0)`. Both fall back to the original function wherever
+the form does not apply. Method notes: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

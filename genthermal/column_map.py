@@ -1,23 +1,11 @@
 """Read any logger's CSV: a column map says which column is which model input or sensor, in what unit.
 
-A :class:`ColumnMap` (from a machine file's ``COLUMN_MAP``, a YAML file given with ``--columns``,
-or a dict) names, per column of the logger's file, the model input (``input``), the sensor column
-(``sensor``) or the auxiliary quantity (``auxiliary``: ``torque``, ``electrical_power``, used by
-unit checks only) it is, with its unit; ``dt_s`` gives the sample period of a file without a time
-column. :func:`read_logged` converts a file into :class:`~genthermal.measurements.MeasurementData`
-in the machine's schema (units converted, ``time_s`` made), after checks that name the file, the
-column and the value: a mapped column missing from the file, a unit the data contradict (kelvin in
-a °C column, rad/s where rpm is declared), a negative speed, a run of missing samples in a sensor.
-:func:`read_logged_set` reads several files and refuses a set whose column sets differ.
-
-YAML form::
-
-    dt_s: 1
-    columns:
-      speed: {input: motor_speed, unit: rpm}
-      water_outlet: {input: T_water, unit: degC}
-      activewind_1: {sensor: activewind_1, unit: degC}
-      Torque: {auxiliary: torque, unit: N m}
+:class:`ColumnMap` (from a machine file's ``COLUMN_MAP``, a YAML file given with ``--columns`` or a
+dict) maps each column to a model ``input``, a ``sensor`` or an ``auxiliary`` quantity, with its
+unit. :func:`read_logged` converts one file into
+:class:`~genthermal.measurements.MeasurementData` in the machine's schema, with checks that name
+the file, the column and the value; :func:`read_logged_set` reads several files with the same
+columns. The YAML form: ``docs/tutorials/real_motor.md``.
 """
 
 from __future__ import annotations

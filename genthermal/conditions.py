@@ -1,30 +1,9 @@
 """The seven generator load conditions of thesis Table 3.2, and the mission :class:`Action`.
 
-Provenance: thesis section 3.2.6, Table 3.2. Missions are built by placing these conditions one
-after another (the "K-conditions" of chapter 7). Each condition has two levels, in % of the
-generator's rated phase current (7 A RMS for the thesis generator):
-
-* a **start-up** level, applied for the first 5 minutes of the action;
-* a **continuous** level, applied for the rest of the action.
-
-Each action lasts at least 15 minutes and has no upper limit. The thesis derives the levels from
-MIL-E-7016F for a UAV with two generators and notes that they were altered by small amounts so that
-they match no real aircraft.
-
-=====  ======================  ==========  ============
-No.    name                    start-up %  continuous %
-=====  ======================  ==========  ============
-1      loading_preparation     40.0        27.3
-2      start_warm_up           83.3        66.7
-3      taxi                    100.0       83.3
-4      take_off_climb          83.3        76.7
-5      cruise                  83.3        70.0
-6      cruise_combat           86.7        73.3
-7      landing                 100.0       76.7
-=====  ======================  ==========  ============
-
-An :class:`Action` is one block of a mission: a condition (or, for step tests, a constant load in
-%) held for a duration. Missions themselves live in :mod:`genthermal.mission`.
+:data:`LOAD_CONDITIONS` holds each condition's start-up level (the first 5 minutes of an action) and
+continuous level, in % of the rated phase current (thesis section 3.2.6, Table 3.2). An
+:class:`Action` is one block of a mission: a condition, or a constant load in %, held for a
+duration; missions live in :mod:`genthermal.mission`. The table: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,27 +1,11 @@
 r"""Coolant flow through a partly blocked outlet: the outlet diameter → flow fraction relation.
 
-The internal fan drives the air around a circuit of resistances in series: the fan itself (a
-centrifugal fan's pressure falls with the square of its flow, :math:`\Delta p = p_0 - c_f Q^2`),
-the machine's passages and the outlet. Every resistance is quadratic, :math:`\Delta p = R Q^2`, so
-the operating point is :math:`Q = \sqrt{p_0 / (c_f + R_{circuit} + R_{out}(d))}`. The outlet is an
-orifice of diameter :math:`d`,
-
-.. math::
-    R_{out}(d) = \frac{\rho}{2\,C_d^2 A(d)^2}, \qquad A(d) = \frac{\pi d^2}{4},
-
-with the same discharge coefficient for the open outlet (diameter :math:`d_0`) and the plate, so
-:math:`R_{out}(d) = R_{out}(d_0)\,(d_0/d)^4`. With :math:`\beta = R_{out}(d_0) / (c_f + R_{circuit})`,
-the share of the healthy outlet's loss against the rest of the circuit, the flow fraction is
-
-.. math::
-    k_{flow}(d) = \frac{Q(d)}{Q(d_0)} = \sqrt{\frac{1 + \beta}{1 + \beta\,(d_0/d)^4}} .
-
-It is 1 at :math:`d = d_0`, rises with :math:`d`, and falls as :math:`d^2` for a small orifice
-(the orifice alone then limits the flow): :math:`k \to \sqrt{(1+\beta)/\beta}\,(d/d_0)^2`.
-
-The thesis (7.3.1) replaced the 50 mm outlet by a 10 mm plate and says only that "the only
-parameter of the design model that needed to change was the output vent diameter". Neither the
-fan curve nor the duct losses are given, so :math:`\beta` is assumed (:data:`OUTLET_LOSS_SHARE`).
+:func:`outlet_flow_fraction` gives :math:`k_{flow}(d) = \sqrt{(1 + \beta)/(1 + \beta\,(d_0/d)^4)}` for a fan
+driving the air through quadratic resistances in series, the outlet an orifice of diameter
+:math:`d`; :math:`\beta` (:data:`OUTLET_LOSS_SHARE`, assumed) is the healthy outlet's share of the
+circuit's loss. :func:`inlet_rise` and :func:`inlet_load_factor` give the coolant inlet's rise
+after a fault (recirculated outlet air). Thesis section 7.3.1 (the 10 mm outlet plate);
+derivation: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

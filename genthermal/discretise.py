@@ -1,50 +1,11 @@
-r"""Discrete-time steps of a ThermalModel with inputs held constant over each step (ZOH).
+"""Discrete-time steps of a ThermalModel with inputs held constant over each step (ZOH).
 
-Write the model as :math:`\dot x = Lx + N(x,u)` with :math:`L = \partial f/\partial x` at
-:math:`x = 0, u = 0` (the network without input-dependent terms). With
-:math:`E = e^{hL}`, :math:`\Gamma_1 = \int_0^h e^{Ls}ds` and
-:math:`\Gamma_2 = \int_0^h e^{L(h-s)}s\,ds`, all from one matrix exponential (below):
-
-* **linear design model** (:math:`N` independent of :math:`x`): exact zero-order hold,
-  :math:`x^+ = Ex + \Gamma_1 N(u)`, which is :math:`A_d x + B_d u + c_d` wherever no loss floor
-  of the model is active (:class:`~genthermal.losses.LossFloor`: the design model's copper loss
-  below 1.6 A; :math:`B_d, c_d` are those of the affine branch, which the schedulers plan on);
-* **nonlinear model**: the second-order exponential Runge-Kutta scheme of Cox and Matthews
-  (ETD2RK), exact for the linear part,
-  :math:`a = Ex + \Gamma_1 N(x,u)`, :math:`x^+ = a + \Gamma_2 (N(a,u) - N(x,u))/h`.
-
-When :math:`f` is affine in :math:`x` for fixed :math:`u` (temperature-dependent copper
-resistance is), :math:`N(x,u) = (J(u) - L)x + f(0,u)` and :math:`J(u) - L` is non-zero only in the
-rows of the winding nodes, so the correction costs a few multiplications.
-
-The step also takes a *forcing* :math:`w` (K/s), a rate added to :math:`\dot x` and held over
-the step (an unknown heat flow :math:`q` at node i is :math:`w_i = q/C_i`). It enters :math:`N`,
-so the same scheme carries it: :math:`\Gamma_1 w` for both variants (it cancels in the ETD2RK
-correction). :attr:`DiscreteModel.step` is :attr:`DiscreteModel.forced_step` at :math:`w = 0`;
-the extended Kalman filter uses the forced step, so filter and simulation share one integrator.
-
-This module is the only place that integrates a model over a step. Its consumers:
-:func:`genthermal.simulate.simulate`, the Kalman filter and EKF, the generated C library (through
-:func:`discretise`); calibration's :class:`~genthermal.diagnose.trajectory.ParametricSimulator`
-(through :func:`parametric_step`: the same scheme with the parameters symbolic, so its derivatives
-with respect to them are exact); the schedulers' design generators and the MILP's prediction
-matrices (through :func:`phi_matrices` and :class:`ModalDecay`, the exact zero-order hold of an
-affine model at a numeric or a free step length).
-
-Matrix exponential
-------------------
-:math:`E, \Gamma_1, \Gamma_2` come from one scaled Taylor series, with numbers
-(:func:`phi_matrices`) or with the parameters symbolic (:func:`symbolic_phi_function`): with
-:math:`A = hL/2^s`, :math:`\varphi_2(A) = \sum_{j=0}^{m} A^j/(j+2)!` (Paterson-Stockmeyer, :math:`m` =
-:data:`PHI_TAYLOR_DEGREE`), :math:`\varphi_1 = I + A\varphi_2`, :math:`D = e^{A} - I = A\varphi_1`,
-then :math:`s` doublings of the step length :math:`\tau \to 2\tau`:
-:math:`\Gamma_2 \to (2I + D)\Gamma_2 + \tau\Gamma_1`, :math:`\Gamma_1 \to (2I + D)\Gamma_1`,
-:math:`D \to 2D + D^2` (doubling :math:`D` rather than :math:`E = I + D` keeps its digits; the
-result agrees with a 40-digit exponential to 1e-15 at every step length of the thesis generator).
-:math:`s` makes :math:`\lVert A\rVert_1 \le 1`. For the symbolic version it is fixed when the
-expression is built, from the parameters' nominal values, with :data:`PHI_NORM_HEADROOM` to spare,
-so the series stays accurate to round-off while the parameters make :math:`\lVert hL\rVert_1` up to
-that factor larger than at their nominal values.
+:func:`discretise` gives a :class:`DiscreteModel`: exact zero-order hold for the linear design
+model, the exponential Runge-Kutta scheme ETD2RK (Cox & Matthews) for the nonlinear one, with an
+optional forcing for the filters' disturbance heat flows. :func:`parametric_step` is the same step
+with the parameters symbolic; :func:`phi_matrices`, :func:`symbolic_phi_function` and
+:class:`ModalDecay` give the matrix exponential. This is the only place that integrates a model
+over a step. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,29 +1,10 @@
-r"""The effect catalogue: physical effects as small, named transformations of a model.
+"""The effect catalogue: physical effects as small, named transformations of a model.
 
-An :class:`Effect` takes a model's network (and the machine's ``roles``: which nodes are the end
-windings, which links are the winding insulation ...) and returns a modified network, with one or
-two new named parameters. Each effect declares the :class:`~genthermal.machines.interface.Role`
-members it needs (``needs``) and applies to every machine that has them:
-:func:`applicable_effects` lists those of a model. Because the result is an ordinary :class:`~genthermal.model.ThermalModel`,
-every consumer (simulation, Kalman filter, scheduler, code generation, calibration) uses it as is.
-Each parameter has a *neutral* value at which the effect vanishes. Effects that start during a
-run (a blockage at 1.1 h) are applied from an onset time by :func:`genthermal.simulate.simulate`
-with ``switches``.
-
-A user-defined effect is a few lines::
-
-    from genthermal.effects import Effect, EffectParameter, register_effect
-    from genthermal.losses import input_symbol
-    from genthermal.machines import Role
-    from genthermal.network import HeatSource
-
-    def winding_ac_loss(network, roles, k):
-        currents = sum(input_symbol(i) ** 2 for i in roles[Role.LOAD_CURRENTS])
-        return network.with_heat_sources([HeatSource(roles[Role.SLOT_WINDING], k * currents, "ac_loss")])
-
-    register_effect(Effect("winding_ac_loss", "extra AC loss k I^2 in the slot winding", r"q = k I^2",
-                           (EffectParameter("k_ac", 0.0, "W/A^2", 0.0, 1.0),), winding_ac_loss,
-                           needs=(Role.SLOT_WINDING, Role.LOAD_CURRENTS)))
+An :class:`Effect` turns a model's network (and the machine's roles) into a modified network with
+one or two new named parameters (:class:`EffectParameter`, each with a neutral value at which the
+effect vanishes). :data:`CATALOGUE` holds the registered effects, :func:`register_effect` adds one
+and :func:`applicable_effects` lists those a model can take. How to write an effect:
+``docs/tutorials/own-machine.md``.
 """
 
 from __future__ import annotations

@@ -1,32 +1,9 @@
-r"""Thermal resistance and capacitance formulas of thesis chapter 4, as sympy expressions.
+"""Thermal resistance and capacitance formulas of thesis chapter 4, as sympy expressions.
 
-Each function takes sympy symbols (or expressions) for geometry and materials and returns the
-resistance in K/W or the capacitance in J/K. Nothing here is evaluated: the network keeps the
-expressions, prints them as LaTeX, and hands them to CasADi.
-
-Decisions where the printed equations are ambiguous or dimensionally wrong
--------------------------------------------------------------------------
-* **Eq. 4.11** (frame, mean to inner surface) is printed as :math:`1/(2\pi K_{sr} r_{f2} L_s)`,
-  which has units K/(W m). The 1/(k A) form needs a path length: we use conduction through half
-  the frame wall, :math:`(t_f/2)/(2\pi K_{sr} r_{f2} L_s)`, with the 1 mm wall of eq. 4.15.
-* **Eqs. 4.23-4.25** (slot winding): the conduction terms carry an extra :math:`1/r_{sw1}`
-  (units K/(W m)). Radial conduction in a rod is :math:`1/(4\pi k L)` (eq. 4.9, no radius); we
-  drop :math:`r_{sw1}` from the conduction terms and keep the insulation terms as printed (they
-  are dimensionally right).
-* **Eqs. 4.6 / 4.19** (:math:`R_{r3}`): the thesis prints a positive :math:`R_{r3}`; Mellor et al.
-  derive it negative (it corrects the mean temperature for internal heat generation). A negative
-  element makes the eliminated network lose its M-matrix property (some effective couplings turn
-  negative, so more heat somewhere can cool a node elsewhere), and the thesis calibrated
-  :math:`K_{cr}, K_{sa}, s` with the positive sign. We keep the thesis sign.
-* **Eq. 4.18**: :math:`r_1` is a misprint for :math:`r_{st1}`.
-* **Eq. 4.28**: the printed :math:`0.01^2` is the toroid radius :math:`r_{sewt}^2` (Table 4.2:
-  10 mm); it is kept as that symbol.
-* **Eq. 4.15**: the printed 0.001 m and 0.01 m are the frame wall thickness :math:`t_f` and the
-  total thickness of the two end shields :math:`t_{end}`; they are kept as those symbols.
-* **Axial resistances** (eqs. 4.3, 4.16, 4.22): :math:`L/(12\pi k_a(r_1^2-r_2^2))` is Mellor's
-  axial T-network with both end faces tied together (:math:`R_{a1}/2 + R_{a3}`). Where the two ends
-  touch different nodes (slot winding to the two end windings) each end gets :math:`2R_a`, so the
-  parallel pair is :math:`R_a`.
+Each function takes sympy symbols or expressions for geometry and materials and returns a
+resistance in K/W or a capacitance in J/K, unevaluated. Where the printed equations are ambiguous
+or dimensionally wrong (eqs. 4.6, 4.11, 4.15, 4.18, 4.19, 4.23-4.25, 4.28, the axial resistances)
+the decisions taken are listed in ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

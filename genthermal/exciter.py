@@ -1,26 +1,10 @@
 r"""The exciter current of a generator whose AVR holds rated terminal voltage.
 
-A brushless synchronous generator's AVR sets the exciter field current :math:`I_{exc}`; the
-exciter is linear below saturation, so :math:`I_{exc}` is proportional to the main field current,
-and that to the internal EMF :math:`E` (air-gap line). With the phasor diagram of a
-cylindrical-rotor machine in per unit (terminal voltage :math:`V = 1` held by the AVR, load current
-:math:`i = I/I_{rated}` at power factor :math:`\cos\varphi`, lagging),
-
-.. math::
-    \underline E = V + i\,(r_a + j x_s)\,e^{-j\varphi}
-    \;\Rightarrow\;
-    |E| = \sqrt{(1 + i r_a\cos\varphi + i x_s\sin\varphi)^2 + (i x_s\cos\varphi - i r_a\sin\varphi)^2},
-
-    I_{exc} = I_{exc,0}\,|E| .
-
-So :math:`I_{exc}` is :math:`I_{exc,0}` at no load, grows with load faster than linearly at first
-(the quadrature term adds in squares) and more steeply the more lagging the power factor (a
-lagging load demagnetises the machine: armature reaction). It carries the :math:`I^2`
-information the thesis's ARX search found in it (thesis 5.3: :math:`I_{exc}` the best input).
-
-The thesis gives no field data for the Genco RF201A, so the three constants are assumed
-(:data:`EXCITER_PARAMETERS`, each with its reason); with them the rated point (7 A, power factor
-0.8) needs 1.02 A.
+:func:`exciter_current` gives :math:`I_{exc} = I_{exc,0}\,|E|`, the internal EMF :math:`E` from
+the phasor diagram of a cylindrical-rotor machine at the load current and power factor (per
+unit, terminal voltage 1). The three constants are assumed (:data:`EXCITER_PARAMETERS`, each with
+its reason); the thesis's ARX search found :math:`I_{exc}` the best input (thesis 5.3).
+Derivation: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

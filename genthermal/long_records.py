@@ -1,22 +1,10 @@
 """Long, finely sampled records made fit for fitting: block averages on a coarser grid.
 
-A rig logging at 1 s for a week gives 604 800 samples, while the temperatures a model is fitted
-to change over minutes: the slow modes of the thesis generator have time constants of 6.5 to 50
-minutes and the fastest (air and thin solid nodes) of 2 to 30 s, which only the sensors' noise
-shows at 1 s. Fitting (``calibrate``, ``diagnose``) simulates the model once per candidate and
-iteration, so its cost grows with the number of samples. :func:`decimate_for_fitting` therefore
-averages the record in blocks down to at most :data:`MAX_FITTING_SAMPLES` samples, on the first
-of :data:`FITTING_STEPS_S` that is long enough, and says so.
-
-Block averages keep what the model needs. Inputs are held over a step ``[t_k, t_k + step)`` by the
-simulation, so they are averaged over that block: currents as RMS values (the copper and excitation
-losses go with the current squared, so the mean loss of the block is kept), inlet and ambient
-temperatures as means. A sensor is compared with the state *at* ``t_k``, so it is averaged over the
-window of at most :data:`SENSOR_WINDOW_S` centred on ``t_k`` (a linear trend cancels, the noise
-falls, and a load change just after ``t_k``, which the state at ``t_k`` has not seen, reaches it
-less); a window without any valid sample is missing. A block inside a gap of the record holds the
-inputs of the block before it, as a resampling does (the gap is flagged when the record is loaded).
-Memory stays bounded: one pass of numpy reductions over the validated columns.
+:func:`decimate_for_fitting` averages a record in blocks down to at most
+:data:`MAX_FITTING_SAMPLES` samples, on the first of :data:`FITTING_STEPS_S` that is long enough:
+currents as RMS values (the mean loss is kept), temperatures as means, sensors over a window
+centred on each sample. Figures: ``docs/results/long_records.md``; method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

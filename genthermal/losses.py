@@ -1,16 +1,9 @@
-r"""Loss models: heat sources written as sympy expressions of inputs, states and parameters.
+"""Loss models: heat sources written as sympy expressions of inputs, states and parameters.
 
-* Copper loss (thesis eqs. 4.40-4.41, with eq. 4.40's repeated :math:`I_v` read as :math:`I_w`):
-  :math:`P_k = w_k \sum_{p\in\{u,v,w\}} I_p^2 R_0 (1 + \alpha_{cu}\theta_k)` in each winding
-  division :math:`k` (slot winding, two end windings), :math:`w_k` its share of the copper mass
-  (thesis 4.2.3). Each division's resistance follows its own temperature.
-* Iron loss: a constant :math:`P_{iron}`, split between back iron and teeth by mass.
-* The linear design model (thesis 5.2): :math:`I^2 \approx a I + b` by least squares over a current
-  range (eq. 5.3) and :math:`R = R_0(1+\alpha_{cu}\theta_{ref})` held constant. The line is
-  negative below :math:`I_0 = -b/a` (1.6 A for the thesis range), and a loss cannot be: each phase's
-  term is :math:`\max(aI_p + b, 0)` (:class:`LossFloor`), so at zero load the design model cools to
-  ambient instead of 20 K below it. Over the fit range (and wherever every phase carries at least
-  :math:`I_0`) the model is the thesis's affine one.
+Copper loss per winding division at its own temperature (thesis eqs. 4.40-4.41), constant iron
+loss split by mass, and the linear design model's affine copper loss (thesis 5.2, eq. 5.3) with
+its floor at zero (:class:`LossFloor`); :func:`input_symbol` names a model input. Guide:
+``docs/guide/model.md``.
 """
 
 from __future__ import annotations

@@ -1,42 +1,10 @@
 """Measured (or synthetic) rig data: one CSV schema, validated once, resampled onto a uniform grid.
 
-The schema is the machine's (:class:`~genthermal.machines.interface.MachineInterface`): ``time_s``,
-its inputs, the CSV columns of its sensors, and its optional outlet column. The default machine's
-(thesis 3.3: the Genco RF201A rig logged by LabVIEW to CSV with a time stamp per sample) is
-
-================  =====  ==========================================================
-column            unit   meaning
-================  =====  ==========================================================
-``time_s``        s      time stamp, strictly increasing
-``I_u, I_v, I_w``  A     stator phase currents, RMS
-``I_exc``         A      exciter winding current
-``T_inlet``       °C     cooling-air inlet temperature
-``T_ambient``     °C     ambient temperature
-``T_winding_u``   °C     stator winding PT100, phase U (likewise ``_v``, ``_w``)
-``T_iron``        °C     stator iron PT100
-``T_outlet``      °C     optional: cooling-air outlet PT100
-================  =====  ==========================================================
-
-Any other column is ignored and reported in :attr:`MeasurementData.ignored_columns`.
-
-*Inputs* (time, currents, inlet and ambient temperature) drive a model, so they must be known: an
-empty cell, a negative current or a temperature outside the PT100 range is an
-:class:`~genthermal.errors.InputError`. *Sensor* columns are what a model is compared with: an empty
-cell means "no measurement at this sample", and a value outside the PT100 range of the rig
-(−50…300 °C, thesis Table 3.4) is flagged and treated as no measurement (set to NaN).
-
-Row numbers in messages count data rows from 1, the header excluded; for files the line of the file
-(header = line 1) is given too, which is the row a spreadsheet shows.
-
-Files as spreadsheets write them are read: UTF-8 with or without a byte-order mark, UTF-16 with
-one, otherwise Latin-1 (flagged); comma, semicolon or tab separated (the header decides); decimal
-commas in a semicolon- or tab-separated file. A row with more or fewer cells than the header is an
-error naming its line. Units are checked against what the machine can do: temperatures that look
-like kelvin, or phase currents above :data:`MAX_CURRENT_FACTOR` times the machine's rated current
-(mA instead of A, say), are errors with the likely fix. A gap in the time stamps longer than
-:data:`GAP_FACTOR` sample periods is flagged: the inputs are held across it by a resampling and the
-sensors are missing there, which the user must know. Every flag is also issued as a
-:class:`DataWarning`, which the command line prints as one line.
+:func:`load_measurements` reads a CSV in the machine's schema (``time_s``, its inputs, its sensor
+columns) into :class:`MeasurementData`: inputs must be known (an empty or impossible value is an
+:class:`~genthermal.errors.InputError` naming row and column), sensors may be missing, suspect
+units and gaps are refused or flagged (:class:`DataWarning`). The schema and the checks:
+``docs/guide/estimation.md`` and ``docs/guide/safety.md``.
 """
 
 from __future__ import annotations

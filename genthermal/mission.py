@@ -1,28 +1,10 @@
 """Missions as data: ordered load actions built from the load conditions of thesis Table 3.2.
 
-A :class:`Mission` is a list of :class:`Action` objects, each a load condition (thesis Table 3.2,
-see :mod:`genthermal.conditions`) or a constant load in % (for step tests) held for a duration.
+A :class:`Mission` is a list of :class:`~genthermal.conditions.Action` objects;
 :meth:`Mission.to_inputs` turns it into the input time series of a thermal model.
-
-Missions are stored as YAML under ``scenarios/`` at the top of the repository (installed as
-``genthermal/data/scenarios``, see :mod:`genthermal.resources`)::
-
-    name: thesis_fig_3_2                 # required, text
-    description: Example flight ...      # optional, text
-    rated_current_A: 7.0                 # optional, > 0, A RMS per phase (default: the default machine's)
-    power_factor: 0.8                    # optional, (0, 1], lagging load power factor (default 0.8)
-    T_inlet_C: 20.0                      # optional, -60..100 degC (default 20)
-    T_ambient_C: 20.0                    # optional, -60..100 degC (default 20)
-    actions:                             # required, non-empty
-      - {condition: 1, duration_min: 15}            # number 1..7 or name (loading_preparation)
-      - {load_percent: 100, duration_min: 60}       # constant load, 0..120 % of rated
-      - {condition: cruise, duration_min: 45, phase_share: [1.1, 1.0, 0.9]}
-    extensions: {}                       # optional mapping: free-form data, not checked
-    faults: ...                          # fault scenarios: checked by genthermal.schedule.power_system
-    generators: ...                      # generators of the power system: checked there too
-
-Any other key is an error. Every problem is reported as :class:`~genthermal.errors.InputError`
-whose field is a path into the document (``actions[3].duration_min``).
+:func:`load_mission` reads one by name (``scenarios/``, installed as ``genthermal/data/scenarios``)
+or from a YAML file; every problem is an :class:`~genthermal.errors.InputError` whose field is a
+path into the document (``actions[3].duration_min``). The YAML form: ``docs/guide/simulation.md``.
 """
 
 from __future__ import annotations

@@ -1,18 +1,9 @@
-r"""ThermalModel: one network + one parameter set → CasADi functions every consumer shares.
+"""ThermalModel: one network + one parameter set → CasADi functions every consumer shares.
 
-Assembly (thesis eq. 4.44): for the internal nodes, :math:`C\dot\theta = G\theta + G_b\theta_b + q`.
-Splitting into capacitive states :math:`x` and massless nodes :math:`z` (air, intermediate),
-
-.. math::
-    C_x\dot x = G_{xx}x + G_{xz}z + G_{xb}b + q_x, \qquad 0 = G_{zx}x + G_{zz}z + G_{zb}b + q_z,
-
-the massless nodes are eliminated exactly (Schur complement):
-:math:`z = -G_{zz}^{-1}(G_{zx}x + G_{zb}b + q_z)`, so the steady state of the reduced model is the
-steady state of the full network. Everything is symbolic in the parameters :math:`p`, so the
-Jacobians with respect to :math:`x`, :math:`u` and :math:`p` are exact (CasADi AD).
-
-The discrete step (see :mod:`genthermal.discretise`) is exact zero-order hold for the linear design
-model and a second-order exponential integrator for the nonlinear model.
+:class:`ThermalModel` assembles the network (thesis eq. 4.44), eliminates the massless nodes
+exactly (Schur complement) and keeps everything symbolic in the parameters, so its Jacobians with
+respect to states, inputs and parameters are exact. Its discrete step is
+:mod:`genthermal.discretise`. Guide: ``docs/guide/model.md``; the assembly: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

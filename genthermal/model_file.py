@@ -1,40 +1,10 @@
 """Model files: a built-in machine, its variant, changed parameters and added effects, as YAML.
 
-::
-
-    machine: genco_rf201a
-    variant: nonlinear            # or linear (the design model of thesis 5.2)
-    parameters:                   # only values that differ from the machine's defaults
-      h_end_air: {value: 17.2, provenance: fitted, source: "least squares on rig_2024.csv"}
-    effects:                      # applied in order, after the parameters
-      - name: coolant_flow_reduction
-        parameters: {k_flow: 0.61}
-        provenance: fitted        # optional (default fitted), with source
-        source: "diagnosis on flight_12.csv"
-        onset_s: 3960             # optional: the effect starts 3960 s after a record's first sample
-    disturbance_prior:            # optional, written by calibrate: where an EKF on this model starts
-      source: "extended Kalman filter over rig_2024.csv (3.00 h) after calibration"
-      states: [q_stator_winding, q_stator_iron, ...]
-      mean: [-0.1, -5.1, ...]     # W (K for dT_inlet)
-      covariance: [[13.9, ...], ...]
-
-:func:`load_model` also takes a machine name: ``genco_rf201a``, ``genco_rf201a:linear`` or a shipped
-parameter set, ``genco_rf201a:chapter7``; a plug-in machine's name or the path of a ``.py`` machine
-file (:mod:`genthermal.machines.registry`), each optionally with ``:linear``. ``machine:`` in a
-model file takes a registered machine only (built-in or plug-in, and the shipped parameter sets:
-the calibration fitted to the thesis's chapter-7 outcomes, :mod:`genthermal.machines.chapter7`):
-a model file is data, and loading one never runs code. A model file of a ``.py`` machine (what
-``calibrate --out`` writes for one) loads only when that file is trusted for the run
-(:func:`genthermal.machines.registry.trusted_machine_files`, ``--trust-machine FILE.py``).
-
-An effect with ``onset_s`` is loaded with its fitted values and the onset recorded on the model
-(``spec.onsets``): :func:`genthermal.simulate.simulate` and ``compare`` hold it at its neutral
-values until the onset, so a model written by ``diagnose --out`` reproduces the diagnosis. Filters
-and generated code use the model with every effect active (the state after the last onset).
-
-``disturbance_prior`` (:mod:`genthermal.estimation.disturbance_prior`) is what the calibration
-left: the extended Kalman filter's disturbance states after the calibration record. A filter on the
-model starts from it. It belongs to the parameter values it was learnt with, so it is read last.
+:func:`load_model` reads a model file or a machine name (``genco_rf201a``, ``genco_rf201a:linear``,
+``genco_rf201a:chapter7``, a plug-in or a trusted ``.py`` machine file); :func:`save_model` writes
+the parameters that differ from the machine's, the added effects with their onsets and the
+disturbance prior a calibration left. Loading a model file never runs code. The format:
+``docs/guide/model.md``.
 """
 
 from __future__ import annotations

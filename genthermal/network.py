@@ -1,20 +1,11 @@
 r"""A lumped-parameter thermal network: nodes, links, air streams and heat sources.
 
-The network is pure data with sympy expressions; :mod:`genthermal.model` turns it into CasADi
-functions. Its energy balance for every non-boundary node :math:`i` is
-
-.. math::
-    C_i \dot\theta_i = \sum_{j} \frac{\theta_j - \theta_i}{R_{ij}}
-        + \sum_{j \to i} c_{air}\dot m_{ji} (\theta_j - \theta_i) + q_i(\theta, u, p),
-
-where the first sum runs over conduction and convection links (symmetric) and the second over the
-air streams *entering* node :math:`i` from an upstream node :math:`j` (directed: a stream carries
-heat downstream only, so the conductance matrix is not symmetric). In matrix form
-:math:`C\dot\theta = G\theta + G_b\theta_b + q`. Massless nodes (:math:`C_i = 0`) are eliminated
-exactly by the model (Schur complement).
-
-Networks are immutable: :meth:`Network.replace` returns a modified copy, which is how a physical
-effect transforms a model.
+:class:`Network` is immutable data with sympy expressions (:class:`Node`, :class:`Link`,
+:class:`AirStream`, :class:`HeatSource`): the energy balance of every node is
+:math:`C_i \dot\theta_i` = conduction and convection (symmetric) + air streams entering it
+(directed) + its heat sources. :meth:`Network.replace` returns a modified copy, which is how a
+physical effect transforms a model; :mod:`genthermal.model` turns it into CasADi functions.
+Thesis section 4.2; the energy balance: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

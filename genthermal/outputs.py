@@ -1,29 +1,10 @@
 """Writing output files without losing data.
 
-Three rules, applied by every command:
-
-* **Nothing is replaced by surprise.** An output file that exists, or an output folder that is not
-  empty, is refused unless the command was given ``--force`` (:func:`check_output_paths`, called
-  by the CLI before any work starts, so a long run never ends in a refusal).
-  ``--force`` replaces regular files only: a symbolic link, a device or a FIFO given as an output
-  is refused by name, with or without it (replacing a link would not write where it points;
-  writing a device or FIFO is not making a file).
-* **Inputs are never outputs.** An output path that names any file the command line names
-  otherwise (``--plant``, a baseline, a column map, a scenario, the data), or two outputs that name
-  the same file, is refused even with ``--force``.
-* **Nothing is left half-written.** Every file is written to a temporary file in the same folder
-  and moved into place only when it is complete (:func:`replacing`); an error, Ctrl-C or SIGTERM
-  (which the CLI turns into :class:`Terminated`) leaves the old file as it was and no partial file
-  behind. A command that writes several files into a folder (C sources and library, a report, the
-  demo, a firmware build) builds them in a temporary folder next to it and moves them in only when
-  all are complete (:func:`replacing_folder`).
-* **Two runs cannot both claim one output.** Without ``--force`` (:func:`replacing_policy`) a file
-  is moved into place only if none appeared meanwhile (an exclusive link), and a folder only if it
-  is still empty: the second of two concurrent runs fails with a clear message instead of
-  silently replacing the first one's result.
-
-JSON output holds finite numbers only: :func:`write_json` writes NaN and ±inf as ``null`` and
-returns where it did so, for the command to say.
+:func:`check_output_paths` refuses, before any work starts, an output that exists (unless
+``--force``), an output that is also an input, and a link, device or FIFO; :func:`replacing` and
+:func:`replacing_folder` move complete results into place only at the end, so an error or a
+signal (:class:`Terminated`) leaves nothing half-written; :func:`write_json` writes NaN and ±inf
+as ``null``. The rules: ``docs/guide/safety.md``.
 """
 
 from __future__ import annotations

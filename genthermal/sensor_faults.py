@@ -1,26 +1,9 @@
-r"""Sensor faults: what a misbehaving sensor does to its reading (the measurement, not the machine).
+"""Sensor faults: what a misbehaving sensor does to its reading (the measurement, not the machine).
 
-A sensor fault changes what a sensor reports from its true temperature :math:`T(t)`, from an onset
-:math:`t_0` (s from the start of the record; :math:`H` the unit step):
-
-=========  ===============================================  =========================  ============
-kind       reading :math:`y(t)`                             ``value``                  unit
-=========  ===============================================  =========================  ============
-bias       :math:`T + b\,H(t-t_0)`                          :math:`b`                  K
-drift      :math:`T + a\,(t-t_0)\,H(t-t_0)`                 :math:`a`                  K/h
-stuck      :math:`T` before, :math:`c` from :math:`t_0`     :math:`c` (0: the reading  °C
-                                                            at the onset is held)
-gain       :math:`T\,(1 + g\,H(t-t_0))` (PT100 scale error  :math:`g`                  (relative)
-           about 0 °C)
-noise      :math:`T + \sqrt{k^2-1}\,\sigma\,\varepsilon`    :math:`k`: the noise std   (factor)
-           from :math:`t_0`, :math:`\sigma` the sensor's    is multiplied by it
-           noise std, :math:`\varepsilon(t) \sim N(0, 1)`
-           independent of the usual noise
-=========  ===============================================  =========================  ============
-
-These five are the common failure modes of resistance thermometers in service (IEC 60751 drift and
-ageing of the element; a broken or shorted lead or a frozen logger channel reading a constant; a
-bad connection adding noise; a wrong transmitter span giving a gain error).
+:class:`SensorFault` changes a sensor's reading from an onset: ``bias`` (K), ``drift`` (K/h),
+``stuck`` (°C), ``gain`` (relative) or ``noise`` (a factor on the noise std), the common failure
+modes of resistance thermometers in service; :func:`inject_sensor_faults` applies them to a
+record. The table of readings: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
@@ -72,6 +55,16 @@ def fault_bound_reason(fault: "SensorFault") -> str | None:
         return (f"{fault.describe()}: beyond the {bound:g} {fault.unit} a faulty {kind} sensor can be off "
                 f"({fault.kind})")
     return None
+
+
+def fault_bounds(fault: "SensorFault") -> tuple[float, float]:
+    """The range of ``value`` a faulty but still reading sensor of the fault's kind can show
+    (:data:`SENSOR_FAULT_BOUNDS`, :data:`STUCK_RANGE_C` for a stuck reading, in the unit of the
+    fault's kind); NaN where no bound is set (a noise factor)."""
+    if fault.kind == "stuck":
+        return float(STUCK_RANGE_C[0]), float(STUCK_RANGE_C[1])
+    bound = SENSOR_FAULT_BOUNDS[sensor_kind(fault.sensor)].get(fault.kind)
+    return (-float(bound), float(bound)) if bound is not None else (math.nan, math.nan)
 
 
 @dataclasses.dataclass(frozen=True)

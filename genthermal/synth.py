@@ -1,18 +1,10 @@
-r"""Synthetic rig data: a model driven by a mission, read through noisy sensors.
+"""Synthetic rig data: a model driven by a mission, read through noisy sensors.
 
-The *plant* (usually the nonlinear simulation model, possibly with changed parameters to stand for
-the real machine) is simulated with the true inputs. What the rig's logger would record is then
-written in the machine's :mod:`genthermal.measurements` CSV schema
-(``model.spec.interface``):
-
-* every CSV column of a sensor reads the sensor's node with its own white Gaussian noise of the
-  sensor's variance (the thesis generator: three stator-winding PT100s at 0.0082 K², the iron
-  and outlet PT100s at 0.013 K², thesis eq. 6.10);
-* current inputs are measured as :math:`I_{meas} = I_{true}\,(1 + \epsilon)`,
-  :math:`\epsilon \sim N(0, c^2)` (``current_noise`` :math:`c`, default 1 %), RMS currents
-  clipped at 0 A. The plant itself sees the true currents, so a model driven by the recorded
-  currents sees slightly wrong losses, as it would on the rig;
-* other inputs (temperatures, speed) are recorded without noise.
+:func:`synthesize` simulates the plant with the true inputs and writes what the rig's logger would
+record in the machine's :mod:`genthermal.measurements` schema: every sensor column with its own
+white noise (thesis eq. 6.10), measured currents with a relative noise (``current_noise``, default
+1 %), other inputs without noise. Guide: ``docs/guide/estimation.md``; the noise model:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,23 +1,8 @@
 """Units of a record checked, not assumed: time in s, currents in A, temperatures in °C.
 
-A record in other units gives a wrong answer without a word: time in minutes makes a three-hour
-run three minutes long, currents in kA make every loss a millionth. :func:`checked_units` looks
-at each column before the record is used and refuses, naming the column and the likely unit, a
-
-* **time** column whose span or steps contradict seconds: a span of more than
-  :data:`MAX_SPAN_S` (milliseconds), a step that is a round number of milliseconds but no round
-  number of seconds (1000, 500, 250: milliseconds at 1, 0.5, 0.25 s logging), a step that is a
-  round number of seconds only when read as minutes (1/6, 1/60), or temperatures that change
-  faster than :data:`MAX_HEATING_RATE_K_PER_S` over :data:`RATE_WINDOW_S` (minutes read as
-  seconds);
-* **current** columns (load and field together) whose largest value is positive but below
-  :data:`MIN_PEAK_CURRENT_SHARE` of the machine's rating (kA); too large a current (mA) is refused
-  by :mod:`genthermal.measurements`;
-* **temperature** column whose median is above :data:`KELVIN_MEDIAN_C` (kelvin).
-
-A user who knows better states the unit (``--unit COLUMN=UNIT``; :func:`stated_units`): the
-column is then converted from that unit (``time_s=min``, ``currents=kA``, ``temperatures=K``) or,
-stated in the schema's own unit (``time_s=s``), taken as it is without the check.
+:func:`checked_units` refuses, naming the column and the likely unit, a time column in ms or min,
+currents in kA and temperatures in kelvin; :func:`stated_units` reads ``--unit COLUMN=UNIT``, which
+converts a column or takes it as it is. The rules: ``docs/guide/safety.md``.
 """
 
 from __future__ import annotations

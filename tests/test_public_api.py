@@ -69,11 +69,69 @@ def test_an_unknown_keyword_argument_raises(name):
         obj(definitely_not_a_parameter=1)
 
 
+@pytest.mark.parametrize("name", [n for n in EXPORTS if not inspect.isclass(getattr(genthermal, n))])
+def test_every_exported_function_documents_what_it_returns(name):
+    assert "Returns\n-------" in inspect.getdoc(getattr(genthermal, name)), f"genthermal.{name} has no Returns section"
+
+
+#: The result objects of the entry points and the methods that turn them into tables and figures.
+RESULT_METHODS = [("genthermal.diagnose", "Diagnosis", "to_pandas"), ("genthermal.diagnose", "Diagnosis", "plot"),
+                  ("genthermal.diagnose", "CalibrationResult", "to_pandas"),
+                  ("genthermal.diagnose", "CalibrationResult", "plot"),
+                  ("genthermal.schedule.flight_result", "FlightResult", "to_pandas"),
+                  ("genthermal.schedule.flight_result", "FlightResult", "plot")]
+
+
+@pytest.mark.parametrize("module, cls, method", RESULT_METHODS)
+def test_every_result_method_documents_its_parameters_and_rejects_unknown_keywords(module, cls, method):
+    function = getattr(getattr(importlib.import_module(module), cls), method)
+    doc = inspect.getdoc(function) or ""
+    parameters = [p.name for p in inspect.signature(function).parameters.values() if p.name != "self"]
+    assert "Returns\n-------" in doc and not [p for p in parameters if p not in documented_names(doc)]
+    with pytest.raises(TypeError, match="definitely_not_a_parameter"):
+        function(object(), definitely_not_a_parameter=1)
+
+
+def test_the_api_reference_documents_the_result_methods():
+    page = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    for module, cls, method in RESULT_METHODS:
+        block = re.search(rf"^\.\. autoclass:: [\w.]*\.{cls}\n((?:   .*\n)+)", page, re.MULTILINE)
+        assert block and method in block.group(1), f"{cls}.{method} is not in docs/api.md"
+
+
 def test_an_export_named_like_a_sub_module_stays_the_function():
     importlib.import_module("genthermal.simulate")
     importlib.import_module("genthermal.diagnose.report")
-    assert inspect.isfunction(genthermal.simulate) and inspect.isfunction(genthermal.diagnose)
-    assert sys.modules["genthermal.simulate"].simulate is genthermal.simulate
+    assert genthermal.simulate.__wrapped__ is sys.modules["genthermal.simulate"].simulate
+    assert genthermal.diagnose.__wrapped__ is sys.modules["genthermal.diagnose.discover"].diagnose
+    for name in ("simulate", "diagnose"):
+        function = getattr(genthermal, name)
+        assert inspect.signature(function) == inspect.signature(function.__wrapped__)
+        assert inspect.getdoc(function) == inspect.getdoc(function.__wrapped__)
+
+
+def test_the_sub_module_named_like_an_export_is_reachable_through_it():
+    import genthermal.diagnose as diagnose_package
+    import genthermal.diagnose.report as report
+    import genthermal.simulate as simulate_module
+
+    assert report is sys.modules["genthermal.diagnose.report"]
+    assert diagnose_package.Diagnosis is sys.modules["genthermal.diagnose"].Diagnosis
+    assert diagnose_package.compare is sys.modules["genthermal.diagnose"].compare
+    assert simulate_module.simulate is sys.modules["genthermal.simulate"].simulate
+    assert "report" in dir(genthermal.diagnose)
+    with pytest.raises(AttributeError, match="no_such_module"):
+        genthermal.diagnose.no_such_module  # noqa: B018
+
+
+@pytest.mark.parametrize("statement", [
+    "import genthermal.diagnose.report as r; import genthermal; assert r.write_diagnosis_report; "
+    "assert callable(genthermal.diagnose) and not isinstance(genthermal.diagnose, type(r))",
+    "import genthermal; f = genthermal.diagnose; import genthermal.diagnose.report as r; assert genthermal.diagnose is f",
+])
+def test_both_spellings_work_in_a_fresh_interpreter(statement):
+    """Whichever comes first, the entry point or the sub-module import, both work."""
+    subprocess.run([sys.executable, "-c", statement], capture_output=True, text=True, check=True, cwd=ROOT)
 
 
 def test_an_unknown_name_is_an_attribute_error():
@@ -83,7 +141,7 @@ def test_an_unknown_name_is_an_attribute_error():
 
 def test_the_api_reference_documents_every_export():
     page = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
-    listed = set(re.findall(r"\.\. auto(?:function|class):: genthermal\.(\w+)", page))
+    listed = set(re.findall(r"^\.\. auto(?:function|class):: genthermal\.(\w+)$", page, re.MULTILINE))
     assert listed == set(EXPORTS)
 
 

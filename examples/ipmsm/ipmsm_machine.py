@@ -1,47 +1,12 @@
-r"""A water-cooled interior permanent-magnet motor on a test bench, as a genthermal machine plug-in.
+"""A water-cooled interior permanent-magnet motor on a test bench, as a genthermal machine plug-in.
 
 The motor of the public bench data set of Liu et al. (IEEE Trans. Power Electronics 2024, doi
-10.1109/TPEL.2024.3409388, MIT licence): a water-jacketed IPMSM up to about 4000 rpm, 160 N·m and
-65 kW electrical, logged at 1 Hz with 13 thermocouples. The network is the one a thermal engineer
-draws for such a machine (9 nodes, 8 of them with heat capacity)::
-
-                 water (jacket, boundary)
-                   │
-               yoke_outer ─────── endcap ── ambient (boundary)
-                   │                 │  └── shaft_bearing ── rotor
-               yoke_inner            │                        │  (air gap)
-               │       └── tooth ────┼──────────────────────── ┤
-           winding_slot ──┘          │                        │
-               │                     │                        │
-           end_winding ──────── end_space_air ────────────────┘
-
-Sensors (the logger's columns): ``activewind_1/2`` and ``slotside`` in the slot winding,
-``endwind_1/2`` on the end windings, ``slotopen`` at the tooth tip, ``slotbottom`` in the yoke
-behind the slot, ``outer_yoke`` at the jacket, ``endcap``, ``rotor`` (magnets, by telemetry) and
-``bearing``; ``water_outlet`` and ``ambient`` are the boundaries.
-
-Losses (each a small term the catalogue of effects names):
-
-* copper, :math:`P_{cu} = \tfrac32 R_0(1 + \alpha\theta)(1 + k_{ac}(n/n_{ref})^2)(i_d^2 + i_q^2)`,
-  split between slot and end winding by conductor length, each at its own temperature (the
-  :math:`k_{ac}` factor is the AC, proximity and skin, part);
-* iron in tooth and yoke, :math:`P_{fe} = (P_h\,n/n_{ref} + P_e(n/n_{ref})^2)(1 + k_{fe,i}\,i^2/I_{ref}^2)`
-  (hysteresis and eddy, flux density rising with the load current);
-* magnet eddy-current loss in the rotor, :math:`P_{pm} = P_{pm,ref}(n/n_{ref})^2(1 + k_{pm,i}\,i^2/I_{ref}^2)`;
-* bearing friction in the bearing node, :math:`P_{fr} = P_{fr,ref}\,n/n_{ref}`.
-
-Convection in the air gap and end space rises with speed,
-:math:`G(n) = G_0 + G_n\,n/n_{ref}` (Taylor-Couette and end-space flow: the Nusselt number grows
-with the rotational Reynolds number, roughly linearly over this speed range).
-
-Geometry is not published with the data set: every geometric value below is ``assumed`` with the
-reason, sized for a ~60 kW water-jacketed IPMSM (stator ~220 mm outside, ~150 mm stack). The
-phase resistance is estimated from the bench's own electrical power at standstill. Calibration
-(``genthermal calibrate`` on several profiles) carries the rest.
-
-``MACHINE`` is the full model; ``MACHINE_PLAIN`` the plain one a first attempt would write (copper
-loss only, constant convection): the tutorial ``docs/tutorials/real_motor.md`` starts from it.
-The logger's column map is :data:`COLUMN_MAP`, read from ``columns.yaml`` beside this file.
+10.1109/TPEL.2024.3409388, MIT licence), as a 9-node network with copper, iron, magnet and
+bearing losses and speed-dependent convection. ``MACHINE`` is the full model, ``MACHINE_PLAIN``
+the plain one a first attempt would write (copper loss only, constant convection); the logger's
+column map is :data:`COLUMN_MAP` (``columns.yaml`` beside this file). Every geometric value is
+``assumed`` with its reason. Tutorial: ``docs/tutorials/real_motor.md``; the network and its
+losses: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

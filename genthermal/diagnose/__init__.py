@@ -1,24 +1,12 @@
 """Model against measurement: compare, calibrate, discover the missing physical effect.
 
-* :func:`~genthermal.diagnose.compare.compare` — simulate on the measured inputs; metrics and where
-  the model fails;
-* :class:`~genthermal.diagnose.error_model.ErrorModel` — the calibrated model's error on a healthy
-  baseline (AR(1) per sensor, the discrepancy floor) and :class:`~genthermal.diagnose.error_model.WhitenedBIC`,
-  the evidence on effective samples that scores every hypothesis of a diagnosis with a baseline;
-* :func:`~genthermal.diagnose.calibrate.calibrate` — least squares (IPOPT, exact derivatives) over
-  named parameters with confidence intervals and identifiability warnings;
-* :class:`~genthermal.diagnose.discovery.Discovery` — candidates (a :class:`Catalogue`), a
-  criterion (:class:`BIC`) and a fitter (:class:`OnsetFitter`) behind ``fit(model, data)``: every
-  candidate the model lacks and pairs of them jointly, ranked, verdict, "something is still
-  missing", ``iterate``; :func:`~genthermal.diagnose.discover.diagnose` is one call of it;
-* :func:`~genthermal.diagnose.open_search.open_search` — the same search over a generic library of
-  heat flows and conductance changes, for physics no catalogue names;
-* :func:`~genthermal.diagnose.experiment.separating_experiment` — a short rig test that tells two
-  look-alike explanations apart;
-* :func:`~genthermal.diagnose.phase_winding.phase_resolved` — one winding node per phase, fitted
-  to the phase sensors when they differ (:class:`~genthermal.diagnose.sensor_view.SensorView`);
-* :func:`~genthermal.diagnose.hidden.make_hidden_effect_case` — test data with a known hidden effect;
-* :func:`~genthermal.diagnose.report.run_discovery_demo` — compare → diagnose → add → error falls.
+:func:`compare` (metrics and where the model fails), :func:`calibrate` (least squares with
+confidence intervals), :class:`Discovery` and :func:`diagnose` (the effect a model lacks, ranked
+by an information criterion), :func:`open_search` (heat flows no catalogue names),
+:func:`separating_experiment` (a rig test that tells two look-alikes apart),
+:func:`phase_resolved` and :class:`SensorView` (the sensors a record adds),
+:func:`make_hidden_effect_case` (test data with a known answer). Guide:
+``docs/guide/calibration-diagnosis.md``.
 """
 
 from .calibrate import CalibrationResult, calibrate

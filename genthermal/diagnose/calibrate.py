@@ -1,20 +1,10 @@
-r"""Least-squares calibration of named model parameters against measurements (CasADi + IPOPT).
+"""Least-squares calibration of named model parameters against measurements (CasADi + IPOPT).
 
-The trajectories and their exact Jacobians come from
-:class:`~genthermal.diagnose.trajectory.ParametricSimulator` (the discrete step of
-:mod:`genthermal.discretise` with the parameters symbolic, the parameter-only expressions hoisted
-out of the time loop).
-
-Fit and confidence
-------------------
-Decision variables are scaled: strictly positive parameters as :math:`z = \ln(\theta/\theta_0)`,
-the others as :math:`z = (\theta - \theta_0)/s`. IPOPT minimises
-:math:`\tfrac12\sum_k\sum_j m_{jk}(\hat y_{jk} - y_{jk})^2` (:math:`m` masks missing samples; K²)
-within the parameters' physical bounds, with the exact gradient and the Gauss-Newton Hessian
-:math:`J_r^\top J_r` (exact Jacobian). Confidence intervals come from the Fisher information
-:math:`F = J^\top J/\hat\sigma^2`, :math:`\hat\sigma^2 = RSS/(N - n)`, inflated by
-:math:`N/N_{eff}` for residuals correlated in time. A fit that stops at a bound, or whose residual
-is not white, is reported as such (:attr:`CalibrationResult.status`), not as converged.
+:func:`calibrate` fits the parameters with exact Jacobians from
+:class:`~genthermal.diagnose.trajectory.ParametricSimulator` and returns a
+:class:`CalibrationResult`: values, confidence intervals from the Fisher information (inflated for
+time-correlated residuals), identifiability warnings and a status that says whether the fit
+stopped at a bound or left a residual that is not white. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
@@ -210,6 +200,12 @@ class CalibrationResult:
         Output name → lag-1 autocorrelation of the fit's residual. Above
         :data:`~genthermal.diagnose.residual.MAX_AUTOCORRELATION` the residual is not white: the
         intervals are widened for it (:func:`fisher_summary`) and :attr:`status` says so.
+    start_provenance : list of str
+        Provenance of each start value (``thesis``, ``literature``, ``assumed``, ``fitted``).
+    trajectories : pandas.DataFrame or None
+        ``time_s`` and per sensor ``<sensor>_measured``, ``<sensor>_before`` and
+        ``<sensor>_after``: the measurement and the model before and after the fit, °C (from the
+        two comparisons; what :meth:`plot` draws).
     """
 
     model: ThermalModel
@@ -222,6 +218,8 @@ class CalibrationResult:
     converged: bool
     at_bounds: list = dataclasses.field(default_factory=list)
     residual_autocorrelation: dict = dataclasses.field(default_factory=dict)
+    start_provenance: list = dataclasses.field(default_factory=list)
+    trajectories: object = None
 
     @property
     def intervals_valid(self) -> bool:
@@ -250,6 +248,37 @@ class CalibrationResult:
     def warnings(self) -> list:
         """Identifiability warnings (plain language, naming the parameters)."""
         return self.fisher["warnings"]
+
+    def to_pandas(self):
+        """The fitted parameters as a table (:func:`~genthermal.diagnose.result_views.parameters_frame`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per parameter: ``name``, ``value``, ``unit``, ``ci95_low``, ``ci95_high``,
+            ``std``, ``start``, ``provenance``, ``source`` and ``start_provenance``.
+        """
+        from .result_views import parameters_frame
+
+        return parameters_frame(self)
+
+    def plot(self, path=None, ax=None):
+        """Measured temperatures per sensor against the model before and after the fit.
+
+        Parameters
+        ----------
+        path : path-like, optional
+            PNG file to write the figure to.
+        ax : matplotlib.axes.Axes or sequence of Axes, optional
+            Draw into this Axes (every sensor) or these (one per sensor) instead of a new figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .result_views import plot_fit
+
+        return plot_fit(self, path=path, ax=ax)
 
     def to_dict(self) -> dict:
         """JSON-ready summary."""
@@ -318,7 +347,21 @@ def calibrate(model: ThermalModel, data, names: Sequence[str], dt_s: float | Non
     after = compare(fitted, series)
     return CalibrationResult(fitted, names, [model.parameters.value(n) for n in names], list(values.values()),
                              fisher, before.metrics, after.metrics, fit.converged, _at_bounds(names, scalings, fit),
-                             _residual_autocorrelation(fit, series.outputs, model.output_names))
+                             _residual_autocorrelation(fit, series.outputs, model.output_names),
+                             [model.parameters[n].provenance for n in names], _trajectories(before, after))
+
+
+def _trajectories(before, after):
+    """``time_s`` and per sensor the measurement and the model before and after the fit (°C), from
+    the two comparisons."""
+    import pandas as pd
+
+    columns = {"time_s": before.frame["time_s"].to_numpy()}
+    for name in before.output_names:
+        columns[f"{name}_measured"] = before.frame[f"{name}_measured"].to_numpy()
+        columns[f"{name}_before"] = before.frame[f"{name}_model"].to_numpy()
+        columns[f"{name}_after"] = after.frame[f"{name}_model"].to_numpy()
+    return pd.DataFrame(columns)
 
 
 def _at_bounds(names, scalings, fit: LeastSquaresFit) -> list[str]:

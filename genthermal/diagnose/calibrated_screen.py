@@ -1,35 +1,11 @@
-r"""Sensor faults against physical effects on top of a calibration-level misfit.
+"""Sensor faults against physical effects on top of a calibration-level misfit.
 
-A model whose parameters are off (a real machine before calibration: the rig plant's losses and
-convection 20-30 % off) misses every sensor by kelvins from the start. Compared on the raw residual,
-any physical effect that absorbs part of that misfit beats a 1-3 K sensor fault, and a slow sensor
-drift is never named. Here every hypothesis is fitted **jointly with the calibration**: the
-residual :math:`r = y - \hat y` (all outputs stacked) is first explained by the model's linear
-sensitivities to its uncertain parameters (:data:`~genthermal.diagnose.discover.DEFAULT_BASELINE_PARAMETERS`
-the model has, :func:`calibration_sensitivities`; a finite difference of
-:data:`RELATIVE_STEP` each), a constant offset per sensor, and every fault present from the first
-sample (an input sensor's offset, a physical effect the machine always had:
-:func:`misfit_from_start`), which a calibration cannot tell from the model's error; what is left is the residual
-:math:`r_\perp` every hypothesis is scored on, :math:`\Delta\mathrm{BIC} = N\ln(RSS_h/RSS_\perp) +
-k\ln N` with :math:`k = 2` (size and onset), the hypothesis' shape projected off the nuisance:
-
-Onsets start at :data:`MIN_ONSET_FRACTION` of the record.
-
-* a sensor's bias or drift from an onset moves its own row only
-  (:mod:`~genthermal.diagnose.sensor_faults`);
-* an input sensor's bias or drift moves every output by the model's response to it
-  (:mod:`~genthermal.diagnose.input_sensors`), and must show in the logged input itself (a jump,
-  a change of slope: :func:`logged_input_shows`): a physical effect that fits like an input error
-  (a better-cooled frame, a warmer ambient reading) does not move the reading;
-* a physical effect moves the outputs by what it changes from an onset
-  (:attr:`~genthermal.diagnose.search.Candidate.onset_responses`, simulated at the effect's
-  typical value on the search's onset grid, interpolated to every sample); an onset between two
-  grid onsets is the two responses with free sizes (three parameters charged as two, the benefit
-  of the doubt to the machine).
-
-The best sensor hypothesis is claimed when it passes the four tests of
-:func:`~genthermal.diagnose.discover.passes_tests` against :math:`r_\perp` and beats the best
-physical effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC`.
+On a plant the model misses by kelvins, every hypothesis (a sensor's or input sensor's bias or
+drift, a physical effect from an onset) is fitted jointly with the model's linear sensitivities
+to its uncertain parameters, an offset per sensor and the misfits present from the start
+(:class:`CalibratedFrame`), and scored by ΔBIC on what is left. The best sensor hypothesis is
+claimed when it passes the tests of :func:`~genthermal.diagnose.discover.passes_tests` and beats
+the best physical effect. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

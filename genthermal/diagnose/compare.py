@@ -1,27 +1,9 @@
-r"""Model against measurement: simulate on the measured inputs, measure the error, find where it fails.
+"""Model against measurement: simulate on the measured inputs, measure the error, find where it fails.
 
-The model runs open loop on the measured inputs (zero-order hold) from an initial state fitted to
-the first measurement. With :math:`e_k = \hat y_k - y_k` (model minus measurement, K; positive =
-the model runs hot) over the valid samples of one sensor:
-
-.. math::
-    \mathrm{RMSE} = \sqrt{\overline{e^2}}, \quad \mathrm{MAE} = \overline{|e|}, \quad
-    \max|e|, \quad \mathrm{bias} = \bar e, \quad
-    R^2 = 1 - \frac{\sum e_k^2}{\sum (y_k - \bar y)^2}.
-
-The same metrics are split by load band (mean phase current in % of rated: the mission phase),
-temperature band (measured winding temperature in thirds), heating / steady / cooling (sign of the
-measured :math:`d\theta_w/dt`, smoothed over 5 min, threshold 0.05 K/min) and by hour; the error
-trend is the least-squares slope of :math:`e` against time (K/h).
-
-Initial state
--------------
-Chosen, not fitted to the whole record: the state is
-:math:`x_0 = c\,\mathbf 1 + a\,(x_{ss}(u_0) - T_{inlet,0}\mathbf 1)`, a blend of a uniformly soaked
-machine and the steady state under the first input, with ``(a, c)`` solved so the model's winding
-and iron temperatures equal the first measured ones (least squares, ``a = 0`` when the steady
-state does not separate winding and iron). A cold start gives ``a ≈ 0``; a machine already at
-its load steady state gives ``a ≈ 1``.
+:func:`compare` runs the model open loop on the measured inputs from an initial state matched to
+the first measurement (:func:`initial_state`) and returns a :class:`Comparison`: RMSE, MAE, max
+error, bias and R² per sensor (model minus measurement, K), split by load band, temperature band,
+heating/steady/cooling and hour, and the error trend (K/h). Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,21 +1,9 @@
 r"""Information criteria that score a candidate explanation against the model without it.
 
-With :math:`N` valid sensor samples, residual sums of squares :math:`RSS` before and after and
-:math:`k` fitted parameters (onsets included), for Gaussian errors of unknown variance
-
-.. math::
-    \Delta\mathrm{BIC} = N\ln\frac{RSS_{after}}{RSS_{before}} + k\ln N, \qquad
-    \Delta\mathrm{AIC} = N\ln\frac{RSS_{after}}{RSS_{before}} + 2k .
-
-A candidate is evidence-worthy when the change is below the criterion's ``evidence_limit``
-(-10: "very strong" evidence for BIC, Kass & Raftery 1995; "essentially no support" for the
-model without the effect for AIC, Burnham & Anderson 2002, sec. 2.6). A criterion is any object
-with ``name``, ``evidence_limit`` and ``delta(rss_after, rss_before, n, k)``.
-
-References
-----------
-Kass, R. E., Raftery, A. E. (1995). Bayes factors. J. Am. Stat. Assoc. 90(430), 773-795.
-Burnham, K. P., Anderson, D. R. (2002). Model Selection and Multimodel Inference, 2nd ed. Springer.
+:class:`BIC` and :class:`AIC` give :math:`\Delta = N\ln(RSS_{after}/RSS_{before}) + k\ln N` (BIC) or
+:math:`+ 2k` (AIC) and an ``evidence_limit`` of -10 (Kass & Raftery 1995; Burnham & Anderson 2002,
+sec. 2.6). A criterion is any object with ``name``, ``evidence_limit`` and
+``delta(rss_after, rss_before, n, k)``. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,24 +1,10 @@
-r"""The size of an explanation as the machine's design sensors see it: phase sensors averaged.
+"""The size of an explanation as the machine's design sensors see it: phase sensors averaged.
 
-With the phase-resolved winding view (:mod:`genthermal.diagnose.phase_winding`) every phase PT100
-is fitted on its own. The residual sum of squares then splits as
-
-.. math::
-    \sum_{x\in\{u,v,w\}} r_x^2 = 3\,\bar r^{\,2} + \sum_x (r_x - \bar r)^2 ,
-
-the common part :math:`\bar r` (what the design sensor, the mean of the three, reads) and the
-phase spread. An effect common to all phases (a change of the frame cooling, a blockage) can only
-remove common error; the spread keeps the noise of three single sensors and the error each phase
-node makes from its own noisy phase current (1 % of :math:`I_x` is 2 % of :math:`I_x^2`, not
-averaged over the phases). On every sensor, the practical tests of
-:func:`~genthermal.diagnose.discover.passes_tests` (a 10 % RMSE reduction, half of the excess
-over the noise explained) measure a common effect against that diluted scale, and one that the
-same record read through the design sensors shows clearly can fail them.
-
-:class:`DesignSensorScale` measures RMSEs and the noise on the design sensors: the phase rows of
-the outputs replaced by their mean, every other sensor as it is. An explanation passes the
-practical tests when it passes them on every sensor or on the design sensors; the evidence
-(ΔBIC) is always that of every sensor, where a loss in one phase shows in the spread.
+With one winding node per phase, an effect common to all phases can only remove the common part
+of the phase errors, so its practical size is diluted by the phase spread.
+:class:`DesignSensorScale` measures RMSEs and noise with the phase rows replaced by their mean: an
+explanation passes the practical tests on every sensor or on the design sensors; its evidence is
+always that of every sensor. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

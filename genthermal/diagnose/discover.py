@@ -1,55 +1,11 @@
-r"""Discover the physical effect a model lacks: fit every catalogue effect, rank by BIC, decide.
+"""Discover the physical effect a model lacks: fit every catalogue effect, rank by BIC, decide.
 
-For every effect of :data:`genthermal.effects.CATALOGUE` that the model lacks, the effect's
-parameters :math:`\theta_e` and an onset :math:`t_0` (the effect holds from the first sample at
-or after :math:`t_0`, as :func:`genthermal.simulate.simulate` with ``switches``) are fitted to the
-measured winding and iron temperatures (grid and golden-section search of the onset, continuous
-fit of :math:`\theta_e`: :mod:`genthermal.diagnose.search`). With a healthy baseline record, the
-uncertain parameters of the model are first calibrated on it (:func:`~genthermal.diagnose.calibrate.calibrate`),
-so that what remains in the data under test is the effect, not the model's general misfit.
-
-Score. With :math:`N` the number of valid sensor samples (both sensors) and :math:`k` the number of
-fitted effect parameters including the onset,
-
-.. math::
-    \mathrm{BIC} = N\ln(RSS/N) + k\ln N, \qquad
-    \Delta\mathrm{BIC} = N\ln(RSS_{after}/RSS_{before}) + k\ln N .
-
-An effect is *significant* when all four hold:
-
-* :math:`\Delta\mathrm{BIC} < -10` ("very strong" evidence, Kass & Raftery 1995);
-* the RMSE falls by at least 10 %: with thousands of time-correlated samples BIC alone accepts
-  tiny improvements, so a practical size is required as well;
-* the model did not already explain the data to noise level: :math:`RMSE_{before} > 1.2\,\hat\sigma`,
-  with :math:`\hat\sigma` the sensor noise estimated from the data alone (second differences,
-  :func:`noise_std`);
-* the effect explains at least half of the unexplained variance,
-  :math:`RMSE_{before}^2 - RMSE_{after}^2 \ge \tfrac12(RMSE_{before}^2 - \hat\sigma^2)`: an effect
-  that only nibbles at a misfit is not the missing physics.
-
-With a healthy baseline the score is the BIC on effective samples of the calibrated model's
-error and :math:`\hat\sigma` is the discrepancy floor (:mod:`genthermal.diagnose.error_model`);
-an effect fitted outside its plausible range (:func:`implausible_reason`) is never significant.
-
-The verdict is the best-ranked significant effect, else ``"none"``. When the phase sensors are
-fitted one by one (:mod:`genthermal.diagnose.phase_winding`), the three practical tests pass on
-every sensor or on the design sensors, the phase sensors averaged
-(:mod:`genthermal.diagnose.design_scale`); the evidence is always the ΔBIC on every sensor. The
-onsets of the verdict are then refined on their profile, and the interval of onsets the data allow
-is reported (:mod:`genthermal.diagnose.onset_profile`).
-
-Beyond one effect:
-
-* when the best single effect leaves a residual that is not noise, pairs of the best single effects
-  are fitted jointly, values and both onsets (:mod:`genthermal.diagnose.joint`), and a pair that
-  passes the four tests against the model, against each of its effects alone and against the best
-  single effect (:func:`choose_pair`) is the verdict (``"A + B"``);
-* the residual after the chosen effects is tested (:mod:`genthermal.diagnose.residual`): when it is
-  more than noise, ``unexplained`` says so, with where and when it is largest;
-* when another explanation fits about as well (:func:`look_alike`), a short rig test that separates
-  them is designed (:mod:`genthermal.diagnose.experiment`);
-* the catalogue is a parameter: :func:`genthermal.diagnose.open_search.open_search` passes a generic
-  library of heat flows instead.
+:func:`diagnose` fits every effect of :data:`genthermal.effects.CATALOGUE` the model lacks with
+its onset, ranks them by ΔBIC and returns a :class:`Diagnosis`: the ranking, the verdict (an
+effect, a pair ``"A + B"`` or ``"none"``), what is still unexplained, look-alikes with the rig
+test that separates them, and the improved model. An effect is significant when it passes the
+four tests of :func:`passes_tests`. Guide: ``docs/guide/calibration-diagnosis.md``; the rules:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations
@@ -322,6 +278,38 @@ class Diagnosis:
                                                  for t in terms],
                            "confidence": "level"})
         return claims
+
+    def to_pandas(self):
+        """The claims as a tidy table, one row per claimed size (:func:`~genthermal.diagnose.result_views.claims_frame`).
+
+        Returns
+        -------
+        pandas.DataFrame
+            ``claim`` (index into ``to_dict()["claims"]``), ``kind``, ``subject``, ``quantity``,
+            ``size``, ``unit``, ``bound_low``, ``bound_high``, ``onset_s`` (s), ``evidence``,
+            ``delta_ic`` and ``confidence``.
+        """
+        from .result_views import claims_frame
+
+        return claims_frame(self)
+
+    def plot(self, path=None, ax=None):
+        """Residual (model − measurement, K) per sensor before the diagnosis and with its found effects.
+
+        Parameters
+        ----------
+        path : path-like, optional
+            PNG file to write the figure to.
+        ax : matplotlib.axes.Axes or sequence of Axes, optional
+            Draw into this Axes (every sensor) or these (one per sensor) instead of a new figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from .result_views import plot_residual_change
+
+        return plot_residual_change(self, path=path, ax=ax)
 
     def to_dict(self) -> dict:
         """The JSON document of ``genthermal diagnose``."""

@@ -1,24 +1,11 @@
-r"""Discovery as one composed object: candidates, a criterion and a fitter behind ``fit``.
+"""Discovery as one composed object: candidates, a criterion and a fitter behind ``fit``.
 
-In the manner of pysindy's ``SINDy(feature_library, optimizer)``, a :class:`Discovery` is built
-from three parts and does nothing until :meth:`Discovery.fit` is called:
-
-* ``candidates`` — a :class:`~genthermal.diagnose.catalogue.Catalogue` (default: the registered
-  catalogue effects, of which each fit uses those that apply to the model);
-* ``criterion`` — scores each candidate against the model without it
-  (:class:`~genthermal.diagnose.criterion.BIC` by default);
-* ``fitter`` — how effects and onsets are fitted (:class:`~genthermal.diagnose.fitter.OnsetFitter`:
-  single effects, then pairs jointly when one effect leaves more than noise).
-
-``fit(model, data)`` returns a :class:`~genthermal.diagnose.discover.Diagnosis`: its ``ranking``,
-its ``verdict`` and :meth:`~genthermal.diagnose.discover.Diagnosis.improved_model`. The decision
-rules (the four tests, "something is still missing", look-alikes and the separating experiment)
-are those of :mod:`genthermal.diagnose.discover`.
-
-The models with effects at neutral values and their compiled simulators take most of a search's
-time; a Discovery keeps them in a private memo so that fitting the same model to several records
-of the same length builds them once. The memo's keys hold the model object itself (not its
-``id``), so an entry can never be mistaken for a later model that reuses a freed address.
+A :class:`Discovery` is built from a :class:`~genthermal.diagnose.catalogue.Catalogue`, a
+criterion (:class:`~genthermal.diagnose.criterion.BIC` by default) and a fitter
+(:class:`~genthermal.diagnose.fitter.OnsetFitter`), in the manner of pysindy's
+``SINDy(feature_library, optimizer)``; :meth:`Discovery.fit` returns a
+:class:`~genthermal.diagnose.discover.Diagnosis`. It memoises the models it builds, so fitting
+one model to several records builds them once. Guide: ``docs/guide/calibration-diagnosis.md``.
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
-r"""Design the short rig test that tells two look-alike explanations apart.
+"""Design the short rig test that tells two look-alike explanations apart.
 
-When two candidate explanations (an effect or a pair of effects, each at its fitted values) fit the
-record about equally well, the record cannot decide between them. A test can: with balanced
-phase currents an extra loss in :math:`I_u^2` grows like one in :math:`\sum_p I_p^2`, with phase u
-loaded alone it does not.
-
-The test is a mission of :data:`BLOCKS` blocks of :data:`BLOCK_MIN` minutes (at most 30 minutes),
-each block one of :data:`LOAD_PERCENTS` × :data:`PHASE_SHARES` (one phase loaded with the other
-two at a fifth, or balanced), started from a machine soaked at the inlet temperature. Both
-candidate models are simulated on it (:func:`genthermal.simulate.simulate`, the same model with the
-effects from the start). A record of the test will be diagnosed with each candidate's parameters
-fitted again, so the test must separate the candidates *after* that refit, not only at the values
-fitted on the first record (a shorted turn and an end-winding loss both grow with :math:`I_u^2`
-when phase u alone is loaded, and a refitted :math:`R_{stray}` would absorb the difference). So for
-each direction (A as the truth, B refitted, and the reverse) the difference
-:math:`y^A - y^B` is fitted by least squares on the sensitivities :math:`\partial y^B/\partial\theta_B`
-(forward differences, one step of Gauss-Newton from the first record's values), and the
-*separation* is the largest remaining difference of a sensor output in units of the sensor noise,
-the smaller of the two directions,
-
-.. math::
-    S = \min_{A \leftrightarrow B}\; \max_{t,\,s} |y^{A}_s(t) - y^{B}_s(t;\hat\theta_B)| / \hat\sigma ,
-
-which one sample of the test would show. Blocks are chosen greedily, each maximising :math:`S` of
-the test with the rest of the blocks held at the same choice, subject to the ratings: every phase
-current at most the rated current and the protected sensor at most its limit (the machine's
-generator role and sensor limit, ``spec.interface``) in both candidates.
+:func:`separating_experiment` chooses, block by block, a test mission of at most 30 minutes (a
+load level and a phase share per block, within the machine's ratings) that maximises the
+separation of two candidate explanations after each is refitted on the test, in units of the
+sensor noise, and returns a :class:`SeparatingExperiment`. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

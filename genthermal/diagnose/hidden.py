@@ -1,33 +1,10 @@
-r"""Test data with a hidden physical effect: a known answer for the discovery loop.
+"""Test data with a hidden physical effect: a known answer for the discovery loop.
 
-A catalogue effect is injected into a mission run of the plant from an onset time (the model
-switches as :func:`genthermal.simulate.simulate` does with ``switches``), and the run is read
-through the rig's noisy sensors by :func:`genthermal.synth.synthesize`. Since the sensor noise is
-additive, the noisy record of the plant *with* the effect is the synthesized record of the plant
-without it plus the noise-free difference the effect makes:
-
-.. math::
-    y^{meas}_{effect} = y^{meas}_{plant} + (y_{plant+effect} - y_{plant}),
-
-which keeps synth's noise model (three winding PT100s, iron PT100, 1 % current noise) exactly.
-
-Random cases draw, from a seeded generator:
-
-* the effect's value in a clearly active range: for a factor (neutral 1)
-  :math:`\theta = \theta_{typ}^{\,u}`, for an additive parameter (neutral 0)
-  :math:`\theta = u\,\theta_{typ}`, :math:`u \sim U(0.6, 1.4)`, clipped to the parameter's bounds;
-* the onset uniformly in 15-60 % of the mission; the two effects that undo a simplification of
-  the linear design model (``copper_resistance_temperature``, ``quadratic_copper_loss``) describe
-  the machine, not a fault, and are present from the start.
-
-The plant is the nonlinear simulation model; effects it cannot take (the two above need the linear
-design model's parameters) are injected into the linear design model instead.
-
-The shipped missions load the three phases equally. With balanced currents an extra loss in
-:math:`I_u^2` (``phase_short_circuit``) and one in :math:`\sum_p I_p^2` (``end_winding_stray_loss``)
-grow alike and differ only in where the heat enters, which the two sensors barely see; the
-``unbalance`` option adds a single-phase load on phase u, switched on and off every
-:data:`UNBALANCE_PERIOD_S` / 2, that tells them apart.
+:func:`make_hidden_effect_case` injects a catalogue effect into a mission run of the plant from an
+onset and reads the run through the rig's noisy sensors (:func:`genthermal.synth.synthesize`); a
+seeded draw gives random cases (:class:`HiddenEffectCase`, :class:`Injection`). The ``unbalance``
+option adds a single-phase load that tells phase-local losses from balanced ones. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

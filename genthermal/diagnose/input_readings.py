@@ -1,21 +1,9 @@
-"""Input-sensor faults told by the reading alone: a coolant-inlet or ambient PT100 that froze or
-got noisier.
+"""Input-sensor faults told by the reading alone: a coolant-inlet or ambient PT100 that froze or got noisier.
 
-The input sensors drive the model (:mod:`~genthermal.diagnose.input_sensors` fits their bias and
-drift through the model's response). Two of their faults need no model, as for the output sensors:
-
-* **stuck**: the reading stops changing from an onset to the end of the record after a noisy
-  stretch (:func:`~genthermal.diagnose.onset_signatures.frozen_tail`, the same thresholds as an
-  output sensor's);
-* **noise**: the noise of the reading grows by at least
-  :data:`~genthermal.diagnose.sensor_faults.MIN_NOISE_FACTOR` from an onset
-  (:func:`~genthermal.diagnose.sensor_faults.fit_noise_increase`, same ΔBIC threshold).
-
-A record may log its inputs without sensor noise (:mod:`genthermal.synth` does; so does a rig
-that logs set points): then a constant or smoothly varying input is what a healthy one looks like.
-Both tests therefore need a reading with real noise: at least :data:`MIN_READING_NOISE_K` before
-a freeze, after a noise increase. A stuck input is claimed and not corrected (what the air did
-after the reading froze is not in the record); a noisier one needs no correction.
+:func:`screen_input_readings` claims a stuck reading (:func:`~genthermal.diagnose.onset_signatures.frozen_tail`)
+or a noise increase (:func:`~genthermal.diagnose.sensor_faults.fit_noise_increase`) without a
+model, on readings with real noise (at least :data:`MIN_READING_NOISE_K`); a reading logged without
+noise that stays constant is what a healthy one looks like. Guide: ``docs/guide/evidence.md``.
 """
 
 from __future__ import annotations

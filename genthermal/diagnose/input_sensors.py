@@ -1,30 +1,10 @@
-r"""Faulty input sensors: the coolant-inlet and ambient PT100s feed the model, not its outputs.
+"""Faulty input sensors: the coolant-inlet and ambient PT100s feed the model, not its outputs.
 
-A sensor whose reading is a model *input* (the cooling-air inlet, the ambient) cannot be compared
-with a prediction of its own. What a fault of it does is drive the model with a wrong input: every
-predicted temperature moves, coherently, by the model's own response to the error. For an error
-:math:`e(t)` of input :math:`u` the residual of output :math:`j` (measured minus predicted) is
-
-.. math::
-    r_j(t) = -\int_0^t s_j(t-\tau)\,\dot e(\tau)\,d\tau,
-
-with :math:`s_j` the output's response to a 1-K step of the input (:func:`input_step_response`,
-from two runs of the model; the model is near-linear in its temperature inputs, which enter the
-heat balance through conductances). The shapes fitted are
-
-* bias: :math:`e = v\,H(t-t_0)` → :math:`r_j = -v\,s_j(t-t_0)`;
-* drift: :math:`e = v\,(t-t_0)_+/3600` → :math:`r_j = -v\int_0^{t-t_0} s_j/3600`;
-
-each at every onset of a grid (then every sample near the best), scored on the RSS over all outputs
-like a single-sensor fault (:func:`~genthermal.diagnose.sensor_faults.screen_against_model`):
-:math:`\Delta\mathrm{BIC} = N\ln(RSS_{after}/RSS_{before}) + 2\ln N`. The signature no heat flow
-has: every sensor moves by the same response to one input, whatever the load; a blockage or a loss
-scales with the load and heats the winding more than the iron.
-
-A *stuck* input sensor is not fitted here: what the true input did after the reading froze is not
-in the record. A noisy reading that froze, or got noisier, is claimed from the reading alone
-(:mod:`~genthermal.diagnose.input_readings`); a reading logged without noise (:mod:`genthermal.synth`)
-that stays constant is what a healthy one looks like.
+A fault of an input sensor drives the model with a wrong input, so every output moves by the
+model's own response to the error (:func:`input_step_response`). Bias and drift of each input are
+fitted at every onset and scored on the RSS over all outputs like a single-sensor fault. Stuck
+and noisier readings are claimed from the reading alone (:mod:`~genthermal.diagnose.input_readings`).
+Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,32 +1,9 @@
 r"""How well the record determines a fitted effect's parameters: intervals from the fit's curvature.
 
-For a candidate of :class:`~genthermal.diagnose.search.EffectSearch` (its effect, onset and
-values), the candidate's parameters, those of the effects found earlier and the initial state are
-refitted with the onsets held (Gauss-Newton with the exact Jacobian :math:`J` of the residuals
-w.r.t. the scaled decision variables :math:`z`: log of a strictly positive parameter, linear
-otherwise). The covariance of :math:`z` is :math:`\hat\sigma^2 (J^\top J)^{-1}` with
-:math:`\hat\sigma^2 = RSS/(N-n)`, and the interval at ``level`` is
-:math:`z_i \pm z_{(1+level)/2}\,\sigma_{z_i}` mapped back to the parameter (asymmetric for a
-log-scaled one such as a flow factor, and never below zero), clipped to the physical bounds
-(``at_lower`` / ``at_upper``: the record does not exclude the bound).
-
-The residuals of a thermal fit are not white (a model error drifts slowly), and
-:math:`\hat\sigma^2 (J^\top J)^{-1}` is then too small. The variance is inflated by
-:math:`N/N_{eff}`, :math:`N_{eff} = \sum_j N_j(1-\rho_j)/(1+\rho_j)` the effective sample size of
-AR(1) residuals with lag-1 autocorrelation :math:`\rho_j` per sensor (the equivalent sample size
-of Zwiers and von Storch 1995): a fit that leaves a slow misfit gets a wider interval than the same
-number of samples of white noise would.
-
-Checked against a profile likelihood (each parameter held, the rest refitted, the likelihood
-ratio with :math:`N_{eff}` against :math:`\chi^2_1`) on blockage_large's in-flight records: the
-same ends within 0.005 for a single parameter (k_flow 0.601-0.687 by the curvature, 0.605-0.687
-by the profile), wider where two are correlated (k_flow with n_flow fitted: 0.317-0.560 against
-0.398-0.448), at 0.1 s instead of 3-9 s per identification.
-
-References
-----------
-Zwiers, F. W., von Storch, H. (1995). Taking serial correlation into account in tests of the mean.
-J. Climate 8(2), 336-351.
+:func:`fitted_intervals` refits a candidate's parameters, the earlier effects and the initial
+state with the onsets held, and gives intervals from :math:`\hat\sigma^2 (J^\top J)^{-1}`
+inflated by :math:`N/N_{eff}` for AR(1) residuals (Zwiers & von Storch 1995), mapped back through
+the parameter's scaling and clipped to its physical bounds. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,47 +1,11 @@
-r"""Joint search over pairs of effects: parameters and both onsets fitted together.
+"""Joint search over pairs of effects: parameters and both onsets fitted together.
 
-A greedy search adds the single effect that explains most, then the next: the first effect
-absorbs part of the second one's signature (a blockage from 1.3 h fitted from the start because
-an end-winding loss present from the start warms the winding too), and the second round cannot
-undo it. Here every pair of the best single effects is fitted as one model:
-
-1. pool: every pair of the :data:`PAIR_POOL` single effects of best ΔBIC, and the best single
-   effect with the :data:`PARTNER_RANKS` − :data:`PAIR_POOL` others that explain most of what it
-   leaves (:func:`residual_partners`: a forward-stepwise screen, orthogonal matching pursuit over
-   what each effect does from each onset, made orthogonal to the best effect's own change). An
-   effect that explains little alone belongs to the answer mostly next to the effect that
-   dominates the record, as a slow insulation change under a strong excitation-dependent iron loss
-   does; in a library of twenty terms the next ranks alone are look-alikes of the best (the same
-   form into a neighbouring node group), and the screen passes over them;
-2. for each pair, both onsets on a :data:`PAIR_GRID` × :data:`PAIR_GRID` grid over the record (on
-   the data decimated to :data:`~genthermal.diagnose.search.GRID_DT_S`), the parameters of both
-   effects fitted at each grid point by two Levenberg-Marquardt steps (warm starts from the
-   neighbour: the grid only has to find the basin), and at both onsets where each effect was
-   fitted alone and each of those with the other effect present from the start;
-3. for the :data:`DESCENDED_PAIRS` pairs of least RSS at their best starting point: coordinate
-   descent over the two onsets, each searched over the whole record (grid, then golden section)
-   with both effects' values refitted, then within one grid step until neither moves; started
-   from the :data:`_DESCENTS` best starting points. The onset landscape of a pair has valleys:
-   fitted alone, a blockage from 80 min takes an onset that lets it absorb a stray loss present
-   from the start, and from there, descent over one onset at a time cannot reach the truth;
-   starting from "this onset, the other effect from the start" does. The other pairs keep their
-   best starting point (the descent costs about four times the grid);
-4. the :data:`POLISHED_PAIRS` pairs of least RSS on the decimated series: both effects' values and
-   the initial state refitted on the full series by Gauss-Newton with the exact Jacobian (onsets
-   stay on the decimated grid, a resolution of one minute); the others are scored on the full
-   series at their values from the decimated fit;
-5. when the best pair is near the answer but not at it (between
-   :data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` and
-   :data:`~genthermal.diagnose.residual.LEVEL_FACTOR` times the noise), each member is swapped for
-   the :data:`SWAPS_PER_MEMBER` effects that best explain its own part plus what the pair leaves
-   (:meth:`PairSearch.swaps`), and those pairs go through steps 2-4: of the heat flows into the
-   iron, ΣI² may fit best alone where the truth is I_exc², and only next to the second term does
-   the difference show.
-
-The pair is scored like a single effect (:math:`\Delta\mathrm{BIC}` against the model without
-effects, :math:`k` = parameters of both + two onsets) and chosen by the same practical tests,
-applied against each of its members alone and against the best single effect
-(:func:`genthermal.diagnose.discover.choose_pair`).
+A greedy search lets the first effect absorb part of the second one's signature; :class:`PairSearch`
+fits pairs of the best single effects as one model instead: a pool of pairs (with
+:func:`residual_partners`), both onsets on a grid, coordinate descent over the onsets, a
+Gauss-Newton polish on the full series, and member swaps when the best pair is near the answer.
+A pair is chosen by :func:`genthermal.diagnose.discover.choose_pair`. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,17 +1,10 @@
-r"""Fit and score one model on several measured records, each from its own measured initial state.
+"""Fit and score one model on several measured records, each from its own measured initial state.
 
-A :class:`Record` is one profile on a uniform grid: inputs, measured outputs, and an initial state
-taken from its first measured temperatures (each state node from the mean of the sensors on it;
-a node without a sensor from the mean of its measured neighbours in the network, else the coolant).
-:class:`StateTrajectory` steps the model over a record with the fitted parameters symbolic and the
-initial state given (the step of :func:`genthermal.discretise.parametric_step`, as
-:class:`~genthermal.diagnose.trajectory.ParametricSimulator`). :func:`fit_records` minimises the
-sum of squared sensor errors over all records with IPOPT (exact Jacobian, Gauss-Newton Hessian,
-log-scaled parameters within a factor of their start), optionally with a weak prior towards the
-start values; :func:`records_fisher` gives confidence intervals and identifiability warnings.
-
-Long 1-Hz records are block-averaged first (:func:`decimated`): currents keep their mean square
-(the copper loss), with the sign of their mean.
+A :class:`Record` is one profile on a uniform grid with an initial state taken from its first
+measured temperatures; :class:`StateTrajectory` steps the model over it with the fitted parameters
+symbolic; :func:`fit_records` minimises the squared sensor errors over all records (IPOPT, exact
+Jacobian) and :func:`records_fisher` gives confidence intervals and identifiability warnings;
+:func:`decimated` block-averages long 1-Hz records first. Tutorial: ``docs/tutorials/real_motor.md``.
 """
 
 from __future__ import annotations

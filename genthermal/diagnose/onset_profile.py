@@ -1,38 +1,9 @@
-r"""Onsets of the verdict refined on their profile, and the interval of onsets the data allow.
+"""Onsets of the verdict refined on their profile, and the interval of onsets the data allow.
 
-The searches place an onset by a grid and golden section with the initial state held
-(:mod:`genthermal.diagnose.search`, :mod:`genthermal.diagnose.joint`). A slow conductance change
-(better frame cooling) has a broad onset likelihood: from an earlier onset, a smaller change and a
-slightly different initial state fit almost as well, so a grid can settle far from the truth, and
-a single onset says nothing of how well the record fixes it. Here, for each effect of the verdict
-(one effect or a pair), on the decimated series of the search (one sample per
-:data:`~genthermal.diagnose.search.GRID_DT_S`):
-
-* the *profile* of the criterion over its onset: at every onset of the series, walking out from
-  the fitted one sample at a time, the values of every effect of the verdict and the initial state
-  are refitted (Levenberg-Marquardt warm-started from the neighbour, the other onsets held), and
-
-  .. math::
-      \Delta\mathrm{IC}(t_0) = N \ln\frac{RSS(t_0)}{\min_t RSS(t)}
-
-  (the same for BIC and AIC: the onsets compared have the same number of parameters); the walk
-  stops on each side at the first onset above the threshold, or at the end of the record;
-* when the profile rejects the onset the search found (its :math:`\Delta\mathrm{IC}` above the
-  threshold), the onset moves to the least RSS of its profile, then the profile of the other
-  effect is taken at that onset, and so on until no onset moves (at most :data:`MAX_ROUNDS`
-  rounds): a joint refinement on a fine grid near the optimum. An onset the profile does not
-  reject stays where the search put it: within the interval the data cannot tell onsets apart,
-  and a move there would trade an effect "from the start" for one from the next sample on noise;
-* the *onset interval*: from the earliest to the latest onset sample of the last profile whose
-  :math:`\Delta\mathrm{IC}` lies within the threshold (by default the magnitude of the
-  criterion's evidence limit, 10: onsets the data do not reject with "very strong" evidence),
-  widened by one sample period before the earliest: an effect that holds from sample :math:`k`
-  began after sample :math:`k-1`.
-  The samples are time-correlated, so the interval is narrower than a confidence interval from
-  independent errors would be; it is a measure of how sharply the record fixes the onset.
-
-The refined onsets are kept when the verdict refitted at them on the full series fits better
-(:meth:`~genthermal.diagnose.joint.PairSearch.refit_at`); the intervals are reported either way.
+For each effect of the verdict, the criterion is profiled over its onset (every other value and
+the initial state refitted at each onset); an onset the profile rejects moves to the profile's
+minimum, and the onset interval is the range the criterion does not reject by more than its
+evidence limit. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,42 +1,10 @@
-r"""Sensor faults told by what happens at their onset, not by the level of the misfit.
+"""Sensor faults told by what happens at their onset, not by the level of the misfit.
 
-On a plant that differs from the model (parameters 20-30 % off, a loss the model lacks) the model
-misses every sensor by kelvins, before and after any onset; a 1-3 K sensor fault compared on the
-whole record's RSS with a physical effect that absorbs that misfit is never the better
-explanation. Two signatures of a sensor fault are local in time, and no heat flow can make them:
-
-* **a jump of a sensor with thermal inertia** (a bias: :math:`v\,H(t-t_0)`). A temperature whose
-  node has a heat capacity cannot change by a kelvin within one sample; the model's misfit, a
-  heat flow it lacks, a load step all change it at a finite rate. In a window of
-  :data:`JUMP_WINDOW_S` either side of each sample :math:`t_0` the model residual
-  :math:`r = y - \hat y` is fitted by the nuisance terms (offset, slope, curvature, a slope
-  change at :math:`t_0`, the model's own prediction: a model whose gain is off misses a fast
-  predicted change in proportion) with and without a step :math:`v\,H(t-t_0)`;
-  :math:`z = \sqrt{(RSS_0 - RSS_1)}/\hat\sigma` (:math:`\hat\sigma` the sensor noise) is the step's
-  size in noise units. A jump is claimed at the largest :math:`z` when :math:`z \ge`
-  :data:`JUMP_MIN_SIGMA` and :math:`|v|` is at least :data:`JUMP_MIN_RATE_FACTOR` times the
-  largest change of the model's prediction of that sensor in one sample. Which sensors have
-  inertia comes from the model (:func:`inertial_outputs`): the response to a 1-K step of the
-  coolant inlet after one sample is below :data:`INERTIA_FRACTION` of its largest value (the
-  Genco's iron 0.2 %, winding 1 %; the cooling-air outlet 70 %: a lost coolant flow makes it jump,
-  so no jump of it is a sensor's).
-* **a reading that freezes** (stuck). The noise of a working sensor does not vanish: a reading
-  that repeats itself (changes by less than :data:`FROZEN_TOLERANCE` of its noise from sample to
-  sample) from an onset to the end of the record, for at least :data:`FROZEN_MIN_S`, after a
-  noisy stretch, is a stuck sensor (:func:`frozen_tail`); this needs no model. Its reading is
-  dropped from the onset.
-* **an input sensor's jump the machine does not follow**. The coolant-inlet and ambient readings
-  drive the model (:mod:`~genthermal.diagnose.input_sensors`). When the logged input jumps by
-  :math:`v_u` at :math:`t_0`, the model's outputs follow by :math:`v_u\,s_j(t - t_0)`
-  (:math:`s_j` the response to a 1-K step of the input). If the measured outputs do not, the
-  residual jumps by :math:`-v_u\,s_j` as well: the local fit of the shape :math:`-v\,s_j(t-t_0)`
-  (same nuisance per output) gives :math:`\hat v`; a fault is claimed when :math:`z \ge`
-  :data:`JUMP_MIN_SIGMA` and :math:`\hat v` is within :data:`INPUT_JUMP_AGREEMENT` of
-  :math:`v_u` (the residual moved by what the logged input's jump made the model do). A real
-  change of the inlet moves the machine too, and the residual does not jump.
-
-These tests decide only when the whole-record comparison with the physical effects
-(:meth:`~genthermal.diagnose.sensor_screen.SensorScreen.against_model`) did not claim a fault.
+Three signatures no heat flow can make, each local in time: a jump of a sensor whose node has heat
+capacity (:func:`inertial_outputs` says which), a reading that freezes after a noisy stretch
+(:func:`frozen_tail`), and an input sensor's jump the machine does not follow. They decide only
+when the whole-record comparison with the physical effects claimed no fault. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,39 +1,11 @@
-r"""Open search for a heat flow no catalogue names: a generic library of small effects.
+"""Open search for a heat flow no catalogue names: a generic library of small effects.
 
-When the catalogue does not explain the data, the missing physics may still be a simple heat flow.
-:func:`heat_flow_library` builds, for a model, one :class:`~genthermal.effects.Effect` per
-(node group, form):
-
-* node groups: the slot winding, the end windings (shared equally), the stator iron (teeth and
-  yoke, shared by heat capacity), the rotor, the frame — taken from the machine's ``roles`` and
-  node names;
-* forms of an extra heat flow :math:`q = k\,f` (:math:`k` signed: a flow in or out):
-  ``constant`` (:math:`f = 1`, W), ``I2`` (:math:`\sum_p I_p^2`, W/A²), ``I_exc2``
-  (:math:`I_{exc}^2`, W/A²), and into the slot winding also the per-phase ``I_u2``, ``I_v2``,
-  ``I_w2`` and the temperature-dependent ``I2_theta`` (:math:`\sum_p I_p^2\,(\theta_{node}-20)`,
-  W/(A²K));
-* (in :mod:`genthermal.diagnose.loss_terms`) a temperature-dependent modelled loss (``loss_theta``): each node's own modelled loss of one
-  kind (the copper loss of the windings) grows by a fraction
-  :math:`k` per kelvin of the node's temperature above the temperature the model evaluates that
-  loss at (the model's ``theta_ref`` when its loss uses one, else 20 °C),
-  :math:`q_n \mathrel{+}= k\,P_n\,(\theta_n - \theta_{ref})` (1/K);
-* the copper loss re-formed (``loss_I2``, two parameters): a fraction :math:`k_P` of the modelled
-  loss and :math:`k_{I2}\,\sum_p I_p^2` added to the winding nodes, the latter shared by heat
-  capacity :math:`s_n` (copper mass, as the machine shares its copper loss),
-  :math:`q_n \mathrel{+}= k_P P_n + k_{I2}\,s_n \sum_p I_p^2` — the loss refitted on two
-  shapes, its modelled one and I² (:math:`k_P = -1`: the modelled form replaced by
-  :math:`k_{I2} I^2`, a linearised loss undone);
-* a change of a conductance by a factor: the winding insulation, the frame to ambient, the
-  coolant air streams (their advective conductance :math:`\dot m c_p`), the internal convection
-  to the cooling air (every heat-transfer coefficient the machine lists as swept by the coolant,
-  :class:`~genthermal.machines.interface.Role` ``INTERNAL_CONVECTION``).
-
-Each is an ordinary :class:`~genthermal.effects.Effect`, so the search is the catalogue search
-with this library in place of the catalogue (:func:`open_search` calls
-:func:`~genthermal.diagnose.discover.diagnose` with ``catalogue=heat_flow_library(model)``): a few
-terms, chosen by the same criterion and tests, singles and jointly fitted pairs — a sparse
-selection. :func:`describe_term` says what was found in plain language and :func:`effect_code` writes
-it out as a few lines of Python that register it as a new effect the user can keep.
+:func:`heat_flow_library` builds one :class:`~genthermal.effects.Effect` per node group (slot and
+end windings, stator iron, rotor, frame) and form (constant, ΣI², I_exc², per-phase I², I²θ, a
+temperature-dependent or re-formed modelled loss, a conductance factor); :func:`open_search` runs
+the catalogue search with it. :func:`describe_term` says in words what was found and
+:func:`effect_code` writes it as Python that registers a new effect. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

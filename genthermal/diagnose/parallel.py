@@ -1,16 +1,9 @@
 """Independent fits in worker processes: the candidates of a search, the pairs of a joint search.
 
-A search object holds compiled CasADi functions that do not pickle cheaply; forked workers
-inherit them (and everything the parent built) instead, and send back only their results (numbers
-and small dataclasses). Where ``fork`` is not available (Windows, macOS default ``spawn``), or with
-one worker, the same function runs in this process, in order: the results do not depend on the
-number of workers.
-
-Each worker measures the CPU time of the items it runs and sends it back with the result;
-:data:`WORKER_CPU` adds them up over the life of this process, so that a caller can tell, stage by
-stage, how much CPU its workers used and how long the busiest of them needed (the critical path of
-a parallel map: on an idle machine its wall time cannot be less). :func:`cpu_clock` reads both
-together with this process's own CPU time.
+:func:`map_in_workers` runs items in forked workers that inherit the compiled CasADi functions and
+send back only their results; without ``fork``, or with one worker, it runs them in this process,
+in order, so the results do not depend on the number of workers. :data:`WORKER_CPU` and
+:func:`cpu_clock` account for the workers' CPU time.
 """
 
 from __future__ import annotations

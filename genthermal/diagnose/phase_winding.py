@@ -1,33 +1,10 @@
-r"""Phase-resolved winding: the slot winding node split into one node per phase.
+"""Phase-resolved winding: the slot winding node split into one node per phase.
 
-The machine models lump the slot winding of all three phases into one node, read by the winding
-sensor. A rig has one PT100 per phase (``T_winding_u/v/w``); under unbalanced load, or with a
-fault in one phase (a shorted turn), those differ, and one winding node cannot use that. The
-variant here splits the slot winding node :math:`s` (role ``slot_winding``) into :math:`s_u, s_v,
-s_w`, with no new parameter:
-
-* each phase node has a third of the heat capacity, :math:`C_x = C_s/3`, and a third of every
-  conductance of :math:`s`: each link :math:`(s, j)` of resistance :math:`R` becomes three links
-  :math:`(s_x, j)` of resistance :math:`3R` (the phases occupy a third of the slots each); the
-  phases exchange heat through the nodes they share (the winding's radial node towards the core,
-  and the end windings);
-* every heat source :math:`P(I_u, I_v, I_w, \theta_s)` of :math:`s` is split by phase as
-
-  .. math::
-      P_x = P\big|_{I_y = 0\ (y \ne x),\ \theta_s \to \theta_{s_x}} - \tfrac23\,P\big|_{I = 0,\ \theta_s \to \theta_{s_x}},
-
-  which is exact for a loss that is a sum of per-phase terms plus a constant (copper loss
-  :math:`R(\theta)\sum_p I_p^2`, a shorted turn :math:`R_{short}I_u^2` — all of it into phase u —,
-  a constant or excitation-driven loss, shared equally);
-* the sensor reading :math:`s` through one column per phase (the Genco's winding, from its three
-  PT100s) becomes one sensor per column (``T_winding_u``, ``T_winding_v``, ``T_winding_w``) on
-  the phase nodes.
-
-Under balanced load the three phase nodes see the same equations and start equal, so they stay
-equal and equal to the single node: the variant then reproduces the model exactly (tested). The
-variant is a *view* for fitting: effects are applied to the single-node model first (their roles
-name the single node), then the view is taken
-(:class:`~genthermal.diagnose.sensor_view.SensorView`).
+:func:`phase_resolved` splits the slot winding node into three phase nodes, each with a third of
+its capacity and conductances and its heat sources split by phase, with no new parameter, and
+reads one sensor per phase column (``T_winding_u/v/w``). Under balanced load it reproduces the
+model exactly. It is a view for fitting (:class:`~genthermal.diagnose.sensor_view.SensorView`).
+Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

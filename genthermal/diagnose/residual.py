@@ -1,25 +1,9 @@
-r"""Is something still missing? Tests of the residual left after the chosen effects.
+"""Is something still missing? Tests of the residual left after the chosen effects.
 
-With the effects found, the residual :math:`e = y_{model} - y_{meas}` of a complete model is close
-to the sensor noise and unrelated to the inputs and temperatures. Three tests:
-
-* **level**: the RMSE over all sensors is at most :data:`LEVEL_FACTOR` :math:`\hat\sigma` (the
-  noise estimated from the data alone, :func:`genthermal.diagnose.search.noise_std`);
-* **whiteness**, per sensor: the lag-1 autocorrelation of :math:`e`. For :math:`e = s + w` with a
-  slow model error :math:`s` and white noise :math:`w` it is about
-  :math:`\operatorname{var}s / (\operatorname{var}s + \operatorname{var}w)`: above
-  :data:`MAX_AUTOCORRELATION` the slow error is larger than the noise;
-* **correlation**, per sensor: :math:`|r|` of :math:`e` with each of mean :math:`I^2`,
-  :math:`I_{exc}`, :math:`T_{inlet}`, :math:`T_{ambient}` and the measured sensor temperatures.
-
-A complete model does not leave white residuals: the measured currents carry noise (1 % per sample
-on the rig) that the model turns into a slow winding error of zero mean, about 1-2 × the noise at
-60 s samples on the shipped missions, and unrelated to any regressor. So the data are
-*unexplained* when the level test fails, or when on some sensor the residual is at once above
-:data:`STRUCTURE_LEVEL_FACTOR` :math:`\hat\sigma`, not white, and follows a regressor with
-:math:`|r| >` :data:`MAX_CORRELATION`: a slow error that tracks the load or a temperature is
-missing physics, one that does not is input noise. Where and when: the sensor and time of the
-largest residual smoothed over :data:`SMOOTHING_S` (so one noisy sample does not decide).
+:func:`residual_tests` checks the residual's level against the noise, its whiteness (lag-1
+autocorrelation) and its correlation with the inputs and temperatures per sensor, and says where
+and when it is largest. A slow error that tracks the load or a temperature is missing physics;
+one that does not is input noise. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

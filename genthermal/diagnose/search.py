@@ -1,20 +1,10 @@
-r"""The search behind the diagnosis: every candidate effect fitted with its onset.
+"""The search behind the diagnosis: every candidate effect fitted with its onset.
 
-For an effect with parameters :math:`\theta_e` switched on at sample :math:`k_0` (the semantics of
-:func:`genthermal.simulate.simulate` with ``switches``):
-
-1. onset grid: 12 onsets evenly over the record (the first sample = present from the start, the
-   last leaves 5 % of the record) on the data decimated to 60 s, :math:`\theta_e` fitted at each
-   by Levenberg-Marquardt (forward-difference Jacobian, warm starts), the initial state held;
-2. golden-section search over the integer onset between the best grid point's neighbours;
-3. the best three effects: onset refined on the full series (± one grid step), then
-   :math:`\theta_e`, the values of the effects found in earlier rounds and the initial state refitted
-   together with the exact Jacobian (AD through the horizon). With earlier effects, one pass of
-   coordinate descent searches every onset again (± 25 % of the record), so that a new effect is
-   not credited with what better onsets of the old ones explain.
-
-Effects found earlier hold from their own onsets; all combinations of active effects are regimes of
-one :class:`~genthermal.diagnose.trajectory.ParametricSimulator`, selected per sample.
+:class:`EffectSearch` fits each effect's parameters on an onset grid over the decimated record
+(Levenberg-Marquardt, warm starts), refines the onset by golden section, and refits the best
+effects, the earlier ones and the initial state on the full series with the exact Jacobian
+(:class:`Candidate`); :func:`noise_std` estimates the sensor noise from the data alone. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

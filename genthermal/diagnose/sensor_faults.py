@@ -1,42 +1,11 @@
-r"""Sensor faults as hypotheses: fitted like effects, but they change the measurement, not the model.
+"""Sensor faults as hypotheses: fitted like effects, but they change the measurement, not the model.
 
-For a sensor :math:`c` with reference signal :math:`r_c(t)` — what the sensor should read minus what
-it read — every kind of :mod:`genthermal.sensor_faults` is a shape :math:`f_c(t;\,v, t_0)`:
-
-* bias :math:`v\,H(t-t_0)`; drift :math:`v\,(t-t_0)_+`; gain :math:`v\,\hat T_c(t)` (from the
-  start: a scale error is a property of the installed sensor);
-* stuck :math:`(v - \hat T_c(t))\,H(t-t_0)` (the reading is the constant :math:`v`);
-
-with :math:`\hat T_c` the sensor's true temperature as the rest of the record says it is. For every
-onset of a grid (every :data:`ONSET_GRID` samples, then every sample around the best) the value
-:math:`v` (and the baseline terms, if any) is a linear least-squares fit, and the shape is scored
-like an effect: :math:`\Delta\mathrm{BIC} = N\ln(RSS_{after}/RSS_{before}) + k\ln N`, :math:`k = 2`
-(value and onset). Increased noise does not change the mean: it is a variance change-point of the
-sensor's second differences (likelihood ratio, same BIC penalty), at least :data:`MIN_NOISE_FACTOR`
-times the usual noise.
-
-Which signal, which evidence (structured residuals)
---------------------------------------------------
-* **Redundant sensors** (the three per-phase winding PT100s read one model output): the reference
-  of sensor :math:`c` is the disagreement :math:`d_c = y_c - \mathrm{mean}_{j\ne c}\,y_j`. No heat
-  flow of a model with one winding node moves it; a constant offset (placement) and a term in the
-  phase's own extra :math:`I_c^2` (unbalanced load) are fitted as the baseline. A fault on :math:`u`
-  moves :math:`d_u` by :math:`f` and :math:`d_v, d_w` by :math:`-f/2`: the sensor with the best
-  ΔBIC is the faulty one. The fault is claimed when it passes the four tests of
-  :func:`~genthermal.diagnose.discover.passes_tests` on :math:`d_c` and explains :math:`d_c` better
-  (by :data:`PREFERENCE_BIC`) than a local heat flow: the phase's own first-order response to
-  :math:`I^2` from an onset (time constants :data:`HEAT_TIME_CONSTANTS_S`). This needs no model.
-The outputs and their record columns come from the machine's sensor schema
-(:attr:`~genthermal.machines.interface.MachineInterface.sensors`).
-
-* **Single sensors** (the iron PT100; the winding in flight, where one value is logged): the
-  reference is the model residual :math:`y_c - \hat y_c` of the model fitted to the whole record
-  (initial state and earlier effects refitted, :class:`~genthermal.diagnose.search.EffectSearch`).
-  The hypothesis moves this one sensor only; it is scored on the RSS over **all** model outputs,
-  the criterion of the physical effects, and must beat the best physical effect by
-  :data:`PREFERENCE_BIC`. A heat flow moves every sensor in the coupled way the model predicts and
-  is better explained by the effect; a drift of one sensor moves no other, and no effect can
-  follow it without spoiling the other sensors.
+Every kind of :mod:`genthermal.sensor_faults` is a shape of a sensor's reference signal, fitted at
+every onset of a grid and scored by ΔBIC like an effect. Redundant sensors (the phase PT100s) are
+screened on their disagreement without a model (:func:`screen_redundant`); single sensors on the
+model residual against the physical effects (:func:`screen_against_model`), which a fault must
+beat by :data:`PREFERENCE_BIC`; :func:`screen_noise` finds a noise increase. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

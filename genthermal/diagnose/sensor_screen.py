@@ -1,34 +1,10 @@
 """The sensor-fault side of a diagnosis: screen the record, compete with the physical effects, correct.
 
-Order (:func:`genthermal.diagnose.discover.diagnose` with ``sensor_faults=True``):
-
-1. before any model: a sensor that disagrees with the other sensors of its output
-   (:func:`~genthermal.diagnose.sensor_faults.screen_redundant`) and a sensor whose noise grew
-   (:func:`~genthermal.diagnose.sensor_faults.screen_noise`) are claimed and corrected; the search
-   runs on the corrected record; an input sensor (coolant inlet, ambient) whose reading froze or
-   got noisier is claimed (:mod:`~genthermal.diagnose.input_readings`);
-2. after the first round of physical effects: the best fault of a single sensor, scored on the RSS
-   over all model outputs, is claimed when it passes the four tests and beats the best physical
-   effect by :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in flight, where the
-   detector names the sensor and the time, also when fitted on top of the best physical effect
-   it still passes the four tests against that effect alone); the round is then run again on the
-   record with that sensor corrected, so what the machine does is still judged. The faults of the
-   input sensors (coolant inlet, ambient: :mod:`~genthermal.diagnose.input_sensors`) compete in
-   the same step; a claimed one is corrected in the inputs the model is driven with;
-3. on a record searched blind, when step 2 claimed nothing (a plant that differs from the model
-   leaves a misfit of kelvins that swamps a 1-3 K fault on the whole-record comparison): the
-   faults told by their onset (a reading that froze, a jump of a sensor with thermal inertia, an
-   input's jump the machine did not follow: :mod:`~genthermal.diagnose.onset_signatures`; an
-   ambient reading that left the inlet reading of the same air, the machine not contradicting it:
-   :mod:`~genthermal.diagnose.shared_air`), then
-   the sensor and input faults fitted jointly with a calibration of the model against the
-   physical effects fitted the same way (:mod:`~genthermal.diagnose.calibrated_screen`). When no
-   ambient fault is claimed, the smallest ambient error the outputs alone could tell from a frame
-   cooling change on this record is reported (:attr:`SensorScreen.limits`).
-
-Redundant sensors are screened on the model's own sensor schema before the record's sensor view
-is chosen (:class:`~genthermal.diagnose.discovery.Discovery`): a view with one winding node per
-phase would otherwise take a faulty phase sensor for that phase's heat.
+:class:`SensorScreen` runs, for :func:`genthermal.diagnose.discover.diagnose` with
+``sensor_faults=True``: the model-free screens before the search; after the first round, the best
+single-sensor or input-sensor fault against the best physical effect; on a record searched blind,
+the onset signatures, the shared-air test and the calibrated screen. A claimed fault is corrected
+and the round run again. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

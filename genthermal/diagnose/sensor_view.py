@@ -1,18 +1,9 @@
 """Which sensors of a record a discovery fits: the model's own, and every other one the record has.
 
-A model's outputs are its design sensors (the Genco: the winding, read as the mean of the three
-phase PT100s, and the stator iron). A rig record often has more: a PT100 per phase and one in the
-cooling-air outlet. Effects that look alike on the design sensors differ on those — a shorted turn
-heats one phase, an end-winding stray loss all three; less coolant flow heats the outlet air, better
-frame cooling does not. A :class:`SensorView` turns a model (with its effects) into one whose
-outputs are the sensors to fit:
-
-* ``phases``: the slot winding split into one node per phase, outputs ``T_winding_u/v/w``
-  (:func:`genthermal.diagnose.phase_winding.phase_resolved`);
-* ``outlet``: the coolant outlet sensor of the machine (``interface.outlet_sensor``; the Genco's
-  cooling-air outlet PT100, ``T_outlet``) as one more output.
-
-:func:`view_for` chooses the view from what the record holds.
+A :class:`SensorView` turns a model (with its effects) into one whose outputs are the sensors to
+fit: ``phases`` (one winding node per phase, :func:`~genthermal.diagnose.phase_winding.phase_resolved`)
+and ``outlet`` (the coolant outlet sensor as one more output); :func:`view_for` chooses the view
+from what the record holds. Guide: ``docs/guide/calibration-diagnosis.md``.
 """
 
 from __future__ import annotations

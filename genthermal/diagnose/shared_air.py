@@ -1,43 +1,10 @@
-r"""The ambient PT100 against the coolant-inlet PT100: two readings of the same air.
+"""The ambient PT100 against the coolant-inlet PT100: two readings of the same air.
 
-A 1-K ambient error moves the machine's sensors by about 0.05 K at steady state (the ambient
-reaches the machine only through the frame), so on a record of a plant the model misses by
-kelvins the outputs cannot tell a wrong ambient reading from a better-cooled frame
-(:mod:`~genthermal.diagnose.calibrated_screen`). The record has a stronger witness: on a rig whose
-cooling air is drawn from the room (the thesis rig, §3: inlet and outlet ducts on the casing) the
-inlet PT100 and the ambient PT100 read the same air. A real change of the room air moves both
-readings; a blockage that recirculates outlet air raises the inlet alone (thesis Fig. 7.4); no
-heat flow of the machine moves the ambient air away from the inlet air. A sensor error moves its
-own reading only.
-
-**The test** (:func:`screen_ambient_against_inlet`). The difference :math:`d = u_{amb} - u_{in}`
-of the two logged readings is fitted by a bias :math:`v\,H(t-t_0)` or a drift
-:math:`v\,(t-t_0)_+` (every onset, least squares, plus the constant offset two sensors in the same
-air may have). The ambient sensor is claimed when
-
-1. the two read the same air before the onset: :math:`d` stays within
-   :data:`SHARED_AIR_TOLERANCE_K` (plus what the readings' noise adds to a largest excursion,
-   :func:`noise_allowance`) of its mean over at least :data:`MIN_BEFORE_FRACTION` of the
-   record, and that mean is itself within the tolerance (two class-B PT100s, IEC 60751);
-2. the difference changed by at least :data:`MIN_CHANGE_K` and the shape explains it (what is left
-   stays within the same tolerance: a step or a ramp, not the slow wander of two airs);
-3. it is the ambient reading that moved: the same shape fitted to the ambient reading alone
-   agrees with :math:`v` within :data:`OWN_AGREEMENT`, fitted to the inlet alone it is below
-   that share of :math:`v`;
-4. the machine does not contradict it: if the ambient had really changed, the measured outputs
-   would follow the model's response to it. With the calibration nuisance projected off (the
-   model's sensitivities to its uncertain parameters, an offset per sensor, the misfits present
-   from the start: :class:`~genthermal.diagnose.calibrated_screen.CalibratedFrame`; a plant the
-   model misses by kelvins leaves a local quadratic misfit that picked the wrong answer on the
-   rig plant), the residual is compared with the shape the sensor error leaves
-   (:math:`-v\,s_j(t-t_0)`, :math:`s_j` the response to the input's step) and with none (the
-   reading was right): the sensor is not claimed when the record favours the real change by
-   :data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (in units of the noise variance).
-
-A record whose inlet and ambient do not read the same air (a separately ducted coolant, oil) fails
-test 1 and is left to the other screens. What the outputs alone can tell is reported by
-:func:`minimal_detectable_error`: the smallest ambient bias the calibrated comparison could tell
-from a frame cooling change on this record (noise, duration, the model's sensitivities).
+On a rig whose cooling air is drawn from the room, the inlet and ambient PT100s read the same air,
+so an ambient reading that leaves the inlet reading, and that the machine does not contradict, is
+a sensor fault. :func:`screen_ambient_against_inlet` applies the four tests;
+:func:`minimal_detectable_error` gives the smallest ambient bias the outputs alone could tell from
+a frame cooling change. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,31 +1,10 @@
-r"""Sensor trajectories of a model on measured inputs, differentiable in chosen parameters.
+"""Sensor trajectories of a model on measured inputs, differentiable in chosen parameters.
 
-:class:`ParametricSimulator` steps the model over each sample interval :math:`h` (inputs held,
-zero-order hold) by :func:`genthermal.discretise.parametric_step`: the step :func:`simulate
-<genthermal.simulate.simulate>`, the filters and the C library take (exact for an affine model,
-ETD2RK otherwise), with the fitted parameters :math:`\theta` symbolic, so trajectories equal
-``simulate``'s to round-off and their derivatives are exact. Everything that depends on
-:math:`\theta` only is evaluated once per trajectory: the matrix exponential
-(:func:`genthermal.discretise.symbolic_phi_function`) and what ``casadi.extract_parametric``
-extracts from the step (conductances, capacitances, the elimination of the massless nodes). A
-4-hour run at 10 s costs about 3 ms of CPU and its exact Jacobian :math:`\partial y/\partial\theta`
-(forward AD through ``mapaccum``, two parameters and the initial state) about 50 ms.
-
-Parameters can change at an onset: the simulator takes *regimes* (parameter overrides) and a
-one-hot indicator per sample saying which regime holds — the semantics of
-:func:`genthermal.simulate.simulate` with ``switches``: the regime of sample k propagates the state
-from k to k+1 and gives the outputs at k.
-
-Initial state
--------------
-:math:`x_0 = c\,\mathbf 1 + a\,(x_{ss}(u_0,\theta) - T_{inlet,0}\mathbf 1)`: a blend of a uniformly
-soaked machine at temperature :math:`c` and the steady state under the first input. ``(a, c)``
-are two nuisance unknowns fitted with the parameters (started from the values that reproduce the
-first measured winding and iron temperatures, :func:`genthermal.diagnose.compare.initial_state`).
-
-Fitted parameters are scaled (:class:`Scaling`): strictly positive ones as
-:math:`z = \ln(\theta/\theta_0)`, the others as :math:`z = (\theta - \theta_0)/s`, within
-their physical bounds.
+:class:`ParametricSimulator` steps the model with :func:`genthermal.discretise.parametric_step`
+(the step ``simulate`` takes) with the fitted parameters symbolic, so trajectories equal
+``simulate``'s to round-off and their Jacobians are exact; parameters may change at onsets
+(regimes). :class:`Scaling` maps parameters to the decision variables of a fit. Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,52 +1,9 @@
-"""ARX models of one generator temperature driven by one input (thesis 5.3), fitted by least squares.
+r"""ARX models of one generator temperature driven by one input (thesis 5.3), fitted by least squares.
 
-Model (single input, single output, sample time ``ts_s``)
-
-.. math::
-
-    A(q)\\,\\tilde y(k) = B(q)\\,u(k - n_k) + e(k), \\qquad \\tilde y = y - y_{\\mathrm{offset}}
-
-    A(q) = 1 + a_1 q^{-1} + \\dots + a_{n_a} q^{-n_a}, \\qquad
-    B(q) = b_0 + b_1 q^{-1} + \\dots + b_{n_b - 1} q^{-(n_b - 1)}
-
-``na`` is the number of A parameters and ``nb`` the number of B parameters (MATLAB ``arx``
-convention); ``nk`` is the pure delay in samples. The thesis writes the same model as eqs 5.5-5.7
-but swaps the labels there: eq 5.6 ends B at :math:`b_{n_a}` and eq 5.7 ends A at :math:`a_{n_b}`.
-Its Tables 5.1/5.2 and the selected models (one A and two B parameters, eqs 5.10-5.13) follow the
-MATLAB meaning used here.
-
-Offsets: with ``remove_offset`` the first measured output (thesis: 26.5 °C iron, 62.7 °C winding) is
-subtracted before fitting and added back by :meth:`ArxModel.simulate`. The input is *not* shifted:
-the temperature rise is driven by the absolute current (losses grow with the current however the
-record starts), and shifting the input would tie the model to the load at the start of the record.
-
-Integrated input (thesis eq 5.9): with ``integrate_input`` the fit uses
-:math:`w(k) = w(k-1) + u(k)`, i.e. :math:`w = u / (1 - q^{-1})` from rest, and the stored model is the
-fitted one multiplied back by the integrator (thesis eqs 5.14-5.17):
-:math:`A = (1 - q^{-1}) A_w`, :math:`B = B_w`, so the model is driven by the raw input ``u``.
-
-Constant term (offset term): with ``constant_term`` the regression also fits a constant
-:math:`c` (K per sample), :math:`A_f(q)\\,\\tilde y(k) = B(q)\\,v(k - n_k) + c` with :math:`A_f, v` the
-fitted polynomial and input (:math:`v = w` for an integrated input). It makes a record that does not
-start at rest consistent: after the thesis's 30-min discard the machine is warm and still heating,
-and without :math:`c` the model would read that first (warm) value as the output at rest for the
-input then applied, a bias of tens of kelvin on any other record. With an integrated input,
-:math:`c` is the input history before the record (:math:`c = B(1)\\,w_{before}`) and the model is
-simulated in the fitted form (:math:`w` from zero), where :math:`c` does not vanish.
-
-Initial state: :meth:`ArxModel.simulate` starts from rest at the model's offset, or, with
-``initial_output``, from a measured first output (initialisation from the data: the past outputs
-set to it, the past inputs zero).
-
-Scores
-
-* :math:`R^2 = 1 - \\sum_k e(k)^2 / \\sum_k (y(k) - \\bar y)^2` with :math:`e` the error of the
-  *simulated* output (infinite horizon, driven by the input only). The thesis's eq 5.8 prints the ratio
-  without the ``1 -``; its text ("tending towards 1 as the fit improves") and tables use this form.
-* AIC as MATLAB ``selstruc`` / normalised ``aic``: :math:`\\mathrm{AIC} = \\ln V + 2 d / N`, with
-  :math:`V = \\frac{1}{N} \\sum_k \\varepsilon(k)^2` the mean squared one-step prediction error of the
-  fit (K²), :math:`d = n_a + n_b` (+1 with a constant term) the number of fitted parameters and :math:`N` the number of
-  residuals (regression rows) it was computed from.
+:func:`arx_fit` fits :math:`A(q)\,\tilde y(k) = B(q)\,u(k - n_k) + e(k)` (``na``, ``nb``, ``nk`` in
+MATLAB's ``arx`` convention) with an optional output offset, integrated input (thesis eq. 5.9) and
+constant term into an :class:`ArxModel`; :func:`simulation_scores` gives R² of the simulated
+output and :func:`normalized_aic` MATLAB's normalised AIC. Method and the thesis's label swaps: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,32 +1,10 @@
-r"""Detect a change in what the model lacks from the filter's innovations, and open the
-disturbance covariance so the filter learns it quickly (a fault, a blockage).
+r"""Detect a change in what the model lacks from the filter's innovations, and open the disturbance covariance.
 
-The disturbance states of :mod:`genthermal.estimation.ekf` drift as slow random walks: a
-calibrated model is off by a few W that change little, and a slow walk learns them like an
-online calibration instead of chasing sensor noise. A fault is a different thing: rare, sudden
-and large. A random walk fast enough to follow it would chase noise the rest of the time, so the
-filter is told about a change when its innovations show one (a jump detector in the spirit of
-Willsky & Jones 1976, with a covariance reset instead of a state jump).
-
-Test. While the filter's model holds, the innovations :math:`\nu_k` are white with covariance
-:math:`S_k = H P_k^- H^T + R`. Their exponentially weighted mean
-
-.. math::
-    m_k = \lambda m_{k-1} + (1 - \lambda)\,\nu_k, \qquad \lambda = \frac{W - 1}{W + 1},
-
-has covariance :math:`\frac{1-\lambda}{1+\lambda} S` in the steady state, so
-
-.. math::
-    T_k = \frac{1+\lambda}{1-\lambda}\, m_k^T S_k^{-1} m_k \;\sim\; \chi^2_{n_y}.
-
-:math:`W` (samples) is the length of the window with the same variance reduction; a persistent
-bias :math:`b` of the innovations (what a missed heat flow leaves) gives
-:math:`T \to W\,b^T S^{-1} b`. When :math:`T_k` exceeds ``threshold`` the filtered covariance
-gets ``jump_covariance`` added (the size of change to expect, on the disturbance states) and
-:math:`m` restarts from zero, so one change opens the covariance once. Only past innovations are
-used: the rule is causal, and :math:`m` is the whole memory, so the generated C update carries it
-as one more vector (:meth:`ExtendedKalmanFilter.update_function`). A sample with a missing
-sensor leaves :math:`m` unchanged and cannot raise an alarm.
+:class:`InnovationChangeDetector` tests an exponentially weighted mean of the innovations against
+:math:`\chi^2_{n_y}` (a jump detector in the spirit of Willsky & Jones 1976); when it fires, the
+filtered covariance of the disturbance states gets ``jump_covariance`` added, so the filter learns
+a fault or a blockage quickly while its random walks stay slow. The rule is causal and carried by
+the generated C update. Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

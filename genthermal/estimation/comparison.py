@@ -1,18 +1,9 @@
-r"""Comparison of the candidate design models on validation data (thesis 5.4).
+"""Comparison of the candidate design models on validation data (thesis 5.4).
 
-Three models predict the stator winding and stator iron temperatures of a validation record from
-its inputs alone (open loop, no measurement updates):
-
-* the nonlinear physics model (the simulation model of chapter 4);
-* the linear physics model (the design model of chapter 5.2, :mod:`genthermal.design`);
-* an ARX model per output (chapter 5.3, :mod:`genthermal.estimation.arx`), its input signal and
-  structure chosen on the *training* record by :func:`~genthermal.estimation.arx_search.select_input`.
-
-The physics models start from the first measured temperatures
-(:func:`~genthermal.estimation.kalman.initial_state_from_measurements`), each ARX model (fitted
-with a constant term, see :mod:`genthermal.estimation.arx`) from the first measured value of its
-output. Scores per model and sensor, over the measured samples:
-:math:`R^2 = 1 - \sum e^2 / \sum (y - \bar y)^2`, RMSE and max :math:`|e|` (K).
+:func:`compare_design_models` predicts the winding and iron temperatures of a validation record
+open loop with the nonlinear physics model, the linear design model (:mod:`genthermal.design`)
+and an ARX model per output (:mod:`genthermal.estimation.arx`, chosen on the training record),
+and scores each by R², RMSE and max error (K). Results: ``docs/results/thesis-reproduction.md``.
 """
 
 from __future__ import annotations

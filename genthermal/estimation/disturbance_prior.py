@@ -1,31 +1,10 @@
-r"""What a calibration leaves: the disturbance heat flows a filter learns on the calibration
-record, kept with the calibrated model as the starting point of the next flight's filter.
+"""What a calibration leaves: the disturbance heat flows a filter learns on the calibration record.
 
-A model calibrated on one healthy record still lacks something (an effect it does not contain,
-parameters it could not separate); what it lacks is, to first order, the same on the next flight
-of the same machine. The extended Kalman filter of :mod:`genthermal.estimation.ekf` learns it as
-disturbance heat flows on load-scaled, coolant-scaled and constant bases, but on a new flight it
-starts from zero with a wide covariance, and until the flight has changed load it cannot tell
-the bases apart (at one load a constant and a load-scaled flow look the same). The calibration
-record has seen the loads it was fitted over; running the filter over it once, after the fit,
-gives the posterior of the disturbances: mean :math:`\mu` and covariance :math:`\Sigma` (the
-filter's own, which already carries the random walks' drift over the record). A filter on a new
-record starts its disturbance states from :math:`(\mu, \Sigma)` instead of :math:`(0,
-\sigma_0^2 I)`: a Bayesian prior whose spread is what the calibration record could not pin down.
-The node temperatures start as before (from the first measurement).
-
-Measured with ``benchmarks/bench_prediction.py`` (two plants, three noise draws, README): with
-the prior, the rig's varying-load winding RMS at 15 / 30 / 60 min went from 0.26 / 0.40 / 0.42 K to
-0.20 / 0.25 / 0.22 K (open loop 0.60 / 0.50 / 0.51 K); there the flight starts with 30 min at one
-load, where the filter cannot tell a constant from a load-scaled heat flow, and the calibration
-record has seen both. No row got worse by more than 0.02 K. The covariance matters: the
-calibration's mean with the default wide covariance made plant B's varying load worse at 30 min
-(0.12 to 0.18 K); doubling or tripling the posterior covariance, or adding a 2-W floor to it, was
-no better than the posterior itself.
-
-``genthermal calibrate --out`` learns the prior and writes it into the model file
-(:mod:`genthermal.model_file`); from Python,
-``fit.model.with_disturbance_prior(learn_disturbance_prior(fit.model, record))``.
+:func:`learn_disturbance_prior` runs the extended Kalman filter over the calibration record once
+after the fit and keeps the posterior of its disturbance states (mean and covariance) as a
+:class:`DisturbancePrior`; a filter on the next flight of the machine starts from it instead of
+zero. ``genthermal calibrate --out`` writes it into the model file. Guide and figures:
+``docs/guide/estimation.md``.
 """
 
 from __future__ import annotations

@@ -1,46 +1,11 @@
-r"""Kalman filter on the linear design model (thesis 6.2).
+"""Kalman filter on the linear design model (thesis 6.2).
 
-With the exact zero-order hold of the design model at step :math:`T_s` (default 10 s),
-
-.. math::
-    x_{k+1} = A x_k + B u_k + c + w_k, \qquad y_k = C x_k + e + v_k,
-    \qquad w_k \sim N(0, Q),\ v_k \sim N(0, R),
-
-:math:`x` the 8 node temperatures (°C), :math:`u` the inputs (A, °C), :math:`y` the sensor
-temperatures ``T_winding`` and ``T_iron`` (°C). Each sample k is *updated* then *predicted*:
-
-.. math::
-    \varepsilon_k = y_k - C\hat x_k^- - e,\quad S_k = C P_k^- C^T + R,\quad
-    K_k = P_k^- C^T S_k^{-1},\quad \hat x_k = \hat x_k^- + K_k\varepsilon_k,
-
-.. math::
-    P_k = (I - K_kC) P_k^- (I - K_kC)^T + K_k R K_k^T,\quad
-    \hat x_{k+1}^- = A\hat x_k + Bu_k + c,\quad P_{k+1}^- = A P_k A^T + Q.
-
-These are thesis eqs 6.12-6.15 with two differences. The covariance update is in Joseph form
-(symmetric and positive definite to rounding; the thesis writes :math:`P(I - LC)`). And the process
-noise enters as :math:`Q` on the states in K² per step, where eq. 6.12 writes :math:`BQB^T` with
-its :math:`B = C_a^{-1}` mapping node heat flows to temperature rates and :math:`Q = 50 I` (eq.
-6.11, units not stated). Here :math:`B` maps the *inputs* (currents, inlet and ambient
-temperatures), so :math:`BQB^T` would model noisy inputs, not unmodelled heat. The default keeps
-the thesis's idea, an unknown heat flow at every node, in discrete form:
-
-.. math::
-    Q = \mathrm{diag}\big((T_s\sigma_P / C_i)^2\big),
-
-:math:`C_i` the node heat capacity (J/K), :math:`\sigma_P` = :data:`DEFAULT_HEAT_NOISE_W` = 30 W.
-Chosen on synthetic data from a plant whose parameters differ from the design model's
-(tests/test_kalman.py): with 30 W the filtered winding and iron stay within 0.3 K of the plant
-and every unmeasured node (rotor, shaft, frame, end windings) within 1 K, and predictions beat the
-open-loop model by at least 0.25 K for more than an hour. A smaller :math:`\sigma_P` smooths the outputs more but leaves
-the unmeasured nodes at the model's values (2 W: rotor off by up to 19 K); the price of 30 W is
-that the winding estimate follows its measurement closely (gain ≈ 0.99), noise included.
-
-A missing sensor sample (NaN) drops that row of :math:`y`, :math:`C` and :math:`R` for the sample;
-with every sensor missing the sample is predicted only. In *steady-state mode* (thesis 6.2.3, Fig.
-6.3) the gain is the converged :math:`K_\infty = P_\infty C^T(CP_\infty C^T + R)^{-1}`, with
-:math:`P_\infty` the stabilising solution of the discrete algebraic Riccati equation; a sample
-with a subset of the sensors uses :math:`P_\infty` restricted to that subset.
+:class:`KalmanFilter` updates then predicts each sample of the design model's exact zero-order
+hold (thesis eqs. 6.12-6.15, with a Joseph-form covariance update and process noise as an
+unknown heat flow at every node, :data:`DEFAULT_HEAT_NOISE_W`); missing sensor samples drop their
+rows, and steady-state mode uses the Riccati gain (thesis 6.2.3).
+:func:`initial_state_from_measurements` starts a model from the first measured temperatures.
+Method: ``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

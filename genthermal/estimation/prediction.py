@@ -1,41 +1,10 @@
-r"""n-step prediction from the Kalman-filtered state (thesis 6.2.4, 6.3.2).
+"""n-step prediction from the Kalman-filtered state (thesis 6.2.4, 6.3.2).
 
-Up to the start time :math:`T_{pred}` the filter updates the design model's state with the
-measurements; from there the model runs open loop (thesis eqs 6.16-6.17):
-:math:`\hat x_{k+1} = A\hat x_k + Bu_k + c`, :math:`\hat y_k = C\hat x_k + e`, starting from the
-filtered state :math:`\hat x_{k_s}` at the start sample :math:`k_s` (the nearest sample to
-:math:`T_{pred}`). The *open-loop model* is the same design model run from the first sample of
-the record, its state set from the first measured temperatures
-(:func:`~genthermal.estimation.kalman.initial_state_from_measurements`), never updated.
-
-Period of increased accuracy (thesis Fig. 6.10), per start and sensor. With the errors
-:math:`e_p(k) = \hat y_p(k) - y(k)` of the prediction and :math:`e_o(k) = \hat y_o(k) - y(k)` of
-the open-loop model, each smoothed by a trailing mean over ``smoothing_min`` minutes of the samples
-from :math:`k_s` on (missing measurements skipped), written :math:`\bar e_p, \bar e_o`, the period
-ends at the first sample :math:`k \ge k_s` with
-
-.. math::
-    |\bar e_p(k)| \ge |\bar e_o(k)| - \delta,
-
-:math:`\delta` = ``margin_K``: the prediction counts as better only while it beats the open-loop
-model by at least :math:`\delta`. The margin is needed because the prediction converges to the
-open-loop trajectory (both are the same model with the same inputs, and the difference decays as
-:math:`CA^k(\hat x_{k_s} - x^o_{k_s})`): where the open-loop error keeps one sign, as it does for a
-plant whose parameters differ from the model's, :math:`|\bar e_p|` approaches :math:`|\bar e_o|`
-from below and, without a margin, would never reach it. A period that has not ended when the record
-does is reported as its lower bound, the time to the end of the record, and flagged *censored*
-(the thesis discarded its 175 min iron result for this reason).
-
-Prediction error by horizon (what a load manager needs). Starts are taken every ``every_min``
-minutes (default 10) from ``every_min`` on, as long as the longest horizon still ends inside the
-record. For each horizon :math:`h` (default 15, 30 and 60 min) and sensor, the error is
-:math:`\hat y(k_s + h \mid k_s) - y(k_s + h)`, the prediction made at :math:`k_s` against the
-measurement :math:`h` later; its RMS and maximum over the starts are reported, next to the error of
-the open-loop model at the same target samples. The filter may be the linear
-:class:`~genthermal.estimation.kalman.KalmanFilter` or the
-:class:`~genthermal.estimation.ekf.ExtendedKalmanFilter`, whose predictions carry the estimated
-disturbance heat flows; its open-loop model is the same model without them (and without the
-prior a calibration left, :mod:`~genthermal.estimation.disturbance_prior`).
+The filter updates the state up to the prediction start, then the model runs open loop (thesis
+eqs. 6.16-6.17). :func:`prediction_study` returns a :class:`PredictionStudy`: how long the prediction beats
+the open-loop model by a margin (:func:`improved_period`, thesis Fig. 6.10, censored at the end
+of the record) and the RMS and maximum error by horizon over many starts (:func:`horizon_errors`). Method:
+``docs/guide/methods.md``.
 """
 
 from __future__ import annotations

@@ -1,21 +1,11 @@
 """FMI 2.0 FMU of a ThermalModel for model exchange and co-simulation, from the generated C.
 
-:func:`export_fmu` writes one ``.fmu`` (a zip) holding
-
-* ``modelDescription.xml`` (:mod:`genthermal.fmu.model_description`): states, derivatives, inputs
-  and sensor outputs named as in the model, every parameter as a tunable start value with its unit
-  and provenance, ``providesDirectionalDerivative`` for both interfaces;
-* ``binaries/<platform>/<model_identifier>.so``: the generated C library (codegen/ABI.md) behind
-  the FMI 2.0 functions of ``fmi2_wrapper.c``, compiled with the system compiler;
-* ``sources/``: every C file needed to build the binary elsewhere.
-
-Model exchange evaluates ``dx/dt = f(x, u, p)`` and the outputs; the importing tool integrates.
-Co-simulation integrates ``f`` over each communication step itself (adaptive Dormand-Prince 5(4),
-:data:`ATOL_K`, :data:`RTOL`), the inputs held. Directional derivatives are the products of the
-generated Jacobians ``jac_x``, ``jac_u`` and the output Jacobians (CasADi, exact) with the seed.
-
-The FMU is assembled in a temporary file and moved into place at the end, so a failure leaves
-nothing half-written.
+:func:`export_fmu` writes one ``.fmu`` holding ``modelDescription.xml``
+(:mod:`genthermal.fmu.model_description`), the generated C library behind the FMI 2.0 functions
+of ``fmi2_wrapper.c`` compiled for this platform, and the sources to build it elsewhere.
+Co-simulation integrates with adaptive Dormand-Prince 5(4) (:data:`ATOL_K`, :data:`RTOL`);
+directional derivatives are exact. The file is moved into place only when complete. Guide:
+``docs/guide/embedded.md``.
 """
 
 from __future__ import annotations

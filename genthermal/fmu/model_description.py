@@ -1,16 +1,9 @@
 """``modelDescription.xml`` of an FMI 2.0 FMU of a ThermalModel (model exchange and co-simulation).
 
-Variables, in value-reference order (the index in ``ModelVariables`` is the value reference + 1):
-
-* the states, one per capacitive node (``x_<node>``, °C, local, start value exact),
-* their derivatives (``der(x_<node>)``, K/s),
-* the inputs as the model names them (``I_u`` ... ``T_ambient``, A and °C),
-* the sensor outputs (``T_winding``, ``T_iron``, °C),
-* every parameter, tunable, its value as start value, its unit, and its provenance in the
-  description.
-
-Units are declared with their SI base-unit exponents; :data:`UNITS` lists those genthermal's
-parameters use. A unit outside it cannot be declared and is refused (:class:`FmuError`).
+The variables, in value-reference order: the states (``x_<node>``, °C), their derivatives, the
+inputs, the sensor outputs and every parameter (tunable, with unit and provenance). Units are
+declared with their SI base-unit exponents from :data:`UNITS`; any other unit is refused
+(:class:`FmuError`). Guide: ``docs/guide/embedded.md``.
 """
 
 from __future__ import annotations
