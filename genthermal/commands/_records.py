@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..machines.interface import InputKind
 from ..outputs import report_json
 from ..progress import working
 
@@ -86,6 +85,8 @@ def load_record_set(args, model) -> list:
 
 
 def _bands(model, record) -> dict:
+    from ..machines.interface import InputKind
+
     interface = model.spec.interface
     labels = {}
     speeds = interface.inputs_of_kind(InputKind.SPEED)
