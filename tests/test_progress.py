@@ -3,6 +3,8 @@
 import io
 import time
 
+import pytest
+
 from genthermal import progress
 
 
@@ -28,3 +30,72 @@ def test_shown_on_a_terminal_and_removed_at_the_end(monkeypatch):
     assert text.endswith("\r")  # the line is cleared, not left behind
     monkeypatch.setenv("GENTHERMAL_PROGRESS", "0")
     assert not progress.enabled()
+
+
+def test_a_counter_is_a_bar_on_a_terminal_only(monkeypatch, capsys):
+    monkeypatch.delenv("GENTHERMAL_PROGRESS", raising=False)
+    with progress.counter(3, "cases") as bar:  # stderr captured: not a terminal
+        bar.update(3)
+    assert capsys.readouterr().err == ""
+    terminal = FakeTerminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    with progress.counter(3, "cases") as bar:
+        bar.update(3)
+    assert "cases" in terminal.getvalue() and "3/3" in terminal.getvalue()
+    with progress.counter(3, "hidden", show=False) as bar:  # the caller's own switch
+        bar.update(3)
+    assert "hidden" not in terminal.getvalue()
+
+
+def test_one_switch_silences_every_kind_of_progress_on_a_terminal(monkeypatch):
+    """``quiet()`` (``genthermal --quiet``) and ``GENTHERMAL_PROGRESS=0`` turn off the tqdm bar,
+    the elapsed-time display and the progress lines alike; the environment is restored after."""
+    terminal = FakeTerminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    monkeypatch.delenv("GENTHERMAL_PROGRESS", raising=False)
+    assert progress.enabled()
+    with progress.quiet():
+        assert not progress.enabled()
+        with progress.counter(2, "cases") as bar:
+            bar.update(2)
+        with progress.working("diagnose"):
+            time.sleep(progress.REFRESH_S * 1.5)
+        progress.say("a line")
+    assert terminal.getvalue() == "" and "GENTHERMAL_PROGRESS" not in __import__("os").environ
+    monkeypatch.setenv("GENTHERMAL_PROGRESS", "0")
+    with progress.counter(2, "cases") as bar:
+        bar.update(2)
+    progress.say("a line")
+    assert terminal.getvalue() == ""
+
+
+@pytest.mark.parametrize("argv", [["--quiet", "describe"], ["describe", "--quiet"]])
+def test_quiet_before_or_after_the_command(argv, monkeypatch):
+    """The command runs with progress off (its worker processes inherit GENTHERMAL_PROGRESS=0)."""
+    import os
+
+    import genthermal.commands.describe as describe
+    from genthermal.cli import main
+
+    seen = {}
+    monkeypatch.setattr("sys.stderr", FakeTerminal())
+    monkeypatch.delenv("GENTHERMAL_PROGRESS", raising=False)
+    monkeypatch.setattr(describe, "run", lambda args: seen.update(enabled=progress.enabled(),
+                                                                  env=os.environ.get("GENTHERMAL_PROGRESS")) or 0)
+    assert main(argv) == 0
+    assert seen == {"enabled": False, "env": "0"} and progress.enabled()
+    assert main(["describe"]) == 0 and seen["enabled"] is True
+
+
+def test_a_command_writes_only_its_result_lines_into_a_log(tmp_path, monkeypatch, capsys):
+    """Not a terminal (a log, CI), progress switched on in the environment: nothing on stderr,
+    only result lines on stdout (no carriage-return redraws)."""
+    from pathlib import Path
+
+    from genthermal.cli import main
+
+    record = str(Path(__file__).resolve().parents[1] / "scenarios" / "data" / "hidden_effect_demo.csv")
+    monkeypatch.setenv("GENTHERMAL_PROGRESS", "1")
+    assert main(["compare", record, record, "--fit-step", "60"]) == 0  # two records: shown as "working" on a tty
+    out, err = capsys.readouterr()
+    assert err == "" and "\r" not in out and "RMSE" in out

@@ -9,7 +9,8 @@ from __future__ import annotations
 import dataclasses
 
 from ..errors import InputError
-from ._common import add_choice_argument, add_json_argument, add_model_arguments, load_model_option, with_overrides
+from ._common import (add_choice_argument, add_json_argument, add_model_arguments, load_model_option,
+                      parse_assignments, with_overrides)
 from ._vocabulary import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, INFEASIBLE_RESPONSES, MANAGER_DEFAULTS,
                           PLANNER_MODELS, SCHEDULERS, library_value)
 
@@ -83,6 +84,7 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     from ..schedule.manager_settings import ManagerSettings
     from ..schedule.power_system import PowerSystem
 
+    parse_assignments(getattr(args, "param", None) or [])  # a malformed --param is refused before any model is built
     margin = ManagerSettings.margin_K if args.margin is None else _number_in("--margin", args.margin, 0.0, 50.0,
                                                                               "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
