@@ -24,7 +24,7 @@ OUT_KIND = {"demo": "folder", "codegen": "folder", "cortex-m4": "folder", "simul
 #: Choices spelt as a column of the measurement CSV, not as a word (sysid --input I_u).
 COLUMN_CHOICES = set(words.ARX_INPUTS) - {"auto"}
 CHOICE_WORD = re.compile(r"^[a-z0-9]+(-[a-z0-9]+)*$")
-HEAVY = ("casadi", "sympy", "matplotlib", "scipy", "pandas", "dask")
+HEAVY = ("casadi", "sympy", "matplotlib", "scipy", "pandas", "dask", "numpy", "tqdm", "yaml")
 
 
 def _parsers() -> dict:
@@ -126,7 +126,7 @@ def test_diagnose_phases_are_the_discoverys():
 
 def test_no_help_imports_a_numerical_library():
     """``genthermal --help`` and every ``genthermal CMD --help`` in one process: none loads casadi,
-    sympy, matplotlib, scipy, pandas or dask (the guard of the 0.5 s help target)."""
+    sympy, matplotlib, scipy, pandas, dask, numpy, tqdm or yaml (the guard of the 0.5 s help target)."""
     code = ("import contextlib, io, sys\nfrom genthermal.cli import COMMANDS, main\n"
             "for argv in [['--help']] + [[name, '--help'] for name in COMMANDS]:\n"
             "    with contextlib.redirect_stdout(io.StringIO()):\n"

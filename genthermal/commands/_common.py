@@ -45,6 +45,21 @@ def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model"
                         help="override a parameter of --model (SI units), e.g. --param h_end_air=15; repeatable")
 
 
+#: Block length records logged faster are averaged to before fitting or scoring, s (compare, calibrate).
+DEFAULT_FIT_STEP_S = 10.0
+
+
+def add_record_set_arguments(parser) -> None:
+    """``--columns FILE`` and ``--fit-step S``."""
+    parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV: which column is "
+                        "which input or sensor, in which unit (default: the machine's own map, if it has one)")
+    parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
+                        help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
+                        "repeatable")
+    parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
+                        f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
+
+
 def add_json_argument(parser: argparse.ArgumentParser, what: str) -> None:
     """Add ``--json FILE.json``: write ``what`` as a JSON document."""
     parser.add_argument("--json", metavar="FILE.json", help=f"write {what} as a JSON document to FILE.json")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_json_argument, add_model_arguments, model_from_args, positive_float
+from ._common import add_json_argument, add_model_arguments, add_record_set_arguments, model_from_args, positive_float
 
 
 def add_model_and_data_arguments(parser, several: bool = False) -> None:
@@ -18,8 +18,6 @@ def add_model_and_data_arguments(parser, several: bool = False) -> None:
     parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step); "
                         "for a logger file without a time column (read through a column map): its sample period")
     if several:
-        from ._records import add_record_set_arguments
-
         add_record_set_arguments(parser)
 
 
