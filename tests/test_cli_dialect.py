@@ -79,12 +79,19 @@ def test_choices_are_written_one_way(name):
         assert "|" not in metavar or metavar == "NAME|FILE", f"{name} {action.option_strings}: metavar {metavar}"
 
 
-def test_old_spellings_are_hidden_and_still_accepted():
-    options = _options(PARSERS["plan"])
-    assert options["--when-infeasible"].type("best_effort") == "best-effort"
+def test_old_spellings_the_docs_use_are_hidden_and_still_accepted():
+    """docs/results/robustness-grid.md runs ``sweep --schedulers heuristic_flown`` and
+    docs/guide/flights.md ``sweep --no-progress``; nothing used ``--when-infeasible best_effort``."""
+    from genthermal.commands.sweep import run
+
+    assert words.cli_spelling("heuristic_flown") == "heuristic-flown" and words.cli_spelling("best_effort") == "best_effort"
+    sweep_help = PARSERS["sweep"].format_help()
+    assert "heuristic_flown" not in sweep_help and "--no-progress" not in sweep_help
+    assert cli.build_parser(["sweep"]).parse_args(["sweep", "--no-progress"]).quiet is True
     assert "best_effort" not in PARSERS["plan"].format_help()
-    assert "--no-progress" not in PARSERS["sweep"].format_help()
     assert words.library_value("best-effort") == "best_effort" and words.library_value("optimal") == "optimal"
+    with pytest.raises(Exception, match="--schedulers"):
+        run(cli.build_parser(["sweep"]).parse_args(["sweep", "--schedulers", "heuristic_flow"]))
 
 
 def test_the_words_agree_with_the_library():

@@ -85,7 +85,7 @@ def add_choice_argument(parser: argparse.ArgumentParser, option: str, choices, h
     """Add an option taking one of ``choices`` (lower-case, hyphenated), shown as ``{a,b}``.
 
     An unknown value is a usage error naming the option and the value (exit code 2); the old
-    underscore spellings of :data:`~genthermal.commands._vocabulary.ALIASES` are accepted.
+    spellings of :data:`~genthermal.commands._vocabulary.OLD_SPELLINGS` are accepted.
     """
     parser.add_argument(option, choices=tuple(choices), type=_Choice(choices), help=help, **kwargs)
 

@@ -32,8 +32,10 @@ PRECISIONS = ("double", "single")
 #: (``genthermal.estimation.arx_search.INPUT_SIGNALS``).
 ARX_INPUTS = ("auto", "I_u", "I_v", "I_w", "I_exc", "I_sq")
 
-#: Old spellings still accepted (hidden from --help): the docs, tests or scenarios use them.
-ALIASES = {"best_effort": "best-effort", "heuristic_flown": "heuristic-flown", "optimal_flown": "optimal-flown"}
+#: The library's spelling of the choices whose command-line spelling differs.
+LIBRARY_SPELLING = {"best-effort": "best_effort", "heuristic-flown": "heuristic_flown", "optimal-flown": "optimal_flown"}
+#: Old command-line spellings still accepted, hidden from --help (docs/results use them).
+OLD_SPELLINGS = {"heuristic_flown": "heuristic-flown", "optimal_flown": "optimal-flown"}
 
 #: Defaults the help quotes: ``ManagerSettings`` (margin_K, rise_backoff, confidence_sigmas,
 #: when_infeasible, filter, cycle_s / 60), ``manager_settings.DEFAULT_REST_BUDGET_FRACTION``,
@@ -50,10 +52,10 @@ DEFAULT_MARGIN_K = 0.25
 
 
 def cli_spelling(value: str) -> str:
-    """The command line's spelling of a choice: an old alias becomes its hyphenated form."""
-    return ALIASES.get(value, value)
+    """The command line's spelling of a choice: an old spelling becomes its hyphenated form."""
+    return OLD_SPELLINGS.get(value, value)
 
 
 def library_value(choice: str) -> str:
     """The library's spelling of a command-line choice (``best-effort`` -> ``best_effort``)."""
-    return {new: old for old, new in ALIASES.items()}.get(choice, choice)
+    return LIBRARY_SPELLING.get(choice, choice)
