@@ -23,7 +23,8 @@ def register(subparsers) -> None:
         "codegen", help="generate C code of the model and compile it",
         description="Write C sources of the model's discrete step, right-hand side, Jacobians and "
         "outputs behind a stable ABI (see ABI.md), an example program and its Makefile, and compile "
-        "a shared library with the system C compiler.")
+        "a shared library with the system C compiler. Without a C compiler the sources are still written "
+        "and the command exits with code 2, saying why nothing was compiled.")
     add_out_argument(parser, "folder", "the C sources, gt.h, ABI.md, the example program, its Makefile and the "
                      "compiled libgt.so", required=True)
     parser.add_argument("--dt", default="10", help="step of gt_step and gt_simulate in s (default 10)")
