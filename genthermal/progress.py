@@ -88,11 +88,51 @@ def counter(total: int, description: str, show: bool = True):
     return tqdm(total=total, desc=description, disable=not (show and enabled()), file=sys.stderr, **_size())
 
 
+class _LinesAboveTheBar:
+    """A stdout that writes whole lines above a progress display on the same terminal: the display
+    is cleared, the lines written and the display drawn again, so the two never share a line."""
+
+    def __init__(self, stream, bar):
+        self._stream, self._bar, self._pending = stream, bar, ""
+
+    def write(self, text: str) -> int:
+        self._pending += text
+        if "\n" in self._pending:
+            lines, _, self._pending = self._pending.rpartition("\n")
+            with self._bar.get_lock():
+                self._bar.clear(nolock=True)
+                self._stream.write(lines + "\n")
+                self._stream.flush()
+                self._bar.refresh(nolock=True)
+        return len(text)
+
+    def flush(self) -> None:
+        """Whole lines are flushed as they come; a partial line waits for its end (or :meth:`close`)."""
+
+    def close(self) -> None:
+        """Write what is left of a partial line."""
+        if self._pending:
+            self._stream.write(self._pending)
+            self._pending = ""
+        self._stream.flush()
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
 @contextmanager
 def working(description: str) -> Iterator[None]:
     """Show ``description`` with the elapsed time while the block runs (work of unknown length).
 
-    The display is removed when the block ends, however it ends.
+    Lines the block prints on a stdout that is a terminal too appear above the display. The
+    display is removed when the block ends, however it ends.
     """
     if not enabled():
         yield
@@ -110,11 +150,19 @@ def working(description: str) -> Iterator[None]:
             bar.refresh()
 
     thread = threading.Thread(target=refresh, daemon=True)
+    stdout = sys.stdout
+    above = _LinesAboveTheBar(stdout, bar) if _is_terminal(stdout) else None
     thread.start()
     try:
+        if above is not None:
+            sys.stdout = above
         with collector_in_this_thread():  # the refresh thread allocates: no collection there
             yield
     finally:
         stop.set()
         thread.join()
+        if above is not None:
+            sys.stdout = stdout
         bar.close()
+        if above is not None:
+            above.close()

@@ -99,3 +99,25 @@ def test_a_command_writes_only_its_result_lines_into_a_log(tmp_path, monkeypatch
     assert main(["compare", record, record, "--fit-step", "60"]) == 0  # two records: shown as "working" on a tty
     out, err = capsys.readouterr()
     assert err == "" and "\r" not in out and "RMSE" in out
+
+
+def test_lines_printed_during_work_appear_above_the_display(monkeypatch):
+    """stdout and stderr on one terminal (demo, fly): each printed line is whole, on its own line,
+    never glued to the elapsed-time display."""
+    import sys
+
+    terminal = FakeTerminal()
+    monkeypatch.setattr("sys.stderr", terminal)
+    monkeypatch.setattr("sys.stdout", terminal)
+    monkeypatch.delenv("GENTHERMAL_PROGRESS", raising=False)
+    with progress.working("demo part 1 of 2"):
+        time.sleep(progress.REFRESH_S * 1.5)
+        print("== Mission thesis_fig_7_7 ==")
+        print("peak", end="")
+        time.sleep(progress.REFRESH_S * 1.5)
+        print(" T_winding 96.1 °C")
+    assert sys.stdout is terminal  # given back
+    screen = terminal.getvalue()
+    lines = [line.rsplit("\r", 1)[-1] for line in screen.split("\n")]  # what each line ends up showing
+    assert "== Mission thesis_fig_7_7 ==" in lines and "peak T_winding 96.1 °C" in lines
+    assert "demo part 1 of 2: working" in screen
