@@ -131,8 +131,8 @@ def _is_terminal(stream) -> bool:
 def working(description: str) -> Iterator[None]:
     """Show ``description`` with the elapsed time while the block runs (work of unknown length).
 
-    Lines the block prints on a stdout that is a terminal too appear above the display. The
-    display is removed when the block ends, however it ends.
+    Lines the block prints on the terminal (results on stdout, warnings on stderr) appear whole
+    above the display. The display is removed when the block ends, however it ends.
     """
     if not enabled():
         yield
@@ -150,19 +150,19 @@ def working(description: str) -> Iterator[None]:
             bar.refresh()
 
     thread = threading.Thread(target=refresh, daemon=True)
-    stdout = sys.stdout
-    above = _LinesAboveTheBar(stdout, bar) if _is_terminal(stdout) else None
+    streams = {name: getattr(sys, name) for name in ("stdout", "stderr") if _is_terminal(getattr(sys, name))}
+    above = {name: _LinesAboveTheBar(stream, bar) for name, stream in streams.items()}
     thread.start()
     try:
-        if above is not None:
-            sys.stdout = above
+        for name, stream in above.items():
+            setattr(sys, name, stream)
         with collector_in_this_thread():  # the refresh thread allocates: no collection there
             yield
     finally:
         stop.set()
         thread.join()
-        if above is not None:
-            sys.stdout = stdout
+        for name, stream in streams.items():
+            setattr(sys, name, stream)
         bar.close()
-        if above is not None:
-            above.close()
+        for stream in above.values():
+            stream.close()

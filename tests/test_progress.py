@@ -116,8 +116,10 @@ def test_lines_printed_during_work_appear_above_the_display(monkeypatch):
         print("peak", end="")
         time.sleep(progress.REFRESH_S * 1.5)
         print(" T_winding 96.1 °C")
-    assert sys.stdout is terminal  # given back
+        print("genthermal demo: warning: a data warning", file=sys.stderr)
+    assert sys.stdout is terminal and sys.stderr is terminal  # given back
     screen = terminal.getvalue()
     lines = [line.rsplit("\r", 1)[-1] for line in screen.split("\n")]  # what each line ends up showing
     assert "== Mission thesis_fig_7_7 ==" in lines and "peak T_winding 96.1 °C" in lines
+    assert "genthermal demo: warning: a data warning" in lines
     assert "demo part 1 of 2: working" in screen
