@@ -73,7 +73,7 @@ def test_choices_are_written_one_way(name):
         if action.choices:
             assert action.metavar is None, f"{name} {action.option_strings}: shown as {{a,b}}, not {action.metavar}"
             for choice in action.choices:
-                assert CHOICE_WORD.match(choice) or choice in COLUMN_CHOICES, f"{name} {action.option_strings}: {choice}"
+                assert CHOICE_WORD.match(choice) or choice in COLUMN_CHOICES, (name, action.option_strings, choice)
             assert " | " not in (action.help or "")
         metavar = action.metavar or ""
         assert "|" not in metavar or metavar == "NAME|FILE", f"{name} {action.option_strings}: metavar {metavar}"
@@ -84,7 +84,8 @@ def test_old_spellings_the_docs_use_are_hidden_and_still_accepted():
     docs/guide/flights.md ``sweep --no-progress``; nothing used ``--when-infeasible best_effort``."""
     from genthermal.commands.sweep import run
 
-    assert words.cli_spelling("heuristic_flown") == "heuristic-flown" and words.cli_spelling("best_effort") == "best_effort"
+    assert words.cli_spelling("heuristic_flown") == "heuristic-flown"
+    assert words.cli_spelling("best_effort") == "best_effort"  # not an old command-line spelling
     sweep_help = PARSERS["sweep"].format_help()
     assert "heuristic_flown" not in sweep_help and "--no-progress" not in sweep_help
     assert cli.build_parser(["sweep"]).parse_args(["sweep", "--no-progress"]).quiet is True

@@ -33,7 +33,8 @@ PRECISIONS = ("double", "single")
 ARX_INPUTS = ("auto", "I_u", "I_v", "I_w", "I_exc", "I_sq")
 
 #: The library's spelling of the choices whose command-line spelling differs.
-LIBRARY_SPELLING = {"best-effort": "best_effort", "heuristic-flown": "heuristic_flown", "optimal-flown": "optimal_flown"}
+LIBRARY_SPELLING = {"best-effort": "best_effort", "heuristic-flown": "heuristic_flown",
+                    "optimal-flown": "optimal_flown"}
 #: Old command-line spellings still accepted, hidden from --help (docs/results use them).
 OLD_SPELLINGS = {"heuristic_flown": "heuristic-flown", "optimal_flown": "optimal-flown"}
 

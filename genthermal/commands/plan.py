@@ -60,8 +60,8 @@ def add_schedule_arguments(parser) -> None:
                         f"generators.when_infeasible, else {MANAGER_DEFAULTS['when_infeasible']})")
     add_model_arguments(parser, what="the model the manager plans on and filters with (default: the scenario's "
                         "machine; --param changes it, and so the default plant built from it)", default=None)
-    parser.add_argument("--plant", metavar="NAME|FILE", help="true plant of every generator before its faults: a built-in name or "
-                        "a model file; default the planning model with the scenario's plant_mismatch. fly also "
+    parser.add_argument("--plant", metavar="NAME|FILE", help="true plant of every generator before its faults: "
+                        "a built-in name or a model file; default the planning model with the scenario's plant_mismatch. fly also "
                         "takes an FMI 2.0 co-simulation FMU (model.fmu) or a Python file defining make_plant() "
                         "(my_plant.py: running it is your decision; see docs/guide/flights.md)")
 
