@@ -123,3 +123,46 @@ def test_lines_printed_during_work_appear_above_the_display(monkeypatch):
     assert "== Mission thesis_fig_7_7 ==" in lines and "peak T_winding 96.1 °C" in lines
     assert "genthermal demo: warning: a data warning" in lines
     assert "demo part 1 of 2: working" in screen
+
+
+def _run_in_a_terminal(argv: list[str]) -> str:
+    """Run ``python -m genthermal.cli argv`` with stdout and stderr on a pseudo-terminal; return
+    everything it drew."""
+    import os
+    import pty
+    import subprocess
+    import sys
+
+    leader, follower = pty.openpty()
+    env = {**os.environ, "COLUMNS": "100", "LINES": "30"}
+    env.pop("GENTHERMAL_PROGRESS", None)
+    process = subprocess.Popen([sys.executable, "-m", "genthermal.cli", *argv], stdout=follower, stderr=follower,
+                               stdin=subprocess.DEVNULL, env=env, close_fds=True)
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:  # the terminal closed: the process ended
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    os.close(leader)
+    assert process.wait(timeout=300) == 0
+    return b"".join(chunks).decode(errors="replace")
+
+
+@pytest.mark.slow
+def test_a_real_terminal_shows_the_display_and_quiet_removes_it():
+    """On a pseudo-terminal ``compare`` of two records shows its elapsed-time display above which
+    the result lines appear whole; ``genthermal --quiet`` draws the same lines and no display."""
+    from pathlib import Path
+
+    record = str(Path(__file__).resolve().parents[1] / "scenarios" / "data" / "hidden_effect_demo.csv")
+    argv = ["compare", record, record, "--fit-step", "60"]
+    shown, quiet = _run_in_a_terminal(argv), _run_in_a_terminal(["--quiet", *argv])
+    assert "compare: working" in shown and "working" not in quiet
+    result = [line.rsplit("\r", 1)[-1] for line in quiet.replace("\r\n", "\n").split("\n") if line.strip()]
+    drawn = [line.rsplit("\r", 1)[-1] for line in shown.replace("\r\n", "\n").split("\n") if line.strip()]
+    assert result and drawn == result  # every line whole, none glued to the display
