@@ -1,24 +1,8 @@
-"""The ``genthermal`` command line.
+"""The ``genthermal`` command line: :func:`main` and :func:`build_parser`.
 
-Each sub-command lives in its own module under :mod:`genthermal.commands` and exposes
-``register(subparsers)``, which adds its parser and sets ``func`` (a callable taking the parsed
-arguments and returning an exit code).
-
-Exit codes (the same for every command)
-
-===  ===========================================================================================
-0    success
-2    bad input: a bad option, file, scenario, model or data value; one line on stderr names the
-     field and the value (argparse's own usage errors also exit 2)
-130  interrupted (Ctrl-C): one line on stderr, no partial output file (see :mod:`genthermal.outputs`)
-143  terminated (SIGTERM, or SIGHUP: 129): as Ctrl-C, no partial output file or folder
-141  the reader of the output went away (``genthermal describe | head``): ends quietly
-1    internal error: a bug in genthermal; one line on stderr, with the path of a file holding the
-     traceback to attach to a bug report
-===  ===========================================================================================
-
-Options are never abbreviated (``--param`` is not ``--params``). Every command that writes files
-refuses to replace existing ones unless given ``--force``.
+Each sub-command lives in its own module under :mod:`genthermal.commands` (``register`` adds its
+parser, ``run`` does the work and returns the exit code: 0 ok, 2 bad input, 130 interrupted, 1 a
+bug). Only the command that runs is imported. Reference: docs/guide/cli.md.
 """
 
 from __future__ import annotations
@@ -64,6 +48,8 @@ COMMANDS = {
 }
 #: Sub-command modules, in the order ``genthermal --help`` lists them.
 COMMAND_MODULES = tuple(module for module, _, _ in COMMANDS.values())
+#: The command-line reference page (every command's options), under docs/.
+REFERENCE_PAGE = "guide/cli.md"
 DOCS_HINT = "the docs/ folder of the source tree, or the documentation site built from it (docs/contributing.md)"
 EXIT_OK, EXIT_INTERNAL_ERROR, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 #: Signals that stop a run the way Ctrl-C does (the temporary outputs are removed), exit 128 + number.
@@ -71,12 +57,27 @@ STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if 
 BUG_REPORT_HINT = "this is a bug in genthermal; please report it with the command line you ran"
 
 
+class UsageError(Exception):
+    """A command line argparse refuses (unknown option or choice, missing argument): exit code 2."""
+
+    def __init__(self, parser: argparse.ArgumentParser, message: str):
+        super().__init__(message)
+        self.parser, self.message = parser, message
+
+
 class _Parser(argparse.ArgumentParser):
-    """An argument parser that never accepts an abbreviated option."""
+    """An argument parser that never accepts an abbreviated option and reports a usage error to
+    :func:`main` (which prints it and returns 2) instead of exiting the interpreter."""
 
     def __init__(self, *args, **kwargs):
         kwargs["allow_abbrev"] = False
         super().__init__(*args, **kwargs)
+
+    def error(self, message):
+        raise UsageError(self, message)
+
+
+QUIET_HELP = "no progress display, even on a terminal (as GENTHERMAL_PROGRESS=0); results are still printed"
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -91,9 +92,10 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
                      description="Thermal models of electrical generators: simulate, estimate, diagnose, plan "
                      "and fly, generate C.",
                      epilog="exit codes: 0 ok, 2 bad input, 130 interrupted, 1 internal error (a bug). "
-                     f"Each command: genthermal COMMAND --help. Read more: {DOCS_HINT}",
+                     f"Each command: genthermal COMMAND --help. Read more: docs/{REFERENCE_PAGE} in {DOCS_HINT}",
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"genthermal {__version__}")
+    parser.add_argument("--quiet", action="store_true", help=QUIET_HELP)
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subparsers.required = True
     wanted = set(COMMANDS) if argv is None else {word for word in argv if word in COMMANDS}
@@ -103,7 +105,10 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
             subparser = subparsers.choices[name]
         else:
             subparser = subparsers.add_parser(name, help=summary)
-        subparser.epilog = f"read more: docs/{page} in {DOCS_HINT}"
+        own = f"{subparser.epilog}. " if subparser.epilog else ""  # a command's own note (fly's exit code 3)
+        subparser.epilog = f"{own}read more: docs/{page}, and every option in docs/{REFERENCE_PAGE}, in {DOCS_HINT}"
+        # --quiet after the command too; SUPPRESS keeps a --quiet given before it
+        subparser.add_argument("--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
     for subparser in subparsers.choices.values():
         writes = {action.dest for action in subparser._actions} & {*FILE_OUTPUT_OPTIONS, *FOLDER_OUTPUT_OPTIONS}
         if writes and "--force" not in subparser._option_string_actions:
@@ -148,19 +153,22 @@ def _printable_anywhere() -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; return the process exit code (see the module docstring)."""
+    """Run the command line; return the process exit code (0 ok, 2 bad input, 130 interrupted, 1 a bug:
+    docs/guide/cli.md)."""
     command = "genthermal"
     # Figures go to files: no window unless the user chose a backend (a library user keeps theirs).
     os.environ.setdefault("MPLBACKEND", "Agg")
     _printable_anywhere()
     try:
         words = sys.argv[1:] if argv is None else list(argv)
-        args = build_parser(words[:1] if words[:1] and words[0] in COMMANDS else words).parse_args(words)
+        named = [word for word in words if word in COMMANDS][:1]  # the command, after any global option
+        args = build_parser(named or words).parse_args(words)
         command = f"genthermal {args.command}"
         check_output_paths(args, args.command)
         # Imported only now: ``genthermal --help`` loads no numerical library.
         from .machines.registry import trusted_machine_files
         from .measurements import DataWarning
+        from .progress import quiet
         from .unit_checks import parse_unit_options, stated_units
 
         with warnings.catch_warnings():
@@ -172,10 +180,14 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = _warning_printer(command)
             with trusted_machine_files(getattr(args, "trust_machine", None) or []), \
                     stated_units(parse_unit_options(getattr(args, "unit", None) or [])), \
-                    replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals():
+                    replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals(), \
+                    quiet(bool(getattr(args, "quiet", False))):
                 code = int(args.func(args) or 0)
         sys.stdout.flush()
         return code
+    except UsageError as exc:
+        _error(f"{exc.parser.format_usage().rstrip()}\n{exc.parser.prog}: error: {exc.message}")
+        return EXIT_BAD_INPUT
     except GenthermalError as exc:
         _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT

@@ -21,8 +21,6 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Iterator
 
-import numpy as np
-
 from .errors import InputError
 
 #: Option destinations that name files a command writes.
@@ -303,6 +301,8 @@ def write_json(path, document) -> list[str]:
 
 def finite_document(value, replaced: list[str] | None = None, where: str = ""):
     """``value`` with numpy types made plain and non-finite floats made None (places in ``replaced``)."""
+    import numpy as np  # here, not at the top: the command line's --help loads no numpy
+
     if isinstance(value, dict):
         return {key: finite_document(item, replaced, f"{where}.{key}" if where else str(key))
                 for key, item in value.items()}

@@ -73,17 +73,18 @@ def test_bad_scenarios_name_the_field(document, named, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "fmu", "cortex-m4", "synth", "estimate", "sysid",
-                                     "compare-models", "compare", "calibrate", "diagnose", "plan", "fly"])
+                                     "compare-models", "compare", "calibrate", "diagnose", "plan", "fly", "sweep"])
 def test_every_command_documents_itself(command, capsys):
     with pytest.raises(SystemExit) as stopped:
         main([command, "--help"])
     assert stopped.value.code == 0 and "usage: genthermal" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "synth", "estimate",
-                                     "compare-models", "compare", "calibrate", "diagnose"])
+@pytest.mark.parametrize("command", ["demo", "simulate", "describe", "codegen", "fmu", "cortex-m4", "synth", "estimate",
+                                     "compare-models", "compare", "calibrate", "diagnose", "plan", "fly"])
 def test_every_model_command_names_the_model_one_way(command, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])
     text = capsys.readouterr().out
-    assert "--model NAME|FILE" in text and "--machine" not in text and "--variant" not in text
+    assert "--model NAME|FILE" in text and "--param NAME=VALUE" in text
+    assert "--machine" not in text and "--variant" not in text

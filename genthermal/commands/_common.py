@@ -1,11 +1,8 @@
-"""Arguments and helpers shared by the sub-commands that build a model.
+"""Options shared by the sub-commands, spelt one way: ``--model``, ``--param``, ``--json``, ``--out``
+and choices.
 
-Every command that uses a model names it the same way: ``--model NAME|FILE`` (a built-in or
-plug-in machine, optionally with its variant, ``genco_rf201a`` or ``genco_rf201a:linear``, a
-``.py`` machine file, or a model file written by ``calibrate --out`` / ``diagnose --out``:
-:func:`genthermal.model_file.load_model`), and ``--param NAME=VALUE`` overrides parameters on top
-of it (to make a mismatched plant for ``synth`` or a what-if for ``simulate``; provenance
-``assumed``).
+Only light modules are imported here: a command's ``register`` must not load the numerical
+libraries (``genthermal CMD --help`` stays fast). Reference: docs/guide/cli.md.
 """
 
 from __future__ import annotations
@@ -14,21 +11,83 @@ import argparse
 import math
 
 from ..errors import InputError
-from ..machines import known_machines
-from ..model import ThermalModel
-from ..model_file import load_model
+from ._vocabulary import BUILT_IN_MACHINES, DEFAULT_MODEL, cli_spelling
 
-DEFAULT_MODEL = "genco_rf201a"
+#: What ``--out`` writes, by kind: (metavar, help text with ``{what}``). Each command's --out is
+#: one of these; ``genthermal.outputs.FOLDER_OUT_COMMANDS`` lists the commands of kind "folder".
+OUT_KINDS = {
+    "csv": ("FILE.csv", "writes a CSV table: {what}"),
+    "folder": ("DIR", "writes a folder: {what} (created; it appears whole or not at all)"),
+    "model": ("FILE.yaml", "writes a YAML model file: {what} (load it with --model FILE.yaml)"),
+    "fmu": ("FILE.fmu", "writes an FMI 2.0 FMU: {what}"),
+}
 
 
-def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model") -> None:
-    """Add ``--model NAME|FILE`` and ``--param NAME=VALUE`` to ``parser``."""
-    builtin = ", ".join(f"{m}, {m}:linear" for m in known_machines())
-    parser.add_argument("--model", default=DEFAULT_MODEL, metavar="NAME|FILE",
-                        help=f"{what}: a machine ({builtin}), a .py machine file, or a YAML model file "
-                        f"written by calibrate --out or diagnose --out (default {DEFAULT_MODEL})")
+def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model",
+                        default: str | None = DEFAULT_MODEL) -> None:
+    """Add ``--model NAME|FILE`` and ``--param NAME=VALUE`` to ``parser``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+    what : str
+        What the model is for, opening the help text.
+    default : str or None
+        The default ``--model``; None when the command takes it from elsewhere (a scenario), and
+        then ``what`` says from where.
+    """
+    builtin = ", ".join(f"{m}, {m}:linear" for m in BUILT_IN_MACHINES)
+    said = f" (default {default})" if default else ""
+    parser.add_argument("--model", default=default, metavar="NAME|FILE",
+                        help=f"{what}: a machine ({builtin}, or an installed plug-in), a .py machine file, or a "
+                        f"YAML model file written by calibrate --out or diagnose --out{said}")
     parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                        help="override a parameter of the model (SI units), e.g. --param h_end_air=15; repeatable")
+                        help="override a parameter of --model (SI units), e.g. --param h_end_air=15; repeatable")
+
+
+#: Block length records logged faster are averaged to before fitting or scoring, s (compare, calibrate).
+DEFAULT_FIT_STEP_S = 10.0
+
+
+def add_record_set_arguments(parser) -> None:
+    """``--columns FILE`` and ``--fit-step S``."""
+    parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV: which column is "
+                        "which input or sensor, in which unit (default: the machine's own map, if it has one)")
+    parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
+                        help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
+                        "repeatable")
+    parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
+                        f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
+
+
+def add_json_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """Add ``--json FILE.json``: write ``what`` as a JSON document."""
+    parser.add_argument("--json", metavar="FILE.json", help=f"write {what} as a JSON document to FILE.json")
+
+
+def add_out_argument(parser: argparse.ArgumentParser, kind: str, what: str, **kwargs) -> None:
+    """Add ``--out`` of one of the :data:`OUT_KINDS`, its help saying what it writes."""
+    metavar, text = OUT_KINDS[kind]
+    parser.add_argument("--out", metavar=metavar, help=text.format(what=what), **kwargs)
+
+
+class _Choice:
+    """argparse ``type`` of a choice option: maps an old spelling (hidden) to the current one."""
+
+    def __init__(self, choices):
+        self.choices = tuple(choices)
+
+    def __call__(self, text: str) -> str:
+        return cli_spelling(text)
+
+
+def add_choice_argument(parser: argparse.ArgumentParser, option: str, choices, help: str, **kwargs) -> None:
+    """Add an option taking one of ``choices`` (lower-case, hyphenated), shown as ``{a,b}``.
+
+    An unknown value is a usage error naming the option and the value (exit code 2); the old
+    spellings of :data:`~genthermal.commands._vocabulary.OLD_SPELLINGS` are accepted.
+    """
+    parser.add_argument(option, choices=tuple(choices), type=_Choice(choices), help=help, **kwargs)
 
 
 def parse_assignments(items: list[str], option: str = "--param") -> dict[str, float]:
@@ -45,7 +104,36 @@ def parse_assignments(items: list[str], option: str = "--param") -> dict[str, fl
     return values
 
 
-def model_from_args(args: argparse.Namespace, source: str = "set on the command line") -> ThermalModel:
+def with_overrides(model, items: list[str], source: str = "set on the command line"):
+    """``model`` with the ``--param NAME=VALUE`` overrides ``items`` (provenance ``assumed``).
+
+    Raises
+    ------
+    InputError
+        Naming ``--param NAME`` for a malformed item, an unknown name or an unphysical value.
+    """
+    overrides = parse_assignments(items)
+    unknown = [name for name in overrides if name not in model.parameters]
+    if unknown:
+        raise InputError(f"--param {unknown[0]}", unknown[0], f"not a parameter of {model.name}")
+    if overrides:
+        model = model.with_parameters(provenance="assumed", source=source, **overrides)
+    return model
+
+
+def load_model_option(option: str, reference: str):
+    """The model a ``--model`` (or ``--plant``) names; InputError names the option."""
+    from ..model_file import load_model
+
+    try:
+        return load_model(reference)
+    except InputError as exc:
+        if exc.field == "model":
+            raise InputError(option, exc.value, exc.reason) from None
+        raise InputError(f"{option} {reference}: {exc.field}", exc.value, exc.reason) from None
+
+
+def model_from_args(args: argparse.Namespace, source: str = "set on the command line"):
     """Load ``--model`` and apply the ``--param`` overrides (checked for physical values).
 
     Raises
@@ -54,19 +142,8 @@ def model_from_args(args: argparse.Namespace, source: str = "set on the command 
         Naming ``--model`` for an unknown name or a bad model file, ``--param NAME`` for a bad
         override.
     """
-    try:
-        model = load_model(args.model)
-    except InputError as exc:
-        if exc.field == "model":
-            raise InputError("--model", exc.value, exc.reason) from None
-        raise InputError(f"--model {args.model}: {exc.field}", exc.value, exc.reason) from None
-    overrides = parse_assignments(args.param)
-    unknown = [name for name in overrides if name not in model.parameters]
-    if unknown:
-        raise InputError(f"--param {unknown[0]}", unknown[0], f"not a parameter of {model.name}")
-    if overrides:
-        model = model.with_parameters(provenance="assumed", source=source, **overrides)
-    return model
+    parse_assignments(args.param)  # a malformed --param is refused before the model is built
+    return with_overrides(load_model_option("--model", args.model), args.param, source)
 
 
 def positive_float(option: str, text: str) -> float:
@@ -89,4 +166,3 @@ def non_negative_float(option: str, text: str) -> float:
     if not (math.isfinite(value) and value >= 0):
         raise InputError(option, text, "must be a number >= 0")
     return value
-

@@ -10,29 +10,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..machines.interface import InputKind
 from ..outputs import report_json
 from ..progress import working
+from ._common import DEFAULT_FIT_STEP_S
 
 #: Speed bands of the comparison, rpm (upper edges; the last is open).
 SPEED_BANDS_RPM = (100.0, 1000.0, 2000.0, 3000.0)
 #: Load-current bands, as a share of the machine's rated current (upper edges; the last is open).
 CURRENT_BANDS = (0.1, 0.4, 0.8)
-#: Block length records logged faster are averaged to before fitting or scoring, s.
-DEFAULT_FIT_STEP_S = 10.0
-
-
-def add_record_set_arguments(parser) -> None:
-    """``--columns FILE`` and ``--fit-step S``."""
-    parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV: which column is "
-                        "which input or sensor, in which unit (default: the machine's own map, if it has one)")
-    parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
-                        help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
-                        "repeatable")
-    parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
-                        f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
-
-
 def _machine(model):
     from ..machines import resolve_machine
 
@@ -86,6 +71,8 @@ def load_record_set(args, model) -> list:
 
 
 def _bands(model, record) -> dict:
+    from ..machines.interface import InputKind
+
     interface = model.spec.interface
     labels = {}
     speeds = interface.inputs_of_kind(InputKind.SPEED)

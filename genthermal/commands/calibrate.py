@@ -1,11 +1,10 @@
-"""``genthermal calibrate DATA.csv [--model NAME|FILE] --params k_cr,h_end_air --out model.yaml``."""
+"""``genthermal calibrate DATA.csv [--model NAME|FILE] --params k_cr,h_end_air --out model.yaml``: a
+least-squares fit with confidence intervals. Reference: docs/guide/calibration-diagnosis.md."""
 
 from __future__ import annotations
 
-from ..model_file import save_model
-from ..outputs import report_json
 from ..progress import working
-from ._common import model_from_args
+from ._common import add_json_argument, add_out_argument, model_from_args
 from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 
@@ -19,14 +18,16 @@ def register(subparsers) -> None:
     parser.add_argument("--params", required=True, metavar="NAMES",
                         help="comma-separated parameter names, e.g. k_cr,h_end_air,R0, or 'assumed': every "
                         "parameter whose provenance is assumed")
-    parser.add_argument("--out", metavar="FILE", help="write the calibrated model as a YAML model file")
-    parser.add_argument("--json", metavar="FILE", help="write the fit summary as JSON")
+    add_out_argument(parser, "model", "the calibrated model")
+    add_json_argument(parser, "the fit summary (values, confidence intervals, RMSE before and after, warnings)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Calibrate, print the table and warnings, write the model file."""
     from ..diagnose.calibrate import calibrate, check_parameter_names
+    from ..model_file import save_model
+    from ..outputs import report_json
 
     from ._records import calibrate_record_set, uses_record_set
 

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..outputs import replacing_folder, report_json
-from ._common import add_model_arguments, model_from_args, positive_float
+from ._common import add_json_argument, add_model_arguments, add_record_set_arguments, model_from_args, positive_float
 
 
 def add_model_and_data_arguments(parser, several: bool = False) -> None:
@@ -19,8 +18,6 @@ def add_model_and_data_arguments(parser, several: bool = False) -> None:
     parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step); "
                         "for a logger file without a time column (read through a column map): its sample period")
     if several:
-        from ._records import add_record_set_arguments
-
         add_record_set_arguments(parser)
 
 
@@ -52,13 +49,14 @@ def register(subparsers) -> None:
                                    "split by load band, temperature band, heating/cooling and hour, with plots.")
     add_model_and_data_arguments(parser, several=True)
     parser.add_argument("--report", metavar="DIR", help="write report.md, metrics.json and plots into DIR")
-    parser.add_argument("--json", metavar="FILE", help="write the metrics as JSON to FILE")
+    add_json_argument(parser, "the metrics (per sensor and band; per record and pooled for several records)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Compare and print the per-sensor metrics."""
     from ..diagnose.compare import compare
+    from ..outputs import replacing_folder, report_json
 
     from ._records import compare_record_set, uses_record_set
 

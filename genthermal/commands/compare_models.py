@@ -4,10 +4,7 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from ..estimation.comparison import compare_design_models
-from ..measurements import load_measurements
-from ..outputs import report_json
-from ._common import add_model_arguments, model_from_args, positive_float
+from ._common import add_json_argument, add_model_arguments, model_from_args, positive_float
 
 
 def register(subparsers) -> None:
@@ -18,7 +15,7 @@ def register(subparsers) -> None:
         "the nonlinear and linear physics models open loop on VAL; print R², RMSE and max error per sensor.")
     parser.add_argument("train", help="training data CSV (for the ARX models)")
     parser.add_argument("validation", help="validation data CSV (all models are scored on it)")
-    parser.add_argument("--json", metavar="OUT.json", help="write the table as JSON")
+    add_json_argument(parser, "the table (R², RMSE and max error per model and sensor)")
     add_model_arguments(parser, what="the nonlinear physics model (its linear design model is derived from it)")
     parser.add_argument("--dt", default="10", help="sample time in s the data are resampled to (default 10)")
     parser.set_defaults(func=run)
@@ -26,6 +23,10 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Compare the models, print the table and write the JSON."""
+    from ..estimation.comparison import compare_design_models
+    from ..measurements import load_measurements
+    from ..outputs import report_json
+
     dt = positive_float("--dt", args.dt)
     train, validation = load_measurements(args.train), load_measurements(args.validation)
     plant = model_from_args(args)

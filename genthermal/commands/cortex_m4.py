@@ -1,31 +1,18 @@
-"""``genthermal cortex-m4 --out DIR [--model M] [--mission NAME] [--precision double|single]
-[--flight SCENARIO]``: the generated C on an emulated Cortex-M4F.
+"""``genthermal cortex-m4 --out DIR``: the generated C cross-compiled for a bare-metal Cortex-M4F,
+run under QEMU (``mps2-an386``) and compared state by state with the host simulation; with
+``--flight`` also the onboard load manager in C against its Python reference.
 
-Cross-compiles the model's step, the Kalman filter update and a 1 h prediction with the Debian
-``gcc-arm-none-eabi`` toolchain, runs the mission bare metal under ``qemu-system-arm``
-(``mps2-an386``) and compares every state with the host's Python simulation; prints flash, RAM,
-stack and instruction counts. With ``--flight`` it also flies that two-generator fault scenario
-with the onboard manager in C and compares it with the manager's Python reference. A precision
-whose states differ from the host's by more than ``--tolerance`` K is an error. Everything is built
-in DIR (generated sources, objects, ELF files and link maps), which appears whole or not at all.
+Reference: docs/guide/cortex_m4.md and docs/guide/cli.md.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
-from ..embedded import toolchain
-from ..embedded.manager import blockage_flight, build_flight_program, fly_on_target, fly_reference
-from ..embedded.mission import PRECISIONS, build_mission_program, check_accuracy, run_mission
 from ..errors import InputError
-from ..mission import load_mission
-from ..model_file import load_model
-from ..outputs import replacing_folder
-from ..schedule.power_system import PowerSystem
-from ..simulate import simulate
+from ._common import add_choice_argument, add_json_argument, add_model_arguments, add_out_argument, model_from_args
 from ._common import positive_float
+from ._vocabulary import PRECISIONS
 
 
 def register(subparsers) -> None:
@@ -35,30 +22,47 @@ def register(subparsers) -> None:
         description="Build the model step, filter update and 1 h prediction for a bare-metal Cortex-M4F "
         "(gcc-arm-none-eabi, newlib, hard float), run a mission on QEMU's mps2-an386 board with "
         "semihosting, compare it with the host simulation and report sizes and instruction counts.")
-    parser.add_argument("--out", required=True, help="build directory (created)")
-    parser.add_argument("--model", default="genco_rf201a", help="built-in model or model file (default genco_rf201a)")
+    add_out_argument(parser, "folder", "the generated sources, objects, ELF files and link maps", required=True)
+    add_model_arguments(parser, what="the model run on the target")
     parser.add_argument("--mission", default="thesis_fig_7_7", help="mission scenario (default thesis_fig_7_7)")
-    parser.add_argument("--precision", default="double", help=f"arithmetic: {' or '.join(PRECISIONS)}")
+    add_choice_argument(parser, "--precision", PRECISIONS, default="double",
+                        help="arithmetic of the target build (default double)")
     parser.add_argument("--tolerance", default="0.01",
                         help="largest state difference from the host simulation accepted, K (default 0.01)")
     parser.add_argument("--flight", help="also fly this two-generator fault scenario (e.g. blockage_large) "
                         "with the onboard manager in C")
+    add_json_argument(parser, "the sizes, instruction counts and differences from the host (and the flight's)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Build, run, compare, report; the build folder appears whole or not at all."""
+    from ..mission import load_mission
+    from ..outputs import replacing_folder, report_json
+
     if args.precision not in PRECISIONS:
         raise InputError("--precision", args.precision, f"must be one of {', '.join(PRECISIONS)}")
     tolerance = positive_float("--tolerance", args.tolerance)
-    model, mission = load_model(args.model), load_mission(args.mission)
+    model, mission = model_from_args(args), load_mission(args.mission)
     with replacing_folder(args.out) as build:
-        _build_and_run(args, model, mission, tolerance, build)
-    return 0
+        report = _build_and_run(args, model, mission, tolerance, build)
+    if args.json:
+        report_json(args.json, report)
+    return 1 if report.get("flight", {}).get("decisions_equal") is False else 0
 
 
-def _build_and_run(args, model, mission, tolerance: float, build: Path) -> None:
-    """The body of :func:`run`, building in ``build`` (moved to ``--out`` at the end)."""
+def _build_and_run(args, model, mission, tolerance: float, build: Path) -> dict:
+    """The body of :func:`run`, building in ``build`` (moved to ``--out`` at the end); returns the
+    figures for ``--json``."""
+    import numpy as np
+
+    from ..embedded import toolchain
+    from ..embedded.manager import blockage_flight, build_flight_program, fly_on_target, fly_reference
+    from ..embedded.mission import build_mission_program, check_accuracy, run_mission
+    from ..mission import load_mission
+    from ..schedule.power_system import PowerSystem
+    from ..simulate import simulate
+
     def shown(path) -> Path:  # where a file of the build will be once it is moved into place
         return Path(args.out) / Path(path).resolve().relative_to(build.resolve())
 
@@ -80,6 +84,12 @@ def _build_and_run(args, model, mission, tolerance: float, build: Path) -> None:
     print(f"  instructions: step {counts['step']:.0f}, filter update {counts['kalman_update']:.0f}, "
           f"1 h prediction {counts['predict']:.0f} (QEMU -icount; instructions, not cycles)")
     print(f"  wrote {shown(program.build.elf)} and {shown(program.build.link_map)}")
+    report = {"model": model.name, "machine": toolchain.MACHINE, "precision": args.precision, "mission": mission.name,
+              "steps": int(program.n_steps), "max_state_difference_K": float(error), "tolerance_K": tolerance,
+              "flash_bytes": int(flash), "ram_bytes": int(sizes.get("data", 0) + sizes["bss"]),
+              "stack_bytes_used": int(result.stack_bytes), "stack_bytes_static_bound": int(stack),
+              "instructions": {key: float(value) for key, value in counts.items()},
+              "elf": str(shown(program.build.elf))}
     if args.flight:
         system = PowerSystem.from_mission(load_mission(args.flight))
         design, settings, flight = blockage_flight(system)
@@ -101,5 +111,8 @@ def _build_and_run(args, model, mission, tolerance: float, build: Path) -> None:
               f"{target.flags[:, 0].sum() * settings.dt_s / 60:.0f} min of rest")
         print(f"  longest manager call {target.instructions['manager_max']:.3g} instructions, whole flight "
               f"{target.instructions['manager_total']:.3g}, stack {target.stack_bytes} B used")
-        if not same:
-            return 1
+        report["flight"] = {"scenario": args.flight, "samples": int(len(target.flags)), "decisions_equal": bool(same),
+                            "max_temperature_difference_K": float(gap),
+                            "rest_min": float(target.flags[:, 0].sum() * settings.dt_s / 60),
+                            "manager_max_instructions": float(target.instructions["manager_max"])}
+    return report

@@ -1,7 +1,7 @@
 """``genthermal demo``: the thesis blockage mission end to end, on built-in defaults.
 
-Each part of the demo is one function that prints its summary, writes its plots into the output
-folder and returns its figures for ``summary.json``.
+Each part is one function that prints its summary, writes its plots into the output folder and
+returns its figures for ``summary.json``. Reference: docs/getting-started.md.
 """
 
 from __future__ import annotations
@@ -9,15 +9,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
-
-from ..design import current_squared_fit, linear_design_model
-from ..errors import CompilerNotFoundError
-from ..mission import load_mission
-from ..outputs import replacing_folder, write_csv, write_json
-from ..plots import plot_comparison, plot_simulation
-from ..simulate import simulate
-from ._common import add_model_arguments, model_from_args
+from ._common import add_json_argument, add_model_arguments, add_out_argument, model_from_args
 
 DEMO_MISSION = "thesis_fig_7_7"
 #: Thesis 7.3.3 large blockage: outlet 50 mm → 10 mm at 1.1 h, inlet air ≈ 51 °C. Flow fraction and
@@ -36,17 +28,21 @@ def register(subparsers) -> None:
                                    description="Build the thesis generator, compile its C library, "
                                    "simulate the chapter 7 mission healthy and with the large coolant "
                                    "blockage, and write a summary and plots.")
-    parser.add_argument("--out", default="genthermal-demo", help="output folder (default genthermal-demo)")
+    add_out_argument(parser, "folder", "summary.json, the plots and the data of every part (default "
+                     "genthermal-demo)", default="genthermal-demo")
     parser.add_argument("--quick", action="store_true",
                         help="leave out the closed-loop load management and the effect search (about a "
                         "minute); the shipped measurements are still compared with the model")
     add_model_arguments(parser, what="the model simulated, compiled and filtered (the load management and "
                         "discovery parts use the built-in machine)")
+    add_json_argument(parser, "the summary (also written as summary.json in --out)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Run every part of the demo and write ``summary.json``; the folder appears whole or not at all."""
+    from ..outputs import replacing_folder, report_json, write_json
+
     started = time.perf_counter()
     plant = model_from_args(args)
     with replacing_folder(args.out) as out:
@@ -54,29 +50,40 @@ def run(args) -> int:
         summary["elapsed_s"] = round(time.perf_counter() - started, 1)
         write_json(out / "summary.json", summary)
     print(f"\nwrote {Path(args.out) / 'summary.json'} and the plots in {args.out}/ ({summary['elapsed_s']} s)")
+    if args.json:
+        report_json(args.json, summary)
     return 0
 
 
 def run_parts(plant, out: Path, quick: bool) -> dict:
-    """The demo's parts, writing their plots and data into ``out``; return the summary."""
+    """The demo's parts, writing their plots and data into ``out``; return the summary (each part
+    shows its progress on a terminal: :mod:`genthermal.progress`)."""
+    from ..design import linear_design_model
+    from ..mission import load_mission
+    from ..progress import working
+
     design = plant if plant.is_affine else linear_design_model(plant)
     summary = {"model": describe_model(plant, design)}
     mission = load_mission(DEMO_MISSION)
     inputs = mission.to_inputs(10.0)
-    summary["simulation"] = simulate_mission(plant, design, mission, inputs, out)
-    summary["c_library"] = compiled_library(plant, inputs, out)
-    summary["blockage"] = blockage(plant, inputs, out)
-    summary["estimation"] = estimation(plant, inputs, out)
+    parts = [("simulation", lambda: simulate_mission(plant, design, mission, inputs, out)),
+             ("c_library", lambda: compiled_library(plant, inputs, out)),
+             ("blockage", lambda: blockage(plant, inputs, out)),
+             ("estimation", lambda: estimation(plant, inputs, out))]
     if quick:
-        summary["measurements"] = shipped_measurements(plant)
+        parts.append(("measurements", lambda: shipped_measurements(plant)))
     else:
-        summary["load_management"] = load_management(out)
-        summary["discovery"] = discovery(out)
+        parts += [("load_management", lambda: load_management(out)), ("discovery", lambda: discovery(out))]
+    for number, (key, part) in enumerate(parts, start=1):
+        with working(f"demo part {number} of {len(parts)} ({key.replace('_', ' ')})"):
+            summary[key] = part()
     return summary
 
 
 def describe_model(plant, design) -> dict:
     """Print and return the model's structure and where its parameter values come from."""
+    from ..design import current_squared_fit
+
     stages = plant.network.reduction_stages()
     provenance = {}
     for row in plant.parameters.table():
@@ -101,6 +108,9 @@ def _limited_sensor(plant) -> tuple[str, float]:
 
 def simulate_mission(plant, design, mission, inputs, out: Path) -> dict:
     """Simulate the mission with the nonlinear and the linear design model."""
+    from ..plots import plot_comparison, plot_simulation
+    from ..simulate import simulate
+
     nonlinear = simulate(plant, inputs)
     linear = simulate(design, inputs)
     outputs = list(plant.output_names)
@@ -121,7 +131,11 @@ def simulate_mission(plant, design, mission, inputs, out: Path) -> dict:
 
 def compiled_library(plant, inputs, out: Path) -> dict:
     """Generate and compile the C library, run the mission in C and compare with Python."""
+    import numpy as np
+
     from ..codegen import model_library
+    from ..errors import CompilerNotFoundError
+    from ..simulate import simulate
 
     print("\n== Generated C library ==")
     try:
@@ -147,6 +161,9 @@ def compiled_library(plant, inputs, out: Path) -> dict:
 
 def blockage(plant, inputs, out: Path) -> dict:
     """The thesis large blockage without load management: the winding breaks its limit."""
+    from ..plots import plot_simulation
+    from ..simulate import simulate
+
     limited, limit = _limited_sensor(plant)
     faulty_inputs = inputs.copy()
     coolant = plant.spec.interface.coolant_input
@@ -173,6 +190,7 @@ def estimation(plant, inputs, out: Path) -> dict:
     """Extended Kalman filter and n-step prediction (thesis 6.3) on synthetic rig data from a
     mismatched plant."""
     from ..estimation.prediction import prediction_study
+    from ..outputs import write_csv
     from ..synth import synthesize
 
     rig = plant.with_parameters(provenance="assumed", source="demo rig: parameters off by RIG_MISMATCH",

@@ -3,9 +3,7 @@ with their provenance."""
 
 from __future__ import annotations
 
-import sympy
-
-from ._common import add_model_arguments, model_from_args
+from ._common import add_json_argument, add_model_arguments, model_from_args
 
 
 def register(subparsers) -> None:
@@ -13,11 +11,14 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser("describe", help="list nodes, element formulas and parameters with provenance")
     parser.add_argument("--latex", action="store_true", help="print the element formulas as LaTeX")
     add_model_arguments(parser)
+    add_json_argument(parser, "the model's states, inputs, sensors and parameters (value, unit, provenance, source)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    """Print the description."""
+    """Print the description (and write the JSON)."""
+    import sympy
+
     model = model_from_args(args)
     net = model.network
     show = sympy.latex if args.latex else sympy.sstr
@@ -46,4 +47,12 @@ def run(args) -> int:
     print("\nparameters:")
     for row in model.parameters.table():
         print(f"  {row['name']:20s} {row['value']:<12.6g} {row['unit']:12s} {row['provenance']:10s} {row['source']}")
+    if args.json:
+        from ..outputs import report_json
+
+        report_json(args.json, {"model": model.name, "nodes": stages, "states": list(model.state_names),
+                                "inputs": [{"name": i.name, "unit": i.unit} for i in interface.inputs],
+                                "outputs": list(model.output_names),
+                                "parameters": [{key: (float(value) if key == "value" else value)
+                                                for key, value in row.items()} for row in model.parameters.table()]})
     return 0

@@ -1,4 +1,5 @@
-"""``genthermal diagnose DATA.csv [--model NAME|FILE] [--baseline HEALTHY.csv] --json out.json [--iterate] [--report DIR]``."""
+"""``genthermal diagnose DATA.csv [--model NAME|FILE] [--baseline HEALTHY.csv] [--json out.json]``: which
+catalogue effect (or open-library term) the model lacks. Reference: docs/guide/calibration-diagnosis.md."""
 
 from __future__ import annotations
 
@@ -6,10 +7,9 @@ import os
 from pathlib import Path
 
 from ..errors import InputError
-from ..model_file import save_model
-from ..outputs import replacing_folder, report_json
 from ..progress import say, working
-from ._common import model_from_args
+from ._common import add_choice_argument, add_json_argument, add_out_argument, model_from_args
+from ._vocabulary import PHASES
 from .compare import add_model_and_data_arguments, data_step, fitting_data
 
 #: Fewest samples a diagnosed record (and its baseline) may have.
@@ -24,14 +24,14 @@ def register(subparsers) -> None:
     add_model_and_data_arguments(parser)
     parser.add_argument("--baseline", metavar="HEALTHY", help="healthy measurements: calibrate the uncertain "
                         "parameters on them first")
-    parser.add_argument("--json", metavar="FILE", help="write the diagnosis (ranked, verdict, ...) as JSON")
+    add_json_argument(parser, "the diagnosis (ranked effects, verdict, residual, sensor faults)")
     parser.add_argument("--iterate", action="store_true", help="add the best effect and search again until "
                         "nothing is significant")
     parser.add_argument("--report", metavar="DIR", help="write report.md, diagnosis.json and plots into DIR")
-    parser.add_argument("--out", metavar="FILE", help="write the model with the found effects as a model file")
+    add_out_argument(parser, "model", "the model with the effects found")
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
                         help="processes fitting candidates side by side (default: up to 2 cores)")
-    parser.add_argument("--phases", choices=("auto", "resolved", "lumped"), default="auto",
+    add_choice_argument(parser, "--phases", PHASES, default="auto",
                         help="fit one winding node per phase sensor: when they differ (auto), always, never")
     parser.add_argument("--no-open-search", action="store_true",
                         help="when the catalogue leaves the residual unexplained, do not search the open library "
@@ -53,6 +53,8 @@ def run(args) -> int:
     """Diagnose and print the ranking and verdict."""
     from ..diagnose.discovery import Discovery
     from ..diagnose.fitter import OnsetFitter
+    from ..model_file import save_model
+    from ..outputs import replacing_folder, report_json
 
     model = model_from_args(args)
     data = _long_enough(fitting_data(args.data, model, args), args, "DATA")

@@ -1,9 +1,7 @@
-"""``genthermal estimate DATA.csv [--json out.json] [--model NAME|FILE] [--filter ekf|kf]``: filter
-and n-step prediction study (thesis 6.3) on rig data.
+"""``genthermal estimate DATA.csv [--model NAME|FILE] [--filter ekf|kf] [--json out.json]``: filter and
+n-step prediction study (thesis 6.3) on rig data, against the open-loop model.
 
-The default filter is the extended Kalman filter on the model itself (a calibrated model file,
-say), with disturbance heat flows (:mod:`genthermal.estimation.ekf`); ``--filter kf`` runs the
-thesis's linear filter on the model's linear design model.
+Reference: docs/guide/estimation.md and docs/guide/cli.md.
 """
 
 from __future__ import annotations
@@ -11,27 +9,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..design import linear_design_model
 from ..errors import InputError
-from ..estimation.ekf import ExtendedKalmanFilter
-from ..estimation.kalman import KalmanFilter
-from ..estimation.prediction import (
-    DEFAULT_EVERY_MIN,
-    DEFAULT_HORIZONS_MIN,
-    DEFAULT_MARGIN_K,
-    DEFAULT_SMOOTHING_MIN,
-    THESIS_STARTS_MIN,
-    check_sensors,
-    check_start_times,
-    horizon_starts,
-    on_grid,
-    prediction_study,
-)
-from ..measurements import load_measurements
-from ..outputs import report_json
-from ._common import add_model_arguments, model_from_args, positive_float
-
-FILTERS = ("ekf", "kf")
+from ._common import add_choice_argument, add_json_argument, add_model_arguments, model_from_args, positive_float
+from ._vocabulary import DEFAULT_EVERY_MIN, DEFAULT_MARGIN_K, FILTERS, THESIS_STARTS_MIN
 
 
 def register(subparsers) -> None:
@@ -45,18 +25,18 @@ def register(subparsers) -> None:
         "prediction from --predict-from beats the open-loop model.")
     parser.add_argument("data", help="rig data CSV (genthermal.measurements schema)")
     add_model_arguments(parser)
-    parser.add_argument("--filter", default="ekf", metavar="|".join(FILTERS),
+    add_choice_argument(parser, "--filter", FILTERS, default="ekf",
                         help="ekf: extended Kalman filter on the model with disturbance heat flows (default); "
                         "kf: the thesis's linear filter on the model's linear design model")
     parser.add_argument("--every", default=str(DEFAULT_EVERY_MIN), metavar="MIN",
                         help=f"interval between the starts of the error-by-horizon table, min (default "
                         f"{DEFAULT_EVERY_MIN:g})")
-    parser.add_argument("--json", metavar="OUT.json", help="write the errors and periods of increased accuracy as JSON")
+    add_json_argument(parser, "the errors and periods of increased accuracy")
     parser.add_argument("--predict-from", default=",".join(str(s) for s in THESIS_STARTS_MIN), metavar="MIN,...",
                         help="prediction start times, min after the first sample (default 50,75,100,125,150,175)")
     parser.add_argument("--dt", default="10",
                         help="filter step in s; data on another grid are resampled to it (default 10)")
-    parser.add_argument("--plot", metavar="OUT.png", help="prediction plot (thesis Figs 6.8-6.10); the filter "
+    parser.add_argument("--plot", metavar="FILE.png", help="prediction plot (thesis Figs 6.8-6.10); the filter "
                         "plot goes next to it as <name>_filter.png, the predictions against the measured winding "
                         "and the error by horizon as <name>_horizons.png")
     parser.add_argument("--steady-state", action="store_true",
@@ -85,6 +65,14 @@ def parse_starts(text: str) -> list[float]:
 
 def run(args) -> int:
     """Run the filter and the prediction study; print a summary and write the JSON (and plots)."""
+    from ..design import linear_design_model
+    from ..estimation.ekf import ExtendedKalmanFilter
+    from ..estimation.kalman import KalmanFilter
+    from ..estimation.prediction import (DEFAULT_HORIZONS_MIN, DEFAULT_SMOOTHING_MIN, check_sensors, check_start_times,
+                                         horizon_starts, on_grid, prediction_study)
+    from ..measurements import load_measurements
+    from ..outputs import report_json
+
     dt = positive_float("--dt", args.dt)
     starts = parse_starts(args.predict_from)
     try:
@@ -94,8 +82,6 @@ def run(args) -> int:
     if not (math.isfinite(margin) and margin >= 0):
         raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0")
     every = positive_float("--every", args.every)
-    if args.filter not in FILTERS:
-        raise InputError("--filter", args.filter, f"must be one of {', '.join(FILTERS)}")
     if args.steady_state and args.filter != "kf":
         raise InputError("--steady-state", True, "only the linear filter has a steady-state gain; add --filter kf")
     model = model_from_args(args)

@@ -1,11 +1,8 @@
-"""``genthermal simulate SCENARIO --out sim.csv [--plot sim.png]``."""
+"""``genthermal simulate SCENARIO --out sim.csv``: one healthy generator on a mission's profile."""
 
 from __future__ import annotations
 
-from ..mission import load_mission
-from ..outputs import write_csv
-from ..simulate import simulate
-from ._common import add_model_arguments, model_from_args, positive_float
+from ._common import add_json_argument, add_model_arguments, add_out_argument, model_from_args, positive_float
 
 
 def register(subparsers) -> None:
@@ -14,15 +11,21 @@ def register(subparsers) -> None:
                                    description="Simulate a mission (YAML scenario or shipped name) and "
                                    "write time_s, the inputs, T_<node> per state and the sensor outputs (°C).")
     parser.add_argument("scenario", help="scenario name (see scenarios/) or path to a YAML file")
-    parser.add_argument("--out", required=True, help="CSV file to write")
-    parser.add_argument("--plot", help="PNG file for a plot of the run")
+    add_out_argument(parser, "csv", "time_s, the inputs, T_<node> per state and the sensor outputs, °C",
+                     required=True)
+    parser.add_argument("--plot", metavar="FILE.png", help="write a plot of the run")
     parser.add_argument("--dt", default="10", help="model step and output interval in s (default 10)")
     add_model_arguments(parser)
+    add_json_argument(parser, "the run's summary (model, mission, step, rows, peak of each sensor)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    """Run the simulation and write the CSV (and plot)."""
+    """Run the simulation and write the CSV (and plot, and JSON)."""
+    from ..mission import load_mission
+    from ..outputs import report_json, write_csv
+    from ..simulate import simulate
+
     dt = positive_float("--dt", args.dt)
     mission = load_mission(args.scenario)
     model = model_from_args(args)
@@ -41,4 +44,7 @@ def run(args) -> int:
 
         plot_simulation(result, model.spec.interface, title=f"{mission.name} — {model.name}", path=args.plot)
         print(f"wrote {args.plot}")
+    if args.json:
+        report_json(args.json, {"model": model.name, "mission": mission.name, "dt_s": dt, "rows": len(result),
+                                "out": str(out), "peak_C": {name: float(value) for name, value in peak.items()}})
     return 0

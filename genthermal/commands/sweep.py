@@ -1,14 +1,11 @@
-"""``genthermal sweep --cases N [--only I,J] [--schedulers a,b] [--planner-model M] [--cluster ADDRESS] [--json FILE]``.
-
-Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweep`): N seeded cases (missions
-of 2-8 h, 2-4 generators, plant parameters off by up to ±30 %, a fault the manager is not told)
-flown with each scheduler in local worker processes of one thread each (no port opened), or on
-Dask (``--cluster``, or ``--dashboard`` for a local Dask cluster with its dashboard; both need the
-extra genthermal[sweep]).
+"""``genthermal sweep --cases N [--schedulers a,b] [--json FILE]``: the robustness grid of closed-loop
+flights (:mod:`genthermal.schedule.sweep`) in local worker processes, or on Dask
+(genthermal[sweep]). Reference: docs/results/robustness-grid.md and docs/guide/cli.md.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import shlex
@@ -17,20 +14,28 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from ..outputs import finite_document, report_json
-from ..schedule.manager_settings import PLANNER_MODELS
-from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, FLOWN_OPTIMAL, SWEEP_SCHEDULERS
+from ._common import add_choice_argument, add_json_argument
+from ._vocabulary import (DEFAULT_FLIGHT_CPU_LIMIT_S, MANAGER_DEFAULTS, PLANNER_MODELS, SWEEP_SCHEDULERS, cli_spelling,
+                          library_value)
+
+#: What ``sweep --help`` says the command does.
+SWEEP_DESCRIPTION = ("Robustness sweep of the closed loop: N seeded cases (missions of 2-8 h, 2-4 generators, plant "
+                     "parameters off by up to ±30 %, a fault the manager is not told) flown with each scheduler in "
+                     "local worker processes of one thread each (no port opened), or on Dask (--cluster, or "
+                     "--dashboard for a local Dask cluster with its dashboard; both need the extra "
+                     "genthermal[sweep]).")
 
 
 def register(subparsers) -> None:
     """Add the ``sweep`` sub-command."""
     parser = subparsers.add_parser("sweep", help="robustness grid of closed-loop flights in worker processes",
-                                   description=__doc__.split("\n\n")[1])
+                                   description=SWEEP_DESCRIPTION)
     parser.add_argument("--cases", default=60, type=int, help="number of cases (default 60)")
     parser.add_argument("--schedulers", default="heuristic,engineer,optimal",
+                        metavar="NAME,...",
                         help=f"comma-separated, of {', '.join(SWEEP_SCHEDULERS)} (default heuristic,engineer,optimal; "
-                        f"{FLOWN_HEURISTIC}: the thesis heuristic on the flown model, a third baseline; "
-                        f"{FLOWN_OPTIMAL}: the optimal scheduler on the flown model, whatever --planner-model)")
+                        "heuristic-flown: the thesis heuristic on the flown model, a third baseline; "
+                        "optimal-flown: the optimal scheduler on the flown model, whatever --planner-model)")
     parser.add_argument("--cluster", help="address of an existing Dask scheduler (default: local worker processes, "
                         "no Dask; needs genthermal[sweep])")
     parser.add_argument("--dashboard", nargs="?", const=":8787", metavar="ADDRESS",
@@ -38,9 +43,8 @@ def register(subparsers) -> None:
                         "needs genthermal[sweep]); without it no port is opened")
     parser.add_argument("--workers", default=2, type=int, help="local worker processes, one thread each (default 2)")
     parser.add_argument("--seed", default=0, type=int, help="seed of the cases (default 0)")
-    parser.add_argument("--json", metavar="FILE", help="write the summary and every case to FILE as well "
-                        "(default: the whole document goes to standard output)")
-    parser.add_argument("--force", action="store_true", help="replace the --json file if it exists")
+    add_json_argument(parser, "the summary and every case (without it the whole document goes to standard "
+                      "output, and only the summary does with it)")
     parser.add_argument("--flight-limit-s", default=DEFAULT_FLIGHT_CPU_LIMIT_S, type=float,
                         help="processor-time limit of one flight, s: a flight past it is recorded as a timeout "
                              f"(default {DEFAULT_FLIGHT_CPU_LIMIT_S:g})")
@@ -48,21 +52,23 @@ def register(subparsers) -> None:
                         "done by then are recorded as unfinished (default: none)")
     parser.add_argument("--only", metavar="INDICES", help="fly only these cases of the --cases grid, "
                         "comma-separated indices from 0 (e.g. 0,15,50: each is the same seeded case as in the whole grid)")
-    parser.add_argument("--planner-model", default="affine", choices=PLANNER_MODELS,
-                        help="model the optimal scheduler plans on (the baselines plan on the design model): "
-                             "affine (default) or nonlinear")
+    add_choice_argument(parser, "--planner-model", PLANNER_MODELS, default=MANAGER_DEFAULTS["planner_model"],
+                        help="model the optimal scheduler plans on (the baselines plan on the design model; "
+                        "default affine)")
     parser.add_argument("--no-hindsight", action="store_true", help="do not plan the faulty cases in hindsight "
                         "(the least rest with the true plant and fault known from the onset, a few seconds a case)")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar (also off when stderr is not a "
-                        "terminal or GENTHERMAL_PROGRESS=0, as for every command)")
+    parser.add_argument("--no-progress", dest="quiet", action="store_true", default=argparse.SUPPRESS,
+                        help=argparse.SUPPRESS)  # the old spelling of --quiet (docs/guide/flights.md)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Run the sweep; print the summary and write every case to ``--json``, or print it all."""
+    from ..outputs import finite_document, report_json
+    from ..progress import enabled as progress_enabled
     from ..schedule.sweep import robustness_case, run_sweep, summarise
 
-    schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
+    schedulers = [cli_spelling(s.strip()) for s in args.schedulers.split(",") if s.strip()]
     bad = [s for s in schedulers if s not in SWEEP_SCHEDULERS]
     if bad or not schedulers:
         raise InputError("--schedulers", args.schedulers, f"each must be one of {', '.join(SWEEP_SCHEDULERS)}")
@@ -78,9 +84,8 @@ def run(args) -> int:
             raise InputError(option, value, "must be a number of seconds > 0")
     documents = [robustness_case(i, args.seed) for i in case_indices(args.only, args.cases)]
     started = time.perf_counter()
-    from ..progress import enabled as progress_enabled
-
-    records = run_sweep(documents, schedulers, args.cluster, args.workers, progress_enabled() and not args.no_progress,
+    schedulers = [library_value(s) for s in schedulers]
+    records = run_sweep(documents, schedulers, args.cluster, args.workers, progress_enabled(),
                         args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight,
                         dashboard=args.dashboard)
     report = {**summarise(records, schedulers),

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 from ..errors import InputError
-from ..mission import load_mission
-from ..outputs import write_csv
-from ..synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2, synthesize
-from ._common import add_model_arguments, model_from_args, non_negative_float, parse_assignments, positive_float
+from ._common import (add_json_argument, add_model_arguments, add_out_argument, model_from_args, non_negative_float,
+                      parse_assignments, positive_float)
+from ._vocabulary import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2
 
 
 #: Largest sensor noise variance accepted, K² (a 10 K standard deviation: no PT100 is that bad).
@@ -30,7 +29,8 @@ def register(subparsers) -> None:
         "currents with relative noise. --param changes the plant's parameters to make it differ from "
         "the design model.")
     parser.add_argument("scenario", help="scenario name (see scenarios/) or path to a YAML file")
-    parser.add_argument("--out", required=True, help="CSV file to write")
+    add_out_argument(parser, "csv", "the record in the measurement CSV schema (genthermal.measurements)",
+                     required=True)
     parser.add_argument("--seed", default="0", help="random seed (integer, default 0)")
     parser.add_argument("--dt", default="10", help="sample period in s (default 10)")
     parser.add_argument("--noise-winding", default=str(THESIS_NOISE_VARIANCE_K2[0]), metavar="K2",
@@ -42,11 +42,16 @@ def register(subparsers) -> None:
     add_model_arguments(parser, what="the plant")
     parser.add_argument("--generator", type=int, default=1,
                         help="which generator of a fault scenario to record (1-based, default 1)")
+    add_json_argument(parser, "the record's summary (samples, step, seed, plant, overrides, noise, faults)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Simulate the plant and write the CSV."""
+    from ..mission import load_mission
+    from ..outputs import report_json, write_csv
+    from ..synth import synthesize
+
     dt = positive_float("--dt", args.dt)
     try:
         seed = int(args.seed)
@@ -74,6 +79,12 @@ def run(args) -> int:
     print(f"noise variances: winding {noise[0]:g} K² per sensor, iron {noise[1]:g} K², currents "
           f"{100 * current_noise:g} %")
     print(f"wrote {out}")
+    if args.json:
+        report_json(args.json, {"mission": mission.name, "samples": len(frame), "dt_s": dt, "seed": seed,
+                                "plant": plant.name, "model": str(args.model), "param": overrides,
+                                "noise_variance_K2": {"winding": noise[0], "iron": noise[1]},
+                                "current_noise": current_noise, "generator": args.generator,
+                                "faults": fault_text or None, "out": str(out)})
     return 0
 
 

@@ -1,30 +1,15 @@
-"""``genthermal sysid TRAIN.csv VAL.csv [--json out.json]``: ARX models from rig data.
+"""``genthermal sysid TRAIN.csv VAL.csv [--json out.json]``: ARX models of the winding and iron
+temperatures from rig data (thesis 5.3: structure search, selection, validation on a second record,
+the two models stacked into one state space).
 
-The thesis 5.3 procedure: for each output (stator winding, stator iron) try every ARX structure
-(and, with ``--input auto``, every input signal) on the training record, list the ten best
-candidates by R² of the simulated output (Tables 5.1/5.2), keep the best, and score it on a
-validation record with a different load profile. The two models are stacked into one state space
-(thesis eqs 5.18-5.23).
+Reference: docs/guide/estimation.md and docs/guide/cli.md.
 """
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..errors import InputError
-from ..estimation.arx import arx_fit, block_diagonal_state_space, simulation_scores
-from ..estimation.arx_search import (
-    INPUT_SIGNALS,
-    OUTPUTS,
-    arx_search,
-    input_signal,
-    output_signal,
-    select_input,
-    training_record,
-)
-from ..measurements import load_measurements, resample
-from ..outputs import report_json
-from ._common import non_negative_float, positive_float
+from ._common import add_choice_argument, add_json_argument, non_negative_float, positive_float
+from ._vocabulary import ARX_INPUTS
 
 #: Largest order or delay accepted on the command line (the search grows as the product of ranges).
 MAX_STRUCTURE_VALUE = 20
@@ -42,9 +27,9 @@ def register(subparsers) -> None:
         "temperature of that record (initialisation from the data).")
     parser.add_argument("train", help="training data CSV")
     parser.add_argument("validation", help="validation data CSV (the selected models are scored on it)")
-    parser.add_argument("--json", metavar="OUT.json", help="write the candidates, models and scores as JSON")
-    parser.add_argument("--input", default="auto",
-                        help=f"input signal: {', '.join(INPUT_SIGNALS)} or auto (try each; default)")
+    add_json_argument(parser, "the candidates, the selected models, their scores and the stacked state space")
+    add_choice_argument(parser, "--input", ARX_INPUTS, default="auto",
+                        help="input signal, a current column of the CSV, or auto: try each (default)")
     parser.add_argument("--integrate", action="store_true",
                         help="fit on the integrated input and multiply the integrator back (thesis eq 5.9)")
     parser.add_argument("--discard-before-min", default="0", metavar="MIN",
@@ -72,13 +57,16 @@ def parse_range(option: str, text: str, smallest: int) -> range:
 
 def run(args) -> int:
     """Search, select and validate a model per output; print the tables and write the JSON."""
+    from ..estimation.arx import block_diagonal_state_space
+    from ..estimation.arx_search import OUTPUTS
+    from ..measurements import load_measurements, resample
+    from ..outputs import report_json
+
     ts_s = positive_float("--dt", args.dt)
     search_options = {"na_range": parse_range("--na", args.na, 1), "nb_range": parse_range("--nb", args.nb, 1),
                       "nk_range": parse_range("--nk", args.nk, 0), "integrate_input": args.integrate,
                       "ts_s": ts_s, "constant_term": True}
     discard_before_s = 60.0 * non_negative_float("--discard-before-min", args.discard_before_min)
-    if args.input != "auto" and args.input not in INPUT_SIGNALS:
-        raise InputError("--input", args.input, f"choose one of {', '.join(INPUT_SIGNALS)} or auto")
     train = resample(load_measurements(args.train), ts_s)
     validation = resample(load_measurements(args.validation), ts_s)
     report = {"ts_s": ts_s, "train": str(args.train), "validation": str(args.validation),
@@ -100,6 +88,11 @@ def run(args) -> int:
 def identify_output(train, validation, output: str, input_choice: str, discard_before_s: float,
                     search_options: dict):
     """Search, print and select the model of one output; return its JSON section and the model."""
+    import numpy as np
+
+    from ..estimation.arx import arx_fit, simulation_scores
+    from ..estimation.arx_search import arx_search, input_signal, output_signal, select_input, training_record
+
     if input_choice == "auto":
         selection = select_input(train, output, discard_before_s=discard_before_s, **search_options)
         input_name, candidates = selection.input_name, selection.candidates

@@ -275,7 +275,8 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     """Fly every case with every scheduler in ``workers`` local processes of one thread each
     (:func:`~genthermal.schedule.sweep_workers.fly_cases_in_processes`: no port opened, no worker
     restarted), or on Dask: the scheduler at ``cluster`` (``tcp://host:8786``), or a local Dask
-    cluster serving its dashboard at ``dashboard`` (``:8787``); a tqdm bar when ``progress``.
+    cluster serving its dashboard at ``dashboard`` (``:8787``); a bar when ``progress`` and
+    :func:`genthermal.progress.enabled` (a terminal, not ``GENTHERMAL_PROGRESS=0``).
 
     Parameters
     ----------
@@ -302,8 +303,7 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     list of dict
         :func:`case_records`, in the order of ``documents``.
     """
-    from tqdm import tqdm
-
+    from ..progress import counter
     from .manager_settings import PLANNER_MODELS
     from .sweep_workers import fly_cases_in_processes, fly_cases_on_dask
 
@@ -312,7 +312,7 @@ def run_sweep(documents, schedulers, cluster: str | None = None, workers: int = 
     documents = list(documents)
     order = sorted(range(len(documents)), key=lambda i: -expected_cost(documents[i]))
     arguments = (tuple(schedulers), flight_cpu_limit_s, optimal_planner_model, hindsight)
-    with tqdm(total=len(documents), disable=not progress, desc="cases") as bar:
+    with counter(len(documents), "cases", show=progress) as bar:
         if cluster or dashboard:
             flights = fly_cases_on_dask(fly_case, documents, order, arguments, cluster, workers, dashboard,
                                         timeout_s, bar)
