@@ -209,8 +209,7 @@ def replacing(path) -> Iterator[Path]:
         yield Path(temporary)
         _move_file_into_place(temporary, path)
     except BaseException:
-        with suppress(FileNotFoundError):
-            os.unlink(temporary)
+        _despite_interrupts(lambda: _unlink_if_present(temporary))
         raise
 
 
@@ -263,7 +262,30 @@ def replacing_folder(path, stale_patterns: tuple[str, ...] = ()) -> Iterator[Pat
                 if old.relative_to(path) not in new and old.is_file():
                     old.unlink()
     finally:
-        shutil.rmtree(temporary, ignore_errors=True)
+        _despite_interrupts(lambda: shutil.rmtree(temporary, ignore_errors=True))
+
+
+def _unlink_if_present(path) -> None:
+    with suppress(FileNotFoundError):
+        os.unlink(path)
+
+
+def _despite_interrupts(cleanup) -> None:
+    """Run ``cleanup`` to the end even if Ctrl-C or a stop signal arrives meanwhile.
+
+    A second interrupt during the cleanup of a first (a signal pending while the first unwinds)
+    would otherwise stop the removal half-way and leave a temporary file or folder behind. The
+    interrupt is raised again once the cleanup is complete.
+    """
+    pending = None
+    for _ in range(100):
+        try:
+            cleanup()
+            break
+        except KeyboardInterrupt as interrupt:  # Terminated included
+            pending = pending or interrupt
+    if pending is not None:
+        raise pending
 
 
 def _umask() -> int:
