@@ -13,9 +13,6 @@ NOT_YET_TRIMMED = (
     "genthermal/schedule/",
     "genthermal/machines/",
     "genthermal/plants/",
-    "genthermal/commands/",
-    "genthermal/cli.py",
-    "genthermal/progress.py",
 )
 #: A commit hash (7-40 hex digits with both a digit and a letter) or an issue number.
 HISTORY = re.compile(r"\b(?=[0-9a-f]*[0-9])(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b|\bissues?\s*#?\d+|\bcommit\b",
