@@ -22,7 +22,7 @@
 parameter set, ``genco_rf201a:chapter7``; a plug-in machine's name or the path of a ``.py`` machine
 file (:mod:`genthermal.machines.registry`), each optionally with ``:linear``. ``machine:`` in a
 model file takes a registered machine only (built-in or plug-in, and the shipped parameter sets:
-the calibration fitted to the thesis's chapter-7 outcomes, :mod:`genthermal.machines.chapter7`):
+the calibration fitted to the thesis's chapter-7 outcomes, :mod:`genthermal.machines.parameter_sets`):
 a model file is data, and loading one never runs code. A model file of a ``.py`` machine (what
 ``calibrate --out`` writes for one) loads only when that file is trusted for the run
 (:func:`genthermal.machines.registry.trusted_machine_files`, ``--trust-machine FILE.py``).
@@ -92,9 +92,9 @@ def load_model(spec_or_path: str | os.PathLike, from_data: bool = False) -> Ther
     head, sep, tail = text.rpartition(":")
     name, variant = (head, tail) if sep and tail in (*VARIANTS, *PARAMETER_SETS) else (text, "")
     if name in MACHINES and variant in PARAMETER_SETS and not Path(text).is_file():
-        from .machines.chapter7 import parameter_file
+        from .machines.parameter_sets import parameter_file
 
-        return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
+        return model_from_document(yaml.safe_load(parameter_file(variant).read_text()), text)
     if variant not in PARAMETER_SETS and not (Path(text).is_file() and not name.endswith(".py")) \
             and is_machine_reference(name):
         return _build(name, variant or "nonlinear", from_file=False, from_data=from_data)

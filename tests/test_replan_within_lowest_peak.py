@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule import replanning
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import FEASIBLE_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, mission_segments
+from genthermal.schedule.flight import replanning
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import FEASIBLE_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, mission_segments
 from genthermal.schedule.power_system import PowerSystem
 
 from flight_scenarios import SHORT

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule import replanning
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import PlanningProblem, PlanResult, Schedule, mission_segments
+from genthermal.schedule.flight import replanning
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import PlanningProblem, PlanResult, Schedule, mission_segments
 from genthermal.schedule.power_system import PowerSystem
-from genthermal.schedule.price import (SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, not_served_per_segment_Ah,
+from genthermal.schedule.planning.price import (SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, not_served_per_segment_Ah,
                                       schedule_cost_min)
-from genthermal.schedule.shed import priced_shed_plan, shed_rest_candidates_s, shed_switching_off
+from genthermal.schedule.planning.shed import priced_shed_plan, shed_rest_candidates_s, shed_switching_off
 
 from flight_scenarios import SHORT
 

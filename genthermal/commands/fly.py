@@ -16,7 +16,7 @@ from __future__ import annotations
 import sys
 
 from ..plants import external_plant, is_external_plant
-from ..schedule.manager_settings import ManagerSettings
+from ..schedule.flight.manager_settings import ManagerSettings
 from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.report import flight_summary
 from .plan import add_schedule_arguments, settings_from_args, write_outputs
@@ -41,7 +41,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Fly and print the summary."""
-    from ..schedule.closed_loop import fly
+    from ..schedule.flight.closed_loop import fly
 
     system, settings = settings_from_args(args)
     plant = external_plant(args.plant) if is_external_plant(args.plant) else None

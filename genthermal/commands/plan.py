@@ -17,12 +17,12 @@ from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
 from ..plants import is_external_plant
-from ..schedule.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
+from ..schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
                                          ManagerSettings)
-from ..schedule.open_loop import plan_mission
+from ..schedule.flight.open_loop import plan_mission
 from ..schedule.state_estimator import FLIGHT_FILTERS
 from ..schedule.power_system import PowerSystem
-from ..schedule.shed import INFEASIBLE_RESPONSES
+from ..schedule.planning.shed import INFEASIBLE_RESPONSES
 from ..schedule.report import flight_summary, plot_flight, summary_text
 
 

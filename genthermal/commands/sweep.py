@@ -1,6 +1,6 @@
 """``genthermal sweep --cases N [--only I,J] [--schedulers a,b] [--planner-model M] [--cluster ADDRESS] [--json FILE]``.
 
-Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweep`): N seeded cases (missions
+Robustness sweep of the closed loop (:mod:`genthermal.schedule.sweeps.sweep`): N seeded cases (missions
 of 2-8 h, 2-4 generators, plant parameters off by up to ±30 %, a fault the manager is not told)
 flown with each scheduler in local worker processes of one thread each (no port opened), or on
 Dask (``--cluster``, or ``--dashboard`` for a local Dask cluster with its dashboard; both need the
@@ -18,8 +18,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..outputs import finite_document, report_json
-from ..schedule.manager_settings import PLANNER_MODELS
-from ..schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, FLOWN_OPTIMAL, SWEEP_SCHEDULERS
+from ..schedule.flight.manager_settings import PLANNER_MODELS
+from ..schedule.sweeps.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, FLOWN_HEURISTIC, FLOWN_OPTIMAL, SWEEP_SCHEDULERS
 
 
 def register(subparsers) -> None:
@@ -60,7 +60,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Run the sweep; print the summary and write every case to ``--json``, or print it all."""
-    from ..schedule.sweep import robustness_case, run_sweep, summarise
+    from ..schedule.sweeps.sweep import robustness_case, run_sweep, summarise
 
     schedulers = [s.strip() for s in args.schedulers.split(",") if s.strip()]
     bad = [s for s in schedulers if s not in SWEEP_SCHEDULERS]

@@ -61,7 +61,7 @@ from ..machines import DEFAULT_MACHINE
 from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
-from .shed import INFEASIBLE_RESPONSES
+from .planning.shed import INFEASIBLE_RESPONSES
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -81,7 +81,7 @@ def _filter_name(config: Mapping) -> str | None:
 
 
 def _infeasible_response(value, field: str = "generators.when_infeasible") -> str | None:
-    """``value`` checked against :data:`genthermal.schedule.shed.INFEASIBLE_RESPONSES` (None
+    """``value`` checked against :data:`genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES` (None
     passes: the manager's own); InputError naming ``field`` otherwise."""
     if value is None:
         return None
@@ -414,17 +414,17 @@ class PowerSystem:
         model with ``plant_mismatch`` applied.
     margin_K : float, optional
         The scenario's back-off margin of the load manager below ``limit_C``, K; None (default):
-        the manager's own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.margin_K`).
+        the manager's own (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.margin_K`).
     filter : str, optional
         The scenario's filter in the loop (``generators.filter``: ``"ekf"`` or ``"kf"``, e.g. the
         thesis's linear filter in the thesis-reproduction scenarios); None (default): the manager's
-        own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.filter`).
+        own (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.filter`).
     when_infeasible : str, optional
         The scenario's response when even the lowest reachable peak is above ``limit_C``
-        (``generators.when_infeasible``, one of :data:`~genthermal.schedule.shed.INFEASIBLE_RESPONSES`:
+        (``generators.when_infeasible``, one of :data:`~genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES`:
         ``shed`` or ``best_effort``, e.g. the thesis heuristic's best effort in the
         thesis-reproduction scenarios); None (default): the manager's own
-        (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.when_infeasible`).
+        (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.when_infeasible`).
     """
 
     mission: Mission
@@ -625,10 +625,10 @@ class PowerSystem:
     def design_generator_for(self, effects=(), base=None) -> AffineGenerator:
         """Design model of ``base`` (default the planning model) with ``effects`` (``(name,
         ((parameter, value), ...))`` pairs, applied in order), linearised by
-        :func:`~genthermal.schedule.linearise.planning_design_model`. ``base`` may differ from the
+        :func:`~genthermal.schedule.planning.linearise.planning_design_model`. ``base`` may differ from the
         planning model in parameter values only (a recalibration): its values are set on the
         planning model's design model, which shares its compiled functions."""
-        from .linearise import planning_design_model
+        from .planning.linearise import planning_design_model
 
         def build_planning():
             if not effects and self.model is None:

@@ -28,7 +28,7 @@ Keys of :func:`flight_summary`:
 ``plant_fault``         the plant's failure that stopped the flight (time_s, cycle, kind, message, the
                         mode the manager holds), None when it answered throughout (closed loop)
 
-Closed loop only (:mod:`genthermal.schedule.monitor`; judged against the scenario's faults, which
+Closed loop only (:mod:`genthermal.schedule.monitoring.monitor`; judged against the scenario's faults, which
 the manager is not told unless ``tell_fault``):
 
 ``tell_fault``          whether the manager was handed the faults
@@ -47,10 +47,10 @@ from pathlib import Path
 import numpy as np
 
 from ..plots import finish_figure, plt
-from .flight_result import FlightResult
-from .manager_settings import ManagerSettings
+from .flight.flight_result import FlightResult
+from .flight.manager_settings import ManagerSettings
 from .power_system import PowerSystem
-from .shed import not_served
+from .planning.shed import not_served
 
 def flight_summary(result: FlightResult) -> dict:
     """The summary keys (module docstring) of a flown or planned mission."""
@@ -221,7 +221,7 @@ def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
         ``plots`` (paths).
     """
     from ..mission import load_mission
-    from .closed_loop import fly
+    from .flight.closed_loop import fly
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

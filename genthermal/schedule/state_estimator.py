@@ -11,7 +11,7 @@ prediction of every scheduler is offset-free for every generator, healthy ones i
 model whose cooling is 10 % short no longer lets the planner load a healthy generator past
 θmax (``tests/test_closed_loop_shed.py``, the plant hot at rest). The nonlinear planner
 (``ManagerSettings.planner_model``) plans on the filter's own model, state, disturbances and
-covariance (:mod:`genthermal.schedule.flown`).
+covariance (:mod:`genthermal.schedule.planning.flown`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from ..estimation.kalman import KalmanFilter
 
 #: Noise settings of the flight EKF: constant and load-scaled heat flows only, as random walks
 #: of 8 and 15 W per hour, no coolant-scaled states, no change detection. The fault detector's
-#: drifts and thresholds (:class:`~genthermal.schedule.detector.DetectorSettings`) were measured
+#: drifts and thresholds (:class:`~genthermal.schedule.monitoring.detector.DetectorSettings`) were measured
 #: on this filter (``benchmarks/bench_detection.py``), and its CUSUM is itself the flight's change
 #: detection, so the flight keeps it; ``genthermal estimate`` uses the slower defaults of
 #: :mod:`genthermal.estimation.ekf` with its own change test.

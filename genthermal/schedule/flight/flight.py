@@ -1,0 +1,65 @@
+"""A flight as composed roles: ``Flight(plant, manager, mission).run()`` returns a :class:`FlightResult`.
+
+* the **plant** (:mod:`genthermal.plants`): anything with the plant protocol, None for the mission's
+  model plant;
+* the **manager** (:class:`Manager`): the scheduler it plans with and its settings;
+* the **mission**: a shipped scenario's name, a scenario file or a
+  :class:`~genthermal.schedule.power_system.PowerSystem`.
+
+The flight is :func:`~genthermal.schedule.flight.closed_loop.fly`; the result's
+:meth:`~genthermal.schedule.flight.flight_result.FlightResult.to_pandas`, ``summary()`` and ``plot()`` give
+the record, the JSON keys of ``genthermal fly`` and the figure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+from ...errors import InputError
+from .flight_result import FlightResult
+from .manager_settings import SCHEDULERS, ManagerSettings
+from ..power_system import PowerSystem
+
+
+@dataclasses.dataclass(frozen=True)
+class Manager:
+    """The load manager: ``scheduler`` (one of :data:`SCHEDULERS`) with its ``settings``."""
+
+    scheduler: str = "optimal"
+    settings: ManagerSettings = dataclasses.field(default_factory=ManagerSettings)
+
+    def __post_init__(self):
+        if self.scheduler not in SCHEDULERS:
+            raise InputError("scheduler", self.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
+        self.settings.check_scheduler(self.scheduler)
+
+
+@dataclasses.dataclass
+class Flight:
+    """A mission flown by a manager against a plant (module docstring).
+
+    Examples
+    --------
+    >>> from genthermal.schedule.flight.flight import Flight, Manager
+    >>> result = Flight(None, Manager("engineer"), "thesis_fig_7_7").run()  # doctest: +SKIP
+    >>> result.to_pandas().head()  # doctest: +SKIP
+    """
+
+    plant: object
+    manager: Manager
+    mission: str | os.PathLike | PowerSystem
+
+    def power_system(self) -> PowerSystem:
+        """The mission as a power system (a scenario is loaded by name or path)."""
+        if isinstance(self.mission, PowerSystem):
+            return self.mission
+        from ...mission import load_mission
+
+        return PowerSystem.from_mission(load_mission(self.mission))
+
+    def run(self) -> FlightResult:
+        """Fly the mission; the result holds a plant's failure in ``plant_fault`` (the flight so far)."""
+        from .closed_loop import fly
+
+        return fly(self.power_system(), self.manager.scheduler, self.manager.settings, self.plant)
