@@ -17,6 +17,7 @@ from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
 from ..plants import is_external_plant
+from ..schedule.planning.registry import planner_names
 from ..schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
                                          ManagerSettings)
 from ..schedule.flight.open_loop import plan_mission
@@ -80,8 +81,8 @@ def _number_in(option: str, text: str, low: float, high: float, what: str) -> fl
 
 def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     """The power system and settings the arguments describe; InputError names a bad option."""
-    if args.scheduler not in SCHEDULERS:
-        raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
+    if args.scheduler not in planner_names():
+        raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(planner_names())}")
     margin = ManagerSettings.margin_K if args.margin is None else _number_in("--margin", args.margin, 0.0, 50.0,
                                                                               "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")

@@ -1,4 +1,4 @@
-"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``), plots and the scheduler demo.
+"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``), plots and the scheduler comparison table.
 
 Keys of :func:`flight_summary`:
 
@@ -42,15 +42,16 @@ the manager is not told unless ``tell_fault``):
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..plots import finish_figure, plt
-from .flight.flight_result import FlightResult
-from .flight.manager_settings import ManagerSettings
-from .power_system import PowerSystem
 from .planning.shed import not_served
+
+if TYPE_CHECKING:
+    from .flight.flight_result import FlightResult
+
 
 def flight_summary(result: FlightResult) -> dict:
     """The summary keys (module docstring) of a flown or planned mission."""
@@ -197,45 +198,3 @@ def comparison_table(summaries: dict) -> str:
                     f"{max(s['max_T_winding'].values()):.1f} | {s['breach_s']:.0f} | {s['replans']} | "
                     f"{s['median_solve_s']:.2f} | {s['displaced_Ah']:.2f} |")
     return "\n".join(rows)
-
-
-def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
-    """Fly the large-blockage mission closed loop with the thesis heuristic, the engineer's
-    heuristic (the strongest simple baseline) and the optimal scheduler on the flown model.
-
-    The optimal scheduler plans on the model the manager flies (``planner_model="nonlinear"``: the
-    extended Kalman filter's nonlinear model, state, disturbances and covariance back-off); the
-    baselines plan on the offset-free design model, as ``genthermal fly`` does by default.
-
-    Parameters
-    ----------
-    out_dir : path-like
-        Folder for ``schedule_heuristic.png``, ``schedule_engineer.png`` and ``schedule_optimal.png``.
-    scenario : str
-        Shipped scenario name or path.
-
-    Returns
-    -------
-    dict
-        ``scenario``, ``summaries`` (scheduler → :func:`flight_summary`), ``table`` (markdown) and
-        ``plots`` (paths).
-    """
-    from ..mission import load_mission
-    from .flight.closed_loop import fly
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    system = PowerSystem.from_mission(load_mission(scenario))
-    flights = {"heuristic": ManagerSettings(), "engineer": ManagerSettings(),
-               "optimal": ManagerSettings(planner_model="nonlinear")}
-    summaries, plots = {}, []
-    for scheduler, settings in flights.items():
-        result = fly(system, scheduler, settings)
-        summaries[scheduler] = flight_summary(result)
-        path = out / f"schedule_{scheduler}.png"
-        plot_flight(result, path=path)
-        plots.append(str(path))
-    table = comparison_table(summaries)
-    print(f"== Load management, {system.mission.name} (closed loop, true plant; optimal on the flown model) =="
-          f"\n{system.describe()}\n{table}")
-    return {"scenario": system.mission.name, "summaries": summaries, "table": table, "plots": plots}

@@ -18,20 +18,21 @@ import os
 
 from ...errors import InputError
 from .flight_result import FlightResult
+from ..planning.registry import planner
 from .manager_settings import SCHEDULERS, ManagerSettings
 from ..power_system import PowerSystem
 
 
 @dataclasses.dataclass(frozen=True)
 class Manager:
-    """The load manager: ``scheduler`` (one of :data:`SCHEDULERS`) with its ``settings``."""
+    """The load manager: ``scheduler`` (a registered planner: :data:`SCHEDULERS` or one of yours,
+    :func:`~genthermal.schedule.planning.registry.register_planner`) with its ``settings``."""
 
     scheduler: str = "optimal"
     settings: ManagerSettings = dataclasses.field(default_factory=ManagerSettings)
 
     def __post_init__(self):
-        if self.scheduler not in SCHEDULERS:
-            raise InputError("scheduler", self.scheduler, f"must be one of {', '.join(SCHEDULERS)}")
+        planner(self.scheduler)  # an InputError naming the registered planners
         self.settings.check_scheduler(self.scheduler)
 
 

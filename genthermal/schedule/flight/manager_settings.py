@@ -14,11 +14,14 @@ from ..monitoring.input_watch import InputWatchSettings
 from ..planning.milp import MilpSettings
 from ..monitoring.monitor import DetectionSettings
 from ..planning.optimal import OptimalSettings
+from ..planning.plan import DEFAULT_MARGIN_K
+from ..planning.registry import BUILT_IN_PLANNERS, planner
 from ..power_system import PowerSystem
 from ..monitoring.sensor_watch import SensorWatchSettings
 from ..planning.shed import INFEASIBLE_RESPONSES
 
-SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
+#: The schedulers genthermal ships (others may be registered: :mod:`genthermal.schedule.planning.registry`).
+SCHEDULERS = BUILT_IN_PLANNERS
 #: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
 #: model with the margin and the rise back-off; ``nonlinear``, the flown model the filter runs
 #: on, with the back-off of its covariance (:mod:`genthermal.schedule.planning.flown`), the mission cut
@@ -26,9 +29,7 @@ SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 PLANNER_MODELS = ("affine", "nonlinear")
 #: Schedulers that plan on the flown model when ``planner_model`` is ``nonlinear``; the engineer's
 #: heuristic and the MILP are defined on the design model.
-FLOWN_SCHEDULERS = ("optimal", "heuristic")
-#: Default back-off margin below θmax, K.
-DEFAULT_MARGIN_K = 2.5
+FLOWN_SCHEDULERS = tuple(name for name in BUILT_IN_PLANNERS if planner(name).on_flown_model)
 #: Default rise back-off: plans tolerate a design model that underestimates a temperature rise
 #: within one cycle by this fraction (the thesis generator's copper loss at rated current and its winding limit is ~20 % above the
 #: linear design model's).
@@ -164,7 +165,7 @@ class ManagerSettings:
         """InputError naming ``planner_model`` when ``scheduler`` cannot plan on the model it names
         (on the flown model only those of :data:`FLOWN_SCHEDULERS` plan; the others are defined on
         the design model, and their plans would be judged on the flown one)."""
-        if self.nonlinear and scheduler not in FLOWN_SCHEDULERS:
+        if self.nonlinear and not planner(scheduler).on_flown_model:
             raise InputError("planner_model", self.planner_model, f"the {scheduler} scheduler plans on the design "
                              f"model; on the flown model plan with one of {', '.join(FLOWN_SCHEDULERS)}")
 

@@ -54,17 +54,15 @@ import dataclasses
 import numpy as np
 
 from ...errors import InputError
-from ..planning.engineer import engineer_plan
 from ..planning.flown import FlownPlanning
-from ..planning.heuristic import heuristic_plan
 from .manager_settings import ManagerSettings, planning_margin_K
-from ..planning.milp import milp_plan
-from ..planning.optimal import lowest_reachable_peak, optimal_plan
+from ..planning.optimal import lowest_reachable_peak
 from ..planning.optimal_nlp import flown_optimal_plan
 from ..planning.optimal_shed import chosen_shed_plan, on_flown_model
 from ..planning.plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
 from ..power_system import PowerSystem
+from ..planning.registry import planner
 from ..planning.price import PRICE_TOLERANCE_MIN, not_served_Ah, schedule_cost_min
 from ..planning.shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
 
@@ -76,7 +74,9 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
 
     Parameters
     ----------
-    scheduler : {"heuristic", "engineer", "optimal", "milp"}
+    scheduler : str
+        A registered planner (:mod:`genthermal.schedule.planning.registry`): heuristic, engineer,
+        optimal, milp or one registered from outside.
     problem : PlanningProblem
         Its ``limit_C`` is the planning limit (θmax minus the margin); its ``rest_budget_s`` bounds
         the total rest of the plan (rests beyond it are cut, earliest kept).
@@ -125,14 +125,11 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         off = np.array(switched_off, dtype=bool)
         return _shed(on_design_model(problem, settings, limit_C), off, off, names, limit_C, "", settings.margin_K)
 
+    entry = planner(scheduler)
+    own_settings = entry.settings_from(settings)
+
     def run(p, initial=previous):
-        if scheduler == "heuristic":
-            return heuristic_plan(p, settings.heuristic)
-        if scheduler == "engineer":
-            return engineer_plan(p, settings.engineer)
-        if scheduler == "optimal":
-            return optimal_plan(p, settings.optimal, initial)
-        return milp_plan(p, settings.milp)
+        return entry.plan(p, own_settings, initial)
     result = _within_budget(problem, run(problem))
     if result.feasible:
         return result

@@ -73,6 +73,7 @@ from ...diagnose.sensor_faults import PREFERENCE_BIC
 from ...errors import InputError
 from ...estimation.ekf import ExtendedKalmanFilter
 from ...sensor_faults import SensorFault
+from ..planning.plan import DEFAULT_MARGIN_K
 from .unconfirmed_inlet import UnconfirmedInlet
 
 
@@ -101,7 +102,7 @@ class InputWatchSettings:
     unconfirmed_rise_K : float
         Most of a warmer coolant-inlet reading the plan holds back while it is unconfirmed, K, on a
         flight planned with the default 2.5-K margin
-        (:data:`~genthermal.schedule.flight.manager_settings.DEFAULT_MARGIN_K`); a flight planned with a
+        (:data:`~genthermal.schedule.planning.plan.DEFAULT_MARGIN_K`); a flight planned with a
         smaller margin holds back proportionally less, none at 0 (the thesis-reproduction
         scenarios, which plan to θmax itself) (:mod:`~genthermal.schedule.monitoring.unconfirmed_inlet`). 4 K:
         the largest step whose real rise heats the thesis generator's winding by no more than the
@@ -148,7 +149,7 @@ class InputWatch:
     n_generators : int
     margin_K : float, optional
         The flight's planning margin, K (:func:`~genthermal.schedule.flight.manager_settings.planning_margin_K`;
-        default :data:`~genthermal.schedule.flight.manager_settings.DEFAULT_MARGIN_K`): scales the inlet
+        default :data:`~genthermal.schedule.planning.plan.DEFAULT_MARGIN_K`): scales the inlet
         hold (:attr:`InputWatchSettings.unconfirmed_rise_K`).
 
     Attributes
@@ -176,8 +177,6 @@ class InputWatch:
         #: The coolant-inlet input, whose warmer reading is held while unconfirmed.
         self.coolant_input = generator.coolant_input
         #: Most of a warmer inlet reading held back, K: the setting scaled to the flight's margin.
-        from ..flight.manager_settings import DEFAULT_MARGIN_K  # it holds these settings: imported here
-
         margin_K = DEFAULT_MARGIN_K if margin_K is None else float(margin_K)
         self.held_K = settings.unconfirmed_rise_K * min(max(margin_K, 0.0) / DEFAULT_MARGIN_K, 1.0)
         self.unconfirmed_inlet = UnconfirmedInlet(self.held_K, settings.max_unconfirmed_s, n_generators)

@@ -27,6 +27,8 @@ from ...exciter import DEFAULT_POWER_FACTOR
 from ...machines.interface import GeneratorRole
 from ...mission import DEFAULT_GENERATOR, DEFAULT_RATED_CURRENT_A, Mission
 
+#: Default back-off margin below θmax the manager plans to, K.
+DEFAULT_MARGIN_K = 2.5
 #: Tolerance on the limit when checking a prediction, K.
 LIMIT_TOLERANCE_K = 1e-6
 #: A plan is feasible when its predicted peak is within this of the planning limit, K
