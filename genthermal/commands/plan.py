@@ -64,7 +64,7 @@ def add_schedule_arguments(parser) -> None:
                         "(genthermal.model_file); default the scenario's machine")
     parser.add_argument("--plant", help="true plant of every generator before its faults: a built-in name or "
                         "a model file; default the planning model with the scenario's plant_mismatch. fly also "
-                        "takes an FMI 2.0 co-simulation FMU (model.fmu) or a Python file defining make_plant() "
+                        "takes an FMI 2.0 co-simulation FMU (model.fmu), a recorded flight to replay (log.csv) or a Python file defining make_plant() "
                         "(my_plant.py: running it is your decision; see docs/guide/flights.md)")
 
 
@@ -163,7 +163,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     """Plan, print the schedule table and the summary."""
     if is_external_plant(args.plant):
-        raise InputError("--plant", args.plant, "plan flies its plan on the planning model; an FMU or a Python "
+        raise InputError("--plant", args.plant, "plan flies its plan on the planning model; an FMU, a log or a Python "
                          "plant is flown with genthermal fly")
     system, settings = settings_from_args(args)
     print(system.describe())

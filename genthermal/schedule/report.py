@@ -27,6 +27,9 @@ Keys of :func:`flight_summary`:
 ``management_cycles``   cycles of the closed loop (0 for a plan)
 ``plant_fault``         the plant's failure that stopped the flight (time_s, cycle, kind, message, the
                         mode the manager holds), None when it answered throughout (closed loop)
+``replay``              flown along a replayed log (``fly --plant log.csv``): ``decisions_applied``
+                        false, the manager's first re-plan and the log's first breach, the lead
+                        between them, the rests it decided (closed_loop.replay_score)
 
 Closed loop only (:mod:`genthermal.schedule.monitoring.monitor`; judged against the scenario's faults, which
 the manager is not told unless ``tell_fault``):
@@ -86,6 +89,8 @@ def flight_summary(result: FlightResult) -> dict:
     }
     if result.closed_loop:
         summary["plant_fault"] = getattr(result, "plant_fault", None)
+        if getattr(result, "replay", None) is not None:
+            summary["replay"] = result.replay
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
     if getattr(result, "sensor_watch", None) is not None:

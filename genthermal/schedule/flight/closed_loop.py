@@ -218,6 +218,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     check_sensors(plant, "--plant", type(plant).__name__, sensors)
     try:
         plant.reset(plant_setup(system, dt))
+    except InputError:
+        raise
     except Exception as error:  # noqa: BLE001 - any failure of a user's plant is named, never a traceback
         raise InputError("--plant", type(plant).__name__, f"the plant raised at its reset: "
                          f"{type(error).__name__}: {error}") from None
@@ -272,19 +274,21 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                                                                       first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
         timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
-        n = min(cycle_steps, timeline.n_steps)
+        n = min(cycle_steps, timeline.n_steps, replay_steps_left(plant, t, dt))
+        if n <= 0:  # a replayed log ends the flight at its last row
+            break
         applied = timeline.head(n)
         step_times = t + dt * np.arange(n)
-        inputs_read = read_inputs(step_times, applied.currents_A)
-        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times,
-                                          applied.currents_A)
         sample_times = t + dt * np.arange(1, n + 1)
         try:
             try:
                 readings = plant.step(t, dt, plant_inputs(system, applied, t))
+            except PlantFault:
+                raise
             except Exception as error:  # noqa: BLE001 - a plant's failure is recorded, the flight so far kept
                 raise PlantFault("raised", f"the plant raised: {type(error).__name__}: {error}") from None
             outputs = checked_readings(readings, sensors, system.n_generators, sample_times)
+            flown_A = checked_currents(readings, applied.currents_A)
         except PlantFault as fault:
             plant_fault = {"time_s": float(t), "cycle": cycles, "kind": fault.kind, "message": str(fault),
                            "plant": type(plant).__name__, "held": "minimum power mode",
@@ -292,16 +296,19 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
             recorder.warnings.append(f"plant fault at {t:g} s: {fault}; the flight stops there, the manager "
                                      f"holding the minimum power mode ({system.rest_current_A:.2f} A)")
             break
+        inputs_read = read_inputs(step_times, flown_A)
+        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times,
+                                          flown_A)
         for g, estimator in enumerate(estimators):
-            estimator.predict(applied.currents_A[g], inlets[g], ambients[g])
+            estimator.predict(flown_A[g], inlets[g], ambients[g])
             if detectors is not estimators:
-                detectors[g].predict(applied.currents_A[g], inlets[g], ambients[g])
+                detectors[g].predict(flown_A[g], inlets[g], ambients[g])
         sensed = outputs + noise_sd[None, :, None] * rng.standard_normal(outputs.shape)
         read = injector.apply(sample_times, sensed)
-        monitor.record(t, applied.currents_A, watch.correct(sample_times, read), inputs_read)
+        monitor.record(t, flown_A, watch.correct(sample_times, read), inputs_read)
         measured = watch.correct(sample_times, read, for_filter=True)[:, :, -1]
-        recorder.add(segments, timeline, n, outputs, t)
-        carried_A = applied.currents_A[:, -1:]
+        recorder.add(segments, timeline, n, outputs, t, flown_A)
+        carried_A = flown_A[:, -1:]
         rested_s += float(np.count_nonzero(applied.resting)) * dt
         running = np.flatnonzero(~applied.resting)
         resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
@@ -311,4 +318,55 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                              rest_budget_s=budget)
     result.sensor_watch = watch
     result.plant_fault = plant_fault
+    if getattr(plant, "replays_log", False):
+        result.replay = replay_score(result, recorder, plant)
     return result
+
+
+def replay_steps_left(plant, t_s: float, dt_s: float) -> int:
+    """Steps of ``dt_s`` a replayed log has left after ``t_s`` (s); unbounded for any other plant."""
+    end_s = getattr(plant, "end_s", None) if getattr(plant, "replays_log", False) else None
+    return np.iinfo(np.int64).max if end_s is None else int(np.floor((end_s - t_s) / dt_s + 1e-9))
+
+
+def checked_currents(readings, commanded_A: np.ndarray) -> np.ndarray:
+    """The phase currents the plant carried, A RMS (n_gen, n): its ``applied_A`` (a replayed log's)
+    or the commanded ones; a :class:`PlantFault` when they are of another shape or not finite."""
+    applied = getattr(readings, "applied_A", None)
+    if applied is None:
+        return commanded_A
+    applied = np.asarray(applied, dtype=float)
+    if applied.shape != commanded_A.shape:
+        raise PlantFault("shape", f"the plant's applied currents have the shape {list(applied.shape)}, not "
+                         f"{list(commanded_A.shape)}")
+    if not np.all(np.isfinite(applied)):
+        g, i = (int(v[0]) for v in np.nonzero(~np.isfinite(applied)))
+        raise PlantFault("not_finite", f"the plant carried {applied[g, i]} A on generator {g + 1} in step {i + 1}")
+    return applied
+
+
+def replay_score(result: FlightResult, recorder: FlightRecorder, plant) -> dict:
+    """What the manager decided along a replayed log, scored (its decisions were not applied).
+
+    Returns
+    -------
+    dict
+        ``log``, ``decisions_applied`` (False), ``log_end_s``; ``first_replan_s`` (the manager's first
+        re-plan, s, None if none), ``log_first_breach_s`` (first logged winding or iron above θmax, s),
+        ``lead_s`` (breach less re-plan, s: how early the manager acted); ``commanded_rest_s`` (the rests
+        it decided, s) and ``commanded_minus_logged_Ah`` per generator (the charge it would have moved).
+    """
+    system = result.system
+    commanded = np.hstack(recorder.commanded) if recorder.commanded else np.zeros((system.n_generators, 0))
+    dt = result.settings.dt_s
+    over = np.flatnonzero(np.any(result.temperatures_C > system.limit_C, axis=(0, 1)))
+    breach = float(result.time_s[over[0]]) if over.size else None
+    replan = float(result.plans[0]["time_s"]) if result.plans else None
+    return {"log": str(plant.path), "decisions_applied": False, "log_end_s": plant.end_s,
+            "note": "the temperatures and currents are the log's; plans, rests and alarms are the manager's "
+                    "decisions, recorded and not applied",
+            "first_replan_s": replan, "log_first_breach_s": breach,
+            "lead_s": None if breach is None or replan is None else breach - replan,
+            "commanded_rest_s": float(np.count_nonzero(result.resting) * dt),
+            "commanded_minus_logged_Ah": {name: float(np.sum(commanded[g] - result.currents_A[g]) * dt / 3600.0)
+                                          for g, name in enumerate(system.generator_names)}}

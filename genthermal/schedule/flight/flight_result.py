@@ -73,6 +73,9 @@ class FlightResult:
     plant_fault : dict or None
         The plant's failure that stopped the flight (closed loop): ``time_s``, ``cycle``, ``kind``,
         ``message``, ``plant``, ``held``, ``rest_current_A``; None when the plant answered throughout.
+    replay : dict or None
+        Flown along a replayed log (:class:`~genthermal.plants.log_plant.LogPlant`): the manager's
+        decisions scored, not applied (:func:`~genthermal.schedule.flight.closed_loop.replay_score`).
     """
 
     system: PowerSystem
@@ -94,6 +97,7 @@ class FlightResult:
     shed_events: list = dataclasses.field(default_factory=list)
     sensor_watch: object = None
     plant_fault: dict | None = None
+    replay: dict | None = None
 
     def to_pandas(self):
         """The flight as a table, one row per sample.
@@ -154,7 +158,7 @@ class FlightRecorder:
     def __init__(self, system: PowerSystem):
         self.system, self.time = system, [0.0]
         self.temperatures = [np.full((system.n_generators, 2), system.mission.T_ambient_C)]
-        self.currents, self.nominal, self.resting, self.action = [], [], [], []
+        self.currents, self.nominal, self.resting, self.action, self.commanded = [], [], [], [], []
         self.plans, self.warnings, self.shed_events = [], [], []
         self.switched_off = np.zeros(system.n_generators, dtype=bool)
 
@@ -177,12 +181,14 @@ class FlightRecorder:
                                      "response": result.details.get("response", "")})
         self.switched_off |= result.schedule.switched_off
 
-    def add(self, segments, timeline, n: int, outputs, t0: float) -> None:
-        """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, 2, n) after each."""
+    def add(self, segments, timeline, n: int, outputs, t0: float, carried_A=None) -> None:
+        """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, 2, n) after each;
+        ``carried_A`` (n_gen, n): the currents the plant carried when not the commanded ones, A."""
         dt = timeline.dt_s
         self.time += list(t0 + dt * np.arange(1, n + 1))
         self.temperatures += list(np.moveaxis(outputs, 2, 0))
-        self.currents.append(timeline.currents_A[:, :n])
+        self.commanded.append(timeline.currents_A[:, :n])
+        self.currents.append(timeline.currents_A[:, :n] if carried_A is None else np.asarray(carried_A))
         self.resting.append(timeline.resting[:n])
         self.action.append(np.array([segments[k].action_index for k in timeline.segment[:n]]))
         nominal = [self.system.rest_current_A if timeline.resting[i] else
