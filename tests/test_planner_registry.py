@@ -29,8 +29,7 @@ def toy():
 
 def test_the_built_in_planners_are_registered():
     assert BUILT_IN_PLANNERS == SCHEDULERS == ("heuristic", "engineer", "optimal", "milp")
-    settings = ManagerSettings()
-    assert planner("optimal").settings_from(settings) is settings.optimal
+    assert planner("optimal").settings_field == "optimal" and planner("optimal").settings is None
     assert [name for name in BUILT_IN_PLANNERS if planner(name).on_flown_model] == ["heuristic", "optimal"]
 
 

@@ -1,43 +1,6 @@
-r"""A power system of N ≥ 2 generators sharing one mission's load demand, with faults at onsets.
-
-Every generator carries the mission's load profile :math:`I_{ini}(t)` (thesis 7.3.2: "initially
-applied to both generators"), so the total demand is :math:`N\,I_{ini}(t)`. A load manager may move
-current between generators (load displacement, thesis eqs. 7.3-7.4) or put all of them into the
-minimum power mode (generator resting, thesis eq. 7.1).
-
-Scenario keys (top level of a mission YAML, kept unchecked by :mod:`genthermal.mission` and
-validated here)::
-
-    generators:                    # optional mapping
-      count: 2                     # >= 2 (default 2), or names: [left, right]
-      rest_percent: 27.3           # minimum power mode, % of rated (default: condition 1 continuous)
-      limit_C: 110                 # temperature limit theta_max, degC (default: the machine's limit of its
-                                   # protected sensor; the thesis generator's 110, thesis 7.3.1)
-      current_limit_percent: 100   # highest phase current a generator may carry, % of rated
-      filter: kf                   # the filter in the load manager's loop (ekf|kf; default: the manager's own)
-      margin_K: 0                  # the load manager's back-off margin below limit_C, K (default: the
-                                   # manager's, 2.5 K; 0: plan to theta_max itself, as the thesis
-                                   # heuristic does, eqs. 7.1-7.5); --margin overrides it
-      when_infeasible: best_effort # when even the lowest reachable peak is above limit_C: shed (default,
-                                   # shed load) or best_effort (fly the scheduler's own plan, all load
-                                   # served: the thesis heuristic has no shedding); --when-infeasible
-                                   # overrides it
-      plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
-      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration), or any machine
-                                   # with the generator role (a plug-in name or a .py machine file)
-    faults:                        # optional list
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 31,
-         inlet_rise_tau_min: 40}   # the inlet approaches +31 K with a 40-min time constant
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 26,
-         inlet_load_share: 1}      # the rise follows gen1's load: (I1/I_share)^2 of it (coolant.inlet_load_factor)
-      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
-      - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
-      - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
-
-Blockage mapping: an outlet plate of diameter ``outlet_diameter_mm`` gives the coolant flow fraction
-of the orifice relation :func:`genthermal.coolant.outlet_flow_fraction` (0.11 for the thesis's
-10 mm plate on the 50 mm outlet); the blockage effect lowers the internal convection with it.
+"""A power system of N ≥ 2 generators sharing one mission's load demand, with faults at onsets,
+the true plants and the design model as matrices. Main objects: :class:`PowerSystem`,
+:class:`AffineGenerator`, :class:`Fault`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,46 +1,6 @@
-"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``), plots and the scheduler comparison table.
-
-Keys of :func:`flight_summary`:
-
-``mission_time_s``      end of the last action, s
-``added_rest_s``        mission time minus the nominal mission duration, s (with the rounding of
-                        every action's duration to the step: a few seconds either way)
-``rested_s``            time flown in the minimum power mode (the rests), s: whole steps, exact
-``max_T_winding``       per generator name, highest winding temperature, °C (true plant when flown)
-``max_T_iron``          per generator name, highest iron temperature, °C
-``breach_s``            time with any generator above θmax, s
-``replans``             number of (re-)plans
-``median_solve_s``      median wall-clock time of a plan, s (0 without plans)
-``displaced_Ah``        phase current moved from one generator to another times time, A·h
-``feasible``            every plan kept the prediction (back-off included) within the planning
-                        limit and no load was shed
-``lowest_reachable_peak_C``  highest lowest-reachable peak of the infeasible plans, °C (None: all
-                        plans feasible)
-``manager_response``    what the manager did about infeasible plans (rest, displacement, shed)
-``rest_budget_s``       the flight's rest budget, s (:class:`ManagerSettings` ``rest_budget_s``)
-``shed``                load shedding: ``events`` (time_s, the generators shedding load and those
-                        switched off then, lowest reachable peak and the action where it falls,
-                        response), ``generators`` (names that shed load), ``switched_off`` (names),
-                        ``not_served_As`` / ``not_served_Ah`` per generator (phase current not
-                        carried by anyone, A·s / A·h), ``first_s`` / ``last_s`` of the load not
-                        served (None without)
-``management_cycles``   cycles of the closed loop (0 for a plan)
-``plant_fault``         the plant's failure that stopped the flight (time_s, cycle, kind, message, the
-                        mode the manager holds), None when it answered throughout (closed loop)
-``replay``              flown along a replayed log (``fly --plant log.csv``): ``decisions_applied``
-                        false, the manager's first re-plan and the log's first breach, the lead
-                        between them, the rests it decided (closed_loop.replay_score)
-
-Closed loop only (:mod:`genthermal.schedule.monitoring.monitor`; judged against the scenario's faults, which
-the manager is not told unless ``tell_fault``):
-
-``tell_fault``          whether the manager was handed the faults
-``detected_at_s``       first fault alarm on a generator whose fault had started, s (None: none)
-``detect_delay_s``      that alarm minus the fault's onset, s
-``identified``          one entry per identification: generator, effect, parameters, onset, confidence
-                        (ΔBIC, fit before/after, runner-up, equivalent explanations)
-``false_alarms``        fault alarms on a generator with no fault started at that time
-``recalibrations``      in-flight recalibrations of the planning model: time, generator, parameters
+"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``: docs/guide/flight-reference.md),
+plots and the scheduler comparison table. Main objects: :func:`flight_summary`,
+:func:`plot_flight`, :func:`summary_text`.
 """
 
 from __future__ import annotations

@@ -1,41 +1,8 @@
-r"""The load management system of thesis 7.2, open loop (``plan``) and closed loop (``fly``).
+"""The closed loop of thesis 7.2 (``fly``): every cycle update the filters, watch the sensors, test
+for faults, predict to the end of the mission and re-plan when a breach is predicted.
 
-Closed loop, every ``cycle_s`` (thesis: 5 min):
-
-1. **update** each generator's filter (default the extended Kalman filter on the flown nonlinear
-   model, ``ManagerSettings.filter``) with the plant's noisy measurements of
-   :math:`\theta_{winding}, \theta_{iron}` (noise variances of thesis eq. 6.10), predicting with the
-   inlet and ambient temperatures as their sensors read them (a scenario's ``sensor_faults`` may
-   make any of these sensors misread: :mod:`~genthermal.schedule.flight.sensor_injection`; the sensor
-   watches, :mod:`~genthermal.schedule.monitoring.sensor_watch` and :mod:`~genthermal.schedule.monitoring.input_watch`,
-   claim and mask, correct or substitute them before the fault monitor sees the cycle); the planner gets
-   its node temperatures (:func:`~genthermal.schedule.state_estimator.planner_state`) and the filter's
-   disturbance heat flows (:func:`~genthermal.schedule.state_estimator.planning_generator`: offset-free
-   predictions); the fault monitor
-   (:mod:`genthermal.schedule.monitoring.monitor`) tests the filters' disturbance heat flows and, on an
-   alarm, identifies the fault from the in-flight record;
-2. **predict** to the end of the mission under the current schedule, with the measured inlet
-   temperature held (thesis 7.3.6) and the faults identified so far (with ``tell_fault``: the
-   scenario's faults, each known at the first cycle after its onset): on the design model
-   (``planner_model`` ``affine``), or on the filter's nonlinear model from its state with the
-   disturbances held and a back-off of the filter's covariance propagated along the plan
-   (``nonlinear``, :mod:`genthermal.schedule.planning.flown`; the mission is then cut into control intervals
-   of one cycle, each with its own displacement and rest);
-3. **re-plan** (unless ``replan`` is off) if a temperature above the planning limit
-   :math:`\theta_{max} - \text{margin}` is predicted, warm-started from the current plan;
-4. **apply** the schedule to the true plant for one cycle.
-
-The true plant is by default the nonlinear model with the faults from their onsets and parameters
-that differ from the design model (``PowerSystem.plant_mismatch``,
-:class:`~genthermal.plants.model_plant.ModelPlant`), or any plant of the protocol of
-:mod:`genthermal.plants` (an FMU, a user's simulator), given the machine's inputs each cycle
-(:func:`plant_inputs`) and answering with its sensors' readings. The back-off ``margin_K`` absorbs the
-mismatch; its cost in mission time is measured by flying with and without it. The nonlinear planner
-replaces it (and the rise back-off) by the back-off of the filter's uncertainty.
-
-What a re-plan does when no schedule keeps the limit, and the rest budget of a flight:
-:mod:`genthermal.schedule.flight.replanning`. The settings: :mod:`genthermal.schedule.flight.manager_settings`;
-the open-loop plan: :mod:`genthermal.schedule.flight.open_loop`.
+Main objects: :func:`fly`, :class:`TrustedHeatFlows`, :func:`replay_score`. Method:
+docs/guide/flight-methods.md; the plant protocol: :mod:`genthermal.plants`.
 """
 
 from __future__ import annotations

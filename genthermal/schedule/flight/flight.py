@@ -1,14 +1,6 @@
-"""A flight as composed roles: ``Flight(plant, manager, mission).run()`` returns a :class:`FlightResult`.
-
-* the **plant** (:mod:`genthermal.plants`): anything with the plant protocol, None for the mission's
-  model plant;
-* the **manager** (:class:`Manager`): the scheduler it plans with and its settings;
-* the **mission**: a shipped scenario's name, a scenario file or a
-  :class:`~genthermal.schedule.power_system.PowerSystem`.
-
-The flight is :func:`~genthermal.schedule.flight.closed_loop.fly`; the result's
-:meth:`~genthermal.schedule.flight.flight_result.FlightResult.to_pandas`, ``summary()`` and ``plot()`` give
-the record, the JSON keys of ``genthermal fly`` and the figure.
+"""A flight as composed roles: ``Flight(plant, manager, mission).run()`` returns a
+:class:`~genthermal.schedule.flight.flight_result.FlightResult`; :class:`Manager` is the scheduler
+and its settings. The flight itself is :func:`~genthermal.schedule.flight.closed_loop.fly`.
 """
 
 from __future__ import annotations

@@ -1,50 +1,8 @@
-r"""Re-planning in the load management system: one scheduler run, and what the manager does when it fails.
+"""Re-planning: one run of the registered scheduler, and what the manager does when no schedule
+keeps the limit (plan within the lowest reachable peak, best effort, or shed load).
 
-When no schedule keeps the prediction within the limit, the lowest reachable peak is found
-(min-max), the scheduler plans within that peak (plus 0.1 K) instead and a warning names the peak,
-the generator and the action. When that peak is above θmax itself, rest cannot help, and what the
-manager does is ``when_infeasible`` (:data:`INFEASIBLE_RESPONSES`; the scenario's
-``generators.when_infeasible`` or ``ManagerSettings.when_infeasible``):
-
-* ``shed`` (default): the manager **sheds** load (:mod:`genthermal.schedule.planning.shed`): each generator
-  carries at most what keeps it within the planning limit, the others take what their limits
-  allow, the rest is not served; a generator too hot even when carrying nothing is switched off
-  for the rest of the mission;
-* ``best_effort``: what the thesis heuristic does, which has no load shedding (thesis 7.2, Fig.
-  7.2; its large blockage breaches 110.7 and 111 °C, 7.3.3): the scheduler's own plan is flown,
-  all load served, knowing it breaches θmax by its predicted peak (the heuristic's, for a segment
-  no rest makes feasible: the longest rest left and the largest displacement the receivers can
-  take within θmax, so a healthy receiver is not planned past it; the optimal scheduler's: the
-  heuristic's, :func:`~genthermal.schedule.planning.optimal.optimal_plan`).
-
-Either way the flight reports ``feasible: false`` (with ``shed``, also the load not served).
-
-**Rest or shed, at the manager's price.** Every scheduler has this fallback, and it chooses
-between resting and shedding by one price (:mod:`genthermal.schedule.planning.price`): a plan costs its
-rest in minutes plus :data:`~genthermal.schedule.planning.price.SHED_PRICE_MIN_PER_AH` (1000) minutes per
-A·h of load not served. It does not rest until the budget is spent:
-
-* when load must be shed (the lowest reachable peak above θmax, or above the planning limit while
-  the manager already sheds), the shed plan is flown after the rest before it that costs least
-  (:func:`~genthermal.schedule.planning.shed.priced_shed_plan`): a rest only where the load it keeps
-  served is worth more than its minutes;
-* when θmax can be kept but the margin cannot (``with shed``, on the design model), the manager
-  compares the schedule within the lowest reachable peak (all load served, usually resting until
-  the budget is spent) with that priced shed plan, which keeps the margin, and flies the cheaper.
-  At 1000 min per A·h, shedding wins only where it leaves less than 1 mA·h unserved per minute
-  of rest it saves (a 60-min rest against 0.06 A·h).
-
-The nonlinear planner prices the same way inside its transcription when it sheds
-(:func:`~genthermal.schedule.planning.optimal_nlp.flown_optimal_plan`, ``shed``). The optimal scheduler
-planning on the design model does too when load must be shed (``flown_shed``,
-``ManagerSettings.own_shed``): it plans rest, displacement and load not served together on the
-flown model and flies that plan instead of the shared one whenever it keeps θmax with the
-filters' back-off (:mod:`~genthermal.schedule.planning.optimal_shed`); the baselines keep the shared plan.
-
-The total rest a flight adds is bounded by a **rest budget** (``ManagerSettings.rest_budget_s``,
-default :data:`~genthermal.schedule.flight.manager_settings.DEFAULT_REST_BUDGET_FRACTION` of the mission): every plan's rests are cut to what
-is left of it, so a flight ends within its mission time plus the budget, after at most
-``(mission + budget) / cycle_s + 1`` management cycles, whatever the plant does.
+Main objects: :func:`plan_with`, :func:`planning_problem`, :func:`flight_segments`. Method:
+docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations
@@ -126,7 +84,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         return _shed(on_design_model(problem, settings, limit_C), off, off, names, limit_C, "", settings.margin_K)
 
     entry = planner(scheduler)
-    own_settings = entry.settings_from(settings)
+    own_settings = getattr(settings, entry.settings_field) if entry.settings_field else entry.settings
 
     def run(p, initial=previous):
         return entry.plan(p, own_settings, initial)

@@ -1,20 +1,6 @@
-r"""Sensor faults of a flight scenario: the ``sensor_faults`` key and what they do to the readings.
-
-Scenario key (top level of a mission YAML)::
-
-    sensor_faults:
-      - {generator: 1, sensor: T_iron, kind: drift, onset_min: 90, value: 1.5}    # K/h
-      - {generator: gen2, sensor: T_winding, kind: bias, onset_min: 60, value: 4}  # K
-      - {generator: 1, sensor: T_winding, kind: stuck, onset_min: 60}             # holds its reading
-      - {generator: 2, sensor: T_inlet, kind: bias, onset_min: 60, value: 3}      # the unit's inlet PT100
-
-``sensor`` is an output of the flown machine's sensor schema (``T_winding``, ``T_iron`` for the
-thesis generator) or one of its measured temperature inputs (``T_inlet``, ``T_ambient``:
-:func:`~genthermal.diagnose.input_sensors.input_sensors`); ``kind`` and ``value`` as
-:class:`~genthermal.sensor_faults.SensorFault` (``stuck`` without ``value``: the reading at the onset
-is held; an input sensor has no ``noise`` kind: inputs are logged without noise). The faulty
-readings go to the filter and to the manager's record, as on a real aircraft: an output's as a
-measurement, an input's as the inlet or ambient temperature the filter is driven with.
+"""Sensor faults of a flight scenario (the ``sensor_faults`` key: bias, drift, stuck) and what they
+do to the readings. Main objects: :func:`parse_sensor_faults`, :class:`SensorFaultInjector`; the
+key's format: docs/guide/flight-reference.md.
 """
 
 from __future__ import annotations

@@ -1,49 +1,7 @@
-r"""Fault detection on the extended Kalman filter's disturbance heat flows, between generators.
-
-The flight filter (:mod:`genthermal.estimation.ekf`) estimates, per generator g and sensor node j
-(stator winding, stator iron), an unknown heat flow :math:`d_{gj}` (W) and a load-scaled loss
-:math:`m_{gj}` (W at rated current). They absorb whatever the model lacks, so a fault does not show
-for long in the innovations: it shows in these states. At load factor
-:math:`\ell = \overline{I^2}/I_{rated}^2` the extra heat flow into node j is
-
-.. math::
-    q_{gj}(\ell) = d_{gj} + \ell\,m_{gj}, \qquad
-    \sigma^2_{gj}(\ell) = a^T P_{gj} a,\quad a = (1, \ell),
-
-with :math:`P_{gj}` the filter's covariance of :math:`(d_{gj}, m_{gj})`. A model error that all
-generators share (the same machine type, the same ambient: cooling, resistance or iron loss off by
-up to 30 %) gives every healthy generator the same :math:`q`; a fault adds heat to one of them.
-The test statistic of generator g on node j compares it, at g's own load, with the generators
-believed healthy (those without an identified fault, g excluded):
-
-.. math::
-    r_{gj} = \frac{q_{gj}(\ell_g) - \operatorname{median}_h q_{hj}(\ell_g)}
-                  {\sqrt{\sigma^2_{gj}(\ell_g) + \operatorname{median}_h \sigma^2_{hj}(\ell_g)}}
-
-(the reference's variance is approximated by the median variance of the reference generators).
-Each :math:`r_{gj}` feeds a one-sided CUSUM (Page 1954), :math:`S_k = \max(0, S_{k-1} + r_k - \nu_j)`,
-alarm when :math:`S_k > h_j`: one-sided because every fault the manager watches for heats the
-machine (blockage, shorted turn, end-winding stray loss on the winding node; excitation iron loss
-on the iron node). A generator with no healthy generator to compare with (two generators, the
-other already identified as faulty) is not tested, nor is one that carries more load than its
-references (load factor above ``1 + load_tolerance`` times their median): the load-scaled
-disturbance :math:`m` is learnt at a generator's own load, so one that took load on from a faulty
-generator carries its model error to a load its references have not flown (on the thesis's large
-blockage the healthy generator, loaded to 6.1 A against the faulty one's 3.7 A, reached
-:math:`r \approx 1.2` for 25 min and alarmed). A manager moves load *off* a generator it finds
-hot, so the faulty one stays tested; a second fault on a generator that took load on is found
-only once the loads even out again.
-
-Thresholds (:class:`DetectorSettings`) come from the healthy flights of
-``benchmarks/bench_detection.py`` (2-4 h missions, 2-3 generators, five plant parameters off by
-10-30 % either way, shared by the generators). On 54 healthy flights (seeds 0 and 1, nominal
-schedule; the 24 of seed 0 again with the engineer scheduler re-planning) the statistic never
-exceeded 0.56 on the winding and 1.15 on the iron, while faults gave about 1-3 (a shorted turn of
-0.13-0.43 Ω), 6-9 (end-winding stray loss), 6-34 (blockage) and 15-24 (excitation iron loss)
-within minutes of their onset. The drifts, 0.8 and 2.0, sit 0.24 and 0.85 standard deviations
-above those healthy maxima, so a healthy flight does not accumulate (its largest CUSUM sum stayed
-0); the thresholds, 1.5 and 3.0, pass a strong fault in one cycle and a weak one in a few. With
-drifts 1.0 and 2.5 two shorted turns of 0.13-0.14 Ω went undetected; 0.10 Ω still does.
+"""Fault detection on the extended Kalman filter's disturbance heat flows, between generators: a
+CUSUM on each generator's extra heat flow against the others'. Main objects:
+:class:`DisturbanceDetector`, :class:`DetectorSettings`, :func:`extra_heat_flow`. Method:
+docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,35 +1,6 @@
-r"""Identification of a fault from the in-flight record, with diagnose's effect search.
-
-**Identification.** On a fault alarm the planning model is first recalibrated on the healthiest
-generator's record, then the alarmed generator's record since the mission start (inputs and the
-noisy sensors, on the grid of ``identify_dt_s`` with each row's inputs averaged over it:
-:meth:`FaultMonitor.fit_record <genthermal.schedule.monitoring.monitor.FaultMonitor.fit_record>`) is handed
-to diagnose's search (:class:`~genthermal.diagnose.discovery.Discovery`) with the candidate
-effects restricted to ``fault_effects``: each is fitted with its onset, ranked by ΔBIC, and
-accepted only when significant by diagnose's four tests. The blockage competes
-twice (:func:`flight_catalogue`): with the catalogue's convection exponent ``n_flow`` 0.8
-(turbulent convection) and with ``n_flow`` fitted. With the exponent held alone, a blockage
-that leaves the internal convection as it was (blockage_large: k_flow 0.2, n_flow 0, +31 K
-inlet) was sized k_flow 0.80-0.84. The manager then plans and
-filters on the calibrated model with that effect (:meth:`PowerSystem.design_generator_for`), and
-every filter whose model changed restarts its disturbance states at zero (:meth:`StateEstimator.use <genthermal.schedule.state_estimator.StateEstimator.use>`:
-the new model has taken in what they carried). An alarm that no effect explains is
-recorded and the detector restarts; a generator is identified at most ``max_identifications``
-times per flight, at least ``identify_spacing_s`` apart.
-
-**Uncertainty.** Each parameter of the identified effect comes with an interval
-(``interval_level``, 95 %) from the curvature of its fit, its variance inflated for the residuals'
-serial correlation (:func:`genthermal.diagnose.interval.fitted_intervals`), and the manager
-believes the end of it farthest from the parameter's neutral value: the most severe fault the
-record allows (:attr:`Identification.believed_values`; shape parameters such as ``n_flow`` keep
-their estimate). A record that sizes a fault sharply changes little (blockage_large, optimal
-scheduler, 200 min: k_flow 0.201 in 0.198-0.204, believed 0.198); a short one widens it (a k_flow
-0.25 blockage 10, 20 and 60 min after its onset: 0.17-0.35, 0.23-0.29, 0.240-0.255,
-``tests/test_schedule_monitor.py``), and the manager then plans on the more blocked end. The
-interval is conditional on the model fitted: it does not cover a bias of the record or of the
-recalibrated model. On the optimal flight's record sampled at the grid times (before
-:meth:`FaultMonitor.fit_record <genthermal.schedule.monitoring.monitor.FaultMonitor.fit_record>`) k_flow 0.642
-came with 0.601-0.687 against the plant's 0.20; the fit grid, not the interval, put that right.
+"""Identification of a fault from the in-flight record with diagnose's effect search (recalibrate
+on the healthiest generator, then search the alarmed one's record over :data:`FAULT_EFFECTS`).
+Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

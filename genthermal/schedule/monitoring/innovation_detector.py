@@ -1,38 +1,6 @@
-r"""A CUSUM on the Kalman filter's differential winding innovations: the baseline fault detector,
-and the alarm test the flight's fault monitor runs beside the disturbance CUSUM.
-
-This is the detector the closed loop flew first (commit 9399c62), and the simplest one an
-engineer would write:
-per generator g a Kalman filter on the nominal linear design model (thesis 6.2,
-:class:`~genthermal.estimation.kalman.KalmanFilter`), updated once per management cycle with the
-measured winding and iron temperatures. Its winding innovation :math:`e_g = y_g - \hat y_g^-` (K)
-is compared with the other generators', which share the model's error,
-
-.. math::
-    d_g = e_g - \operatorname{median}_{h \ne g} e_h,
-
-and fed to a one-sided CUSUM (Page 1954) :math:`S_k = \max(0, S_{k-1} + d_k - \nu)`, alarm when
-:math:`S_k > h` (then the sum restarts). As in the original, a generator is tested only when its
-mean current over the cycle is not above the others' median (a generator that took load on sees
-the model's load-dependent error as a fault), from the second cycle on.
-
-:class:`InnovationCusum` steps it one management cycle at a time. In flight
-(:class:`~genthermal.schedule.monitoring.monitor.FaultMonitor`) each generator's filter runs on the design
-model of the machine as the manager believes it (its identified effect, the recalibrated
-parameters), and the reference is the median over the *other generators believed healthy* whose
-sensors are trusted, so that an identified generator whose belief is off does not push its error
-onto the healthy ones. :func:`innovation_cusum_alarms` runs the original on a flight's record (the
-currents applied, the measured inlet and the noisy sensors the manager saw, the nominal model,
-every other generator a reference): the baseline of ``benchmarks/bench_detection.py``.
-
-Why it runs in flight beside the disturbance test (:mod:`genthermal.schedule.monitoring.detector`): on the
-benchmark's 20 healthy and 8 faulty flights (seed 0, nominal schedule, commit 74ca9b3) it alarmed
-within a median 306 s of the onset, the disturbance test 732 s, with no false alarm on either
-kind of flight. The innovation of a filter without disturbance states shows a new heat flow from
-the first cycle, where the extended Kalman filter's disturbance states take it up before its
-innovations show it, and their estimate needs several cycles to stand out of their covariance.
-The disturbance test stays for the iron node, which this test does not watch (an excitation iron
-loss of k_exc 40 went unseen by it).
+"""A CUSUM on the Kalman filter's differential winding innovations: the baseline fault detector,
+and the alarm test the flight's fault monitor runs beside the disturbance CUSUM. Method:
+docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,64 +1,6 @@
-r"""Faulty input sensors in flight: the coolant-inlet and ambient PT100s each unit's filter is driven with.
-
-An input sensor's reading is not compared with a prediction: it *drives* the filter. A unit whose
-inlet PT100 reads 3 K high has its model predict every node about 3 K hotter (less after a step,
-through the machine's time constants), while the measured winding and iron do not move; the filter's
-disturbance states cool both nodes to follow them. That is the redundancy the check uses: one input
-error moves the model's prediction of every sensor by the model's own response to it
-(:mod:`genthermal.diagnose.input_sensors`), whatever the load, where a heat flow scales with the
-load and heats the winding more than the iron.
-
-**Looking.** Units of one power system take their cooling air from the same place (the mission has
-one inlet temperature; a recirculation that heats one unit's inlet is a real difference the check
-below does not claim) and see the same ambient. Every cycle, each unit's mean reading of each input
-over the cycle is compared with the median of the other units' (those whose sensor is not claimed):
-a difference above :attr:`InputWatchSettings.disagreement_K` sends the unit's record to the check.
-With two units both differ: both are checked, and the model says which one is at fault.
-
-**A step of one unit's ambient.** The units see one ambient (the mission has one ambient
-temperature, every unit's filter is driven with it): a real change reaches every unit's sensor. A unit whose ambient reading stepped by more than
-:attr:`InputWatchSettings.disagreement_K` in one sample while every other unit's moved less than
-:attr:`InputWatchSettings.shared_step_K`, and has disagreed since, has the faulty sensor; it is
-claimed (a bias of the step's size from that sample) at the first check, unless its record fits its
-own reading markedly better than the others' (the check below: the machine followed it). This
-names the unit with two units too, where the median cannot. The record check alone did not: a
-+5 K ambient bias moves the unit's sensors by about 0.25 K through the frame, and the model's own
-error (it runs cooler than the plant) made the faulty unit's record fit its own warmer reading
-better (+6 at 90 min) and the healthy unit's fit the faulty reading (-10): nothing was claimed in
-6 checks. The inlet has no such rule: a blockage that recirculates air raises one unit's inlet for
-real. A drift of one unit's ambient is left to the check.
-
-**Checking.** The redundancy decides: the unit's model (as the manager believes it) is run over the
-unit's record twice, driven once by the unit's own reading and once by the other units' median
-reading of that input, and the two misfits of the measured sensors are compared over the
-disagreement (from :attr:`InputWatchSettings.lookback_s` before it began):
-:math:`\Delta = N \ln(RSS_{shared}/RSS_{own})`, no parameter fitted (the substitute is
-measured). The sensor is claimed when :math:`\Delta` is below
--:data:`~genthermal.diagnose.sensor_faults.PREFERENCE_BIC` (the record fits the shared air
-markedly better than the unit's own reading) and better than every other disagreeing unit's by as
-much; a unit whose inlet really is hotter (air recirculated by a blockage) fits its own reading
-better and is not claimed. The claim's shape (bias or drift) and onset are fitted to the difference
-of the two readings, which inputs logged without noise give exactly. Measured on the Fig. 7.7
-flight: the screen of :mod:`genthermal.diagnose.input_sensors` (one free bias against the heating
-faults on one unit's record) missed a -3 K inlet bias on every check, a shorted turn or a winding
-drift fitting the unit's record better; the shared-air comparison does not fit a heat flow at all.
-
-**Acting on a claim.** From the fitted onset on, the unit's reading of that input is replaced by
-the median of the other units' readings (the shared air), in the filter's inputs from now on and in
-the manager's record back to the onset; with no other unit to read, by the reading minus the fitted
-error. The unit's filter takes back its disturbance heat flows of the last cycle before the onset
-(those since were the filter's way of following a wrong input) plus the change the other units'
-heat flows made since (the model error every unit follows as the load changes), and the effects
-identified on the unit since the onset are dropped. Measured on the flights of
-``benchmarks/bench_sensor_flights.py``: keeping the heat flows the wrong input forced moved the plan
-(a ±3 K inlet bias: 1-2 re-plans, 3 load changes), taking back those before the onset alone moved
-it after a 25-min claim (a -8 K ambient bias: 3 load changes); with the common change, none. A
-coolant-inlet reading under check drives the filter only as held
-(:mod:`~genthermal.schedule.monitoring.unconfirmed_inlet`, :meth:`InputWatch.for_filter`): when the hold
-covered the whole error since the onset the filter never took the fault, and nothing is taken back
-(the unit's fault test is not restarted either). The believed machine, hence the plan, does not change. Stuck input
-sensors are not claimed: a constant input reads constant whether stuck or not
-(:mod:`genthermal.diagnose.input_sensors`).
+"""Faulty input sensors in flight (the coolant-inlet and ambient PT100s that drive each unit's
+filter): detect, identify and substitute them. Main objects: :class:`InputWatch`,
+:class:`InputWatchSettings`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

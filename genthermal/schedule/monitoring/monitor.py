@@ -1,52 +1,6 @@
-r"""Fault detection in flight: the tests on each generator's filter, the common model-error test and
-recalibration, and the hand-over to identification (:mod:`genthermal.schedule.monitoring.fault_identification`) on
-an alarm. The filters: :mod:`genthermal.schedule.state_estimator`.
-
-**Detection.** Two one-sided tests raise fault alarms, each comparing a generator with the
-generators believed healthy; an alarm of either is an alarm. The *innovation test*
-(:class:`~genthermal.schedule.monitoring.innovation_detector.InnovationCusum`) runs a linear Kalman filter
-per generator on the design model of the machine as believed, without disturbance states, and
-sums its winding innovation minus the healthy generators' median: a new heat flow shows in it
-from the first cycle (its provenance and its measured delays are in that module). The
-*disturbance test* (:class:`~genthermal.schedule.monitoring.detector.DisturbanceDetector`) compares the
-extended Kalman filter's estimated extra heat flows into the winding and the iron, normalised by
-the filter's covariance; it alone watches the iron (an excitation iron loss). With the linear
-filter (``kf``) in the loop the disturbance test runs on a parallel extended Kalman filter of its
-own. Only a disturbance-test alarm starts an identification: an innovation-test alarm is a
-detection (``alarms``, ``detected_at_s``) and nothing more. The innovation test cannot tell a
-drifting sensor from heat (the reading moves, the filter has nothing else to follow): on a
-winding sensor drifting 1.5 K/h from 60 min it alarmed from 80 min, each alarm's identification
-named a shorted turn the plan then believed, and the sensor watch, whose record checks the new
-beliefs had spent, claimed the drift 10 min later than without it; the disturbance states take a
-drift up as opposite heat flows on the two nodes (the sensor watch's pattern), not as a fault.
-A generator whose sensor the sensor watch masked leaves both tests. A reading the sensor
-watch merely suspects (one sensor moved alone: it holds it out of the planner's filter until its
-record check) still reaches the innovation test: held out too, it delayed the detection of a
-blockage by a cycle (138 to 438 s on ``bench_detection.py``'s case 20); as it starts no
-identification, it changes no belief.
-
-A second test watches for a **model error** common to all generators: the mean :math:`\bar z`
-of the normalised winding innovations :math:`z_g = e_g/\sqrt{S_{ww}}` over the generators
-believed healthy, a two-sided CUSUM with :math:`\nu_m, h_m`. An alarm recalibrates the planning
-model's uncertain parameters (``calibrate_parameters``) on the record of the generator that looks
-healthiest (:func:`genthermal.diagnose.calibrate`), at most every ``recalibrate_every_s``.
-With the extended Kalman filter in the loop this test rarely fires (the disturbance states take
-the model error up before the innovations show it); the common model error reaches the plan
-through those states instead (offset-free planning, above), which is why no test on the common
-part of the disturbances triggers more recalibrations. Measured: on the plant hot at rest of
-``tests/test_closed_loop_shed.py`` (cooling 10 % short, resistance 5 % high, no recalibration
-before 60 min) the healthy generator peaks at 78.9 °C, within θmax 85 °C, where it reached 86.7 °C
-without the disturbance states in the plan.
-
-Recalibration and identification fit the record on the grid of ``identify_dt_s``, each row's
-inputs averaged over the interval it is held for (:meth:`FaultMonitor.fit_record`,
-:mod:`genthermal.schedule.monitoring.record_grid`). Sampled at the grid times instead, the record aliased the
-schedulers' 10-s rests at the cycle starts: on blockage_large (optimal scheduler) four fits on the
-healthy generator's record gave ``h_top_air`` 125/102/56/28 W/(m² K) (plant 15.5), ``m_dot_fan``
-0.003-0.007 kg/s (plant 0.02) and ``R0`` 1.00-1.13 Ω (plant 1.26), compensating errors that took
-up the misfit, and the blockage sized against that fan flow came out as k_flow 0.64, then 0.42
-(plant 0.20). On the fit grid the same fit at 200 min gives ``h_top_air`` 15.6, ``m_dot_fan``
-0.0195 kg/s, ``R0`` 1.257 Ω and ``h_end_air`` 13.94 (plant 13.95), and the blockage k_flow 0.201.
+"""Fault detection in flight: the tests on each generator's filter, the common model-error test
+and recalibration, and the hand-over to identification on an alarm. Main objects:
+:class:`FaultMonitor`, :class:`DetectionSettings`, :class:`Cusum`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

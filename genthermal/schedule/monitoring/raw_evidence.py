@@ -1,47 +1,6 @@
-r"""What a claimed sensor fault must show in the raw record, where no heat flow can imitate it.
-
-The sensor watch's record check (:meth:`SensorWatch._fit <genthermal.schedule.monitoring.sensor_watch.SensorWatch._fit>`)
-fits the single-sensor faults against the heating faults on the record put on the 60-s fit grid
-(:func:`~genthermal.schedule.monitoring.record_grid.on_fit_grid`). On a plant whose parameters are 10-30 %
-off the manager's model, the best machine effect leaves kelvins of slow, structured misfit, and a
-sensor fault fitted on that grid absorbs it: on the robustness grid
-(``benchmarks/figures/robustness.json``, optimal flights) 7 of 48 faulty flights claimed a sensor
-fault nobody injected: biases of -1.0 to -2.9 K of the iron or winding reading of a unit with an
-end-winding stray loss (cases 2, 37, 42, 52), a -6.35 K winding bias of a unit with a shorted
-turn (case 41: the bias was subtracted in the filter, the real overheat hidden), and readings
-"2-2.6× noisier" (cases 32, 45, 52). The misfit is slow; a sensor fault is not. The flight
-records every simulation step (10 s), and two signatures of a sensor fault show there:
-
-* **a bias is a step at its onset** (:math:`b\,H(t-t_0)`; a gain error :math:`g\,T\,H(t-t_0)`
-  too). A node with a heat capacity changes its temperature at a finite rate; a load step or a
-  heat flow the model lacks bends its curve (a slope change), it does not lift it within one
-  sample. Around each raw sample :math:`t_j` within :attr:`RawEvidenceSettings.onset_tolerance_s`
-  of the fitted onset, the reading over :math:`\pm` :attr:`RawEvidenceSettings.step_window_s` is
-  fitted by an offset, a slope and a slope change at :math:`t_j` (the heat flows), with and
-  without a step :math:`v\,H(t-t_j)`; :math:`z = \sqrt{RSS_0 - RSS_1}/\hat\sigma`
-  (:math:`\hat\sigma` the sensor noise, :func:`~genthermal.diagnose.search.noise_std`) is the
-  step's size in noise units.
-  The claim stands when the largest step there is significant (:math:`z \ge`
-  :attr:`RawEvidenceSettings.step_min_sigma`), has the fitted fault's sign, at least
-  :attr:`RawEvidenceSettings.step_min_share` of its size and
-  :attr:`RawEvidenceSettings.step_min_rate_factor` times what heat moved the node in one sample
-  there (the local slopes). The fastest heat flows move a node by about a kelvin per sample (the
-  winding when a unit is switched on: 25.2 → 26.0 → 27.1 °C in 10-s steps), which the local fit
-  reads partly as a step; the rate test keeps it apart.
-* **a stuck reading holds still**: after its onset it scatters about its value by its noise at
-  most (:func:`stuck_spread`; a reading frozen exactly is claimed from the raw record already,
-  :func:`~genthermal.schedule.monitoring.sensor_patterns.frozen_since`), where a live reading follows the heat.
-* **increased noise shows in the sample-to-sample differences of the raw reading**. Second
-  differences of 10-s samples remove any heat flow's slope and almost all its curvature, while
-  on the 60-s grid a misfit's curvature reads as noise. The robust scale of the raw second
-  differences after the onset over that before it must reach
-  :data:`~genthermal.diagnose.sensor_faults.MIN_NOISE_FACTOR`, the factor a noise claim needs.
-
-Measured on the dumped record checks of the seven grid flights and of
-``benchmarks/bench_sensor_flights.py``: the false biases show raw jumps of 0.14-0.23 of their
-fitted size (case 41: -0.54 K for -6.35 K, z 6.0), the injected ±4 K biases 0.96-1.07 (z 29-47);
-the false noise claims raw factors of 0.74-1.24. Drifts (a ramp, no step) are bounded by
-:attr:`SensorWatchSettings.max_drift_K_per_h <genthermal.schedule.monitoring.sensor_watch.SensorWatchSettings>`.
+"""What a claimed sensor fault must show in the raw record, where no heat flow can imitate it
+(the check the sensor watch runs before it believes a sensor fault). Main objects:
+:class:`RawEvidenceSettings`, :func:`unsupported`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,26 +1,6 @@
-r"""An in-flight record put on the coarser grid that calibration and identification fit on.
-
-The flight records every simulation step (``dt`` s): the sensors at the end of the step and the
-inputs in force during it (:meth:`FaultMonitor.frame <genthermal.schedule.monitoring.monitor.FaultMonitor.frame>`).
-The fits run on a grid of ``fit_dt`` s (``DetectionSettings.identify_dt_s``), where the simulator
-holds each input row constant until the next (zero-order hold). Sampling the inputs at the grid
-times, as :func:`genthermal.measurements.resample` does with a measurement file, aliases every
-load change shorter than ``fit_dt``: the schedulers rest a generator in 10-s steps at the start of
-a management cycle, which falls on the 60-s grid, so on ``blockage_large`` (optimal scheduler)
-one minute in five of the record read the rest current (1.9 A) where the unit carried 7 A for
-50 of its 60 s. The true plant then missed its own record by 2.47 K RMS (0.25 K at the 10-s
-step), the recalibration on the healthy unit's record took the misfit up as a fan flow of
-0.005 kg/s (plant 0.02) with ``h_top_air`` 68 W/(m² K) (plant 15.5), and the blockage, sized
-against that flow, came out as k_flow 0.64, then 0.42 (plant 0.20).
-
-:func:`on_fit_grid` gives each grid row the inputs over the interval it is held for instead:
-the root mean square of each current over the steps in :math:`(T_j, T_j + \Delta]` (the copper
-and excitation losses go with :math:`I^2`, so a window's heat is kept), the mean of every other
-input (inlet and ambient temperatures), and the sensors as measured at :math:`T_j`. On the same
-record the true plant then fits at 0.11 K RMS, the recalibration gives a fan flow of 0.0195 kg/s
-and the blockage is sized k_flow 0.201 (``genthermal fly blockage_large --scheduler optimal``);
-on a record of 7 A with the same 10-s rests the plant fits at 0.09 K RMS on the grid against
-10.1 K sampled at the grid times (``tests/test_record_grid.py``).
+"""An in-flight record put on the coarser grid that calibration and identification fit on: each
+grid row gets the RMS of each current and the mean of the other inputs over the interval it is
+held for. Main objects: :func:`on_fit_grid`, :func:`check_fit_step`.
 """
 
 from __future__ import annotations

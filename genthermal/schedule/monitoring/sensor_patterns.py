@@ -1,38 +1,6 @@
-r"""Two in-flight signatures of a sensor fault that no heat flow has.
-
-**A frozen reading.** A PT100 read through a live channel carries its noise (standard deviation
-:math:`\sigma` of the machine's sensor schema, 0.09-0.11 K on the thesis generator): two
-consecutive samples are equal with probability about zero, :math:`n` in a row never. A channel that
-returns the same value sample after sample (a frozen logger channel, a stuck transmitter) is a
-stuck sensor, known from its own record in one management cycle, before any model is asked.
-:func:`frozen_since` finds such a run at the end of a record and checks that the sensor was noisy
-before it (a record logged without noise has runs of equal samples everywhere and is not judged).
-
-**Opposite heat flows.** The fault test (:mod:`genthermal.schedule.monitoring.detector`) gives, per generator
-and sensor node, the extra heat flow relative to the healthy generators in standard deviations,
-:math:`r_{g,\mathrm{winding}}` and :math:`r_{g,\mathrm{iron}}`. Every fault the manager watches
-for *adds* heat: a shorted turn or stray loss heats the winding and, through the coupling the model
-knows, the iron follows (:math:`r_w \gg 0`, :math:`r_i \gtrsim 0`); an iron loss heats the iron
-(:math:`r_i > 0`, :math:`r_w \approx 0`); a blockage heats both. A sensor that drifts moves one
-reading only: to follow it the filter must heat that node *and cool the other* (the coupling would
-otherwise carry the heat into the other sensor, which does not move). The signature of a drifting
-sensor is therefore two heat flows of opposite sign, both away from zero:
-
-.. math::
-    m_g = \begin{cases} \min(|r_{g,w}|, |r_{g,i}|) & r_{g,w}\,r_{g,i} < 0 \\ 0 & \text{otherwise}
-    \end{cases}
-
-which feeds a one-sided CUSUM per generator (:func:`opposite_flows`). Measured on the Fig. 7.7
-flight (two generators, engineer scheduler, limit 88 °C, statistics logged every 5-min cycle):
-:math:`m_g` stayed at or below 0.42 on the healthy flight; on flights with a shorted turn
-(0.3 Ω), an end-winding stray loss (0.3 Ω), an excitation iron loss and a partial blockage from
-60 min it was 0 at their alarms and at most 0.44 over the whole flight; a measured 8-K inlet rise
-gave 0.95 on one cycle. A 1.5 K/h iron-sensor drift from 90 min gave 0.5-0.7 from 105 min on,
-1.6 at most; a 3 K/h winding drift 1.4 within 25 min.
-With two generators the test is symmetric (the healthy generator is
-compared with the drifting one and shows the mirror pattern): the alarm only says *look*; the record
-check of each generator (:meth:`~genthermal.schedule.monitoring.sensor_watch.SensorWatch`) decides which
-sensor, if any, is at fault.
+"""Two in-flight signatures of a sensor fault that no heat flow has: a frozen reading
+(:func:`frozen_since`) and two nodes of one unit moving in opposite directions
+(:func:`opposite_flows`, :class:`UnconfirmedExcess`). Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,51 +1,6 @@
-r"""A warmer coolant-inlet reading the physics has not confirmed yet: what the plan and filter hold.
-
-A unit's inlet PT100 drives its filter and its plan. When it suddenly reads warmer than the other
-units' two things can have happened, and they look alike at the inlet reading alone:
-
-* the air really got warmer at that unit (a blockage recirculates hot air): the winding and the
-  iron follow, along the model's response to the inlet step (on the thesis generator 0.31 K per K
-  after 5 min, 0.48 after 10 min, 0.59 after 15 min for the winding; the iron about half that),
-  and the outlet-air reading, where the machine's sensor schema has one, follows within a minute;
-* the sensor reads high (a bias, a drift): only the reading moves.
-
-**Shared air.** The units of a power system take their cooling air from one source: the mission
-has one inlet temperature, and a unit's inlet differs from it only by the rise of a fault of that
-unit (:meth:`PowerSystem.inlet_C <genthermal.schedule.power_system.PowerSystem.inlet_C>`, a
-recirculating blockage). The other units' median reading is therefore the reference, as in
-:mod:`~genthermal.schedule.monitoring.input_watch`; with one unit there is no reference, and nothing is held.
-
-**Deciding.** Two tests, each cycle while the readings disagree: the input watch's record check
-(:math:`\Delta`, the record's misfit with the unit's own reading against the other units', no
-parameter fitted) claims the sensor at :math:`\Delta < -10` and confirms the rise at
-:math:`\Delta > +10` (on the Fig. 7.7 flight a 3-K bias gave -7.6 one cycle after its onset and
--36 two cycles after; real 2-16 K steps were confirmed one cycle after); and the unit's fault test
-(:meth:`~genthermal.schedule.monitoring.input_watch.InputWatch._confirm_by_heating`) confirms the rise when
-it alarms on the unit, which a high-reading sensor cannot make it do (the model driven by a warmer
-reading runs hot, the filter cools the unit) and a blockage that cuts the flow as it heats the
-air does within a cycle or two, when the record check is still undecided (its misfit mixes the
-flow's heating into both fits).
-
-**The hold.** While the warmer reading is undecided, the plan *and the unit's filters* take the
-unit's last agreeing (trusted) reading plus whatever of the rise exceeds
-:attr:`~genthermal.schedule.monitoring.input_watch.InputWatchSettings.unconfirmed_rise_K`, for at most
-:attr:`~genthermal.schedule.monitoring.input_watch.InputWatchSettings.max_unconfirmed_s` from the first held
-plan. Planning the warmer reading at once (the rule before) moved the plan for a sensor fault: a +3
-K inlet bias on a flight planned 0.1-0.2 K below its limit re-planned at its onset and changed three
-cycles' loads before its claim; holding it from the plan only still let the filter learn heat flows
-from it, which the claim takes back only approximately (1-3 re-plans, up to 7 load changes on other
-noise seeds, ``benchmarks/bench_inlet_confirmation.py``). The bounds make a real rise safe: over
-the hold and the cycle the last held plan is flown, a real rise of the held size heats the winding
-by at most the response to a step of that size over that time (0.59 K per K after 15 min: 4 K
-held for 10 min plus one 5-min cycle is 2.4 K), within the plan's margin (2.5 K,
-``ManagerSettings.margin_K``). A rise larger than the held part is planned at once for the excess
-(a 31-K blockage inlet is planned 27 K warmer from its first cycle). The hold ends when the readings
-agree again, when a test confirms the rise (the reading is then planned and filtered), when the
-check claims the sensor (the other units' reading is then used, as for any claimed input sensor),
-when the checks run out, or at the time bound (the reading is then used).
-
-A colder reading under check is held at the last agreeing one by the input watch without a bound
-(:meth:`~genthermal.schedule.monitoring.input_watch.InputWatch.for_plan`): that is the safe side.
+"""A warmer coolant-inlet reading the physics has not confirmed yet: the plan and the filter hold
+most of the rise back until the unit's own temperatures follow it. Main object:
+:class:`UnconfirmedInlet`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

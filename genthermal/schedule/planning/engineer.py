@@ -1,21 +1,6 @@
-r"""The engineer's heuristic: the fair baseline for the optimal scheduler.
-
-One rule changed from the thesis heuristic (:mod:`genthermal.schedule.planning.heuristic`): once a breach
-is predicted anywhere in the rest of the mission, the generators that would breach shed **as much
-load as the others can take**, from the first segment on and not the least that keeps them within
-the limit in the breaching segment; only when that is not enough do all generators rest, in fine
-steps (``rest_step_s``, default 10 s).
-
-What the others can take: a receiver :math:`h` carries :math:`I_{ini}(t) + a_h` with
-:math:`a_h \le I_{limit} - \max_t I_{ini}(t)` (current limit) and, on the linear design model,
-:math:`\theta_h(t) = \theta_{h,0}(t) + a_h s_h(t)` with :math:`s_h \ge 0`, so its thermal room is
-exactly :math:`\min_t (\theta_{lim} - \theta_{h,0}(t))/s_h(t)`. The violators shed the total room
-equally, at most what they carry. Moving the most load early leaves the violators coolest for the
-segments that follow, which is what an engineer at the console would do.
-
-The shortest rest is searched on the grid of ``rest_step_s`` by doubling and bisection: on the
-linear design model a longer rest in the minimum power mode never makes a segment hotter (the
-machine cools towards the rest-mode steady state), so the feasible rests form an interval.
+"""The engineer's heuristic, the fair baseline for the optimal scheduler: once a breach is
+predicted, the generators that would breach shed as much load as the others can take, then all
+rest in fine steps. Main objects: :func:`engineer_plan`, :class:`EngineerSettings`.
 """
 
 from __future__ import annotations

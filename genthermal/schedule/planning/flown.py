@@ -1,40 +1,6 @@
-r"""Planning on the model the manager flies: the filter's nonlinear model, its state and its covariance.
-
-The closed loop's extended Kalman filter (:class:`~genthermal.estimation.ekf.ExtendedKalmanFilter`)
-runs on the nonlinear model the manager believes in (the calibrated or identified model with the
-effects identified so far) and estimates the node temperatures and the disturbance heat flows
-:math:`(d, m)`. :class:`FlownPlanning` predicts a schedule with the filter's own step
-:math:`z_{k+1} = \Phi(z_k, u_k)` (:mod:`genthermal.discretise`'s ETD2RK step with the disturbances
-held, as :meth:`~genthermal.estimation.ekf.ExtendedKalmanFilter.forecast`) and derives the
-**back-off** from the filter's uncertainty instead of a fixed margin: the covariance the filter's
-estimate will have along the plan, the measurement update it makes once per management cycle
-included,
-
-.. math::
-    P^{+}_k = P_k - P_k H^T (H P_k H^T + R)^{-1} H P_k \;\;(k \in U,\ \text{else } P^{+}_k = P_k),\qquad
-    P_{k+1} = F_k P^{+}_k F_k^T + Q,\qquad
-    b_k = z_\alpha \sqrt{\operatorname{diag}\bigl(H P_k H^T\bigr)},
-
-with :math:`P_0` the filter's covariance now, :math:`F_k` the exact Jacobian of the step along the
-predicted trajectory (CasADi), :math:`Q` and :math:`R` the filter's process and measurement noise
-and :math:`U` the steps at which the closed loop updates the filter (one per cycle from now:
-:func:`update_steps`; the filter takes the cycle's last sample, ``closed_loop``). :math:`b_k` is the
-standard deviation of the temperature the manager's estimate at its last update before step
-:math:`k` predicts for step :math:`k`: the manager re-plans as soon as that corrected prediction
-crosses θmax, so a step's temperature is held by the plan made one cycle before it at the latest,
-not by the prediction made now. The estimate's present uncertainty (the disturbance states
-included: an uncertain heat flow is a growing temperature uncertainty) counts in full over the
-first cycle and shrinks as the filter's updates will shrink it; what the measurements cannot see
-(an unobservable combination of heat flows) keeps growing. Every generator, healthy ones
-included, is held to :math:`\theta + b \le \theta_{max}`.
-
-Before (the present covariance carried along the whole plan without the updates, the process
-noise over one window), a filter whose model had just changed (its disturbance states restart
-from their prior, :meth:`~genthermal.schedule.state_estimator.StateEstimator.use`) gave a
-back-off of 16.6 K on the robustness grid's case 10 at the identification, and the manager rested
-27 min and shed load on a generator that then peaked at 93.8 °C.
-
-:math:`z_\alpha` = :data:`DEFAULT_CONFIDENCE_SIGMAS` (one-sided 97.7 % for a Gaussian error).
+"""Planning on the model the manager flies: the filter's nonlinear model, its state and
+disturbances, with a back-off from its covariance. Main object: :class:`FlownPlanning`. Method:
+docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

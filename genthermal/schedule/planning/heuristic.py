@@ -1,19 +1,6 @@
-r"""The load management heuristic of thesis chapter 7 (eqs. 7.1-7.5, Fig. 7.2).
-
-Going forward through the segments, for the first segment :math:`k` in which some generator would
-exceed :math:`\theta_{max}` (winding or iron) during its rest and the segment:
-
-1. **Displacement only** (eq. 7.2): each violating generator :math:`f` sheds the smallest
-   :math:`I_d` that keeps it within the limit; the others share it equally (eqs. 7.3-7.4). On the
-   linear design model the temperature is affine in :math:`I_d`,
-   :math:`\theta(t) = \theta_0(t) - I_d\,s(t)` with :math:`s(t) \ge 0`, so the minimum is exact:
-   :math:`I_d = \max_t (\theta_0(t) - \theta_{max})/s(t)`. It is accepted if the receivers stay
-   within the limit and every current within :math:`[0, I_{limit}]`.
-2. Otherwise **rest both generators** (eq. 7.1) for ``rest_step_s`` more before the segment and
-   go back to 1 (a rested receiver is cooler and can take more), until a solution is found.
-
-Minimising the mission time (eq. 7.5) this way prefers displacement, which adds no time. Decisions
-for segment :math:`k` fix the state for :math:`k+1`, so one forward sweep ends.
+"""The load management heuristic of thesis chapter 7 (eqs. 7.1-7.5, Fig. 7.2): displacement first,
+then rest, segment by segment. Main objects: :func:`heuristic_plan`, :class:`HeuristicSettings`,
+:class:`SegmentResponse`.
 """
 
 from __future__ import annotations

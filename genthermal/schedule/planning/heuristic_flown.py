@@ -1,15 +1,6 @@
-r"""The thesis heuristic's segment responses on the flown model (``planner_model`` ``nonlinear``).
-
-The thesis's rig test made its predictions with "a Kalman Filter containing the simulation
-model" (7.3.4). On the nonlinear model the temperature is no longer affine in the displaced
-current :math:`I_d` (the copper loss grows with :math:`I^2`, the resistance with the winding
-temperature), so the least displacement of eq. 7.2 is found by a bracketed search on the model
-itself instead of the affine formula of :class:`~genthermal.schedule.planning.heuristic.SegmentResponse`:
-the peak over a rest and segment is monotone in :math:`I_d` (less current, less heat), so
-regula falsi (Illinois) between a current that breaches and one that does not converges to the
-least one that does not. Each evaluation runs the filter's own model from its state with the
-back-off of its covariance (:meth:`~genthermal.schedule.planning.flown.FlownPlanning.run`), so the
-heuristic holds :math:`\theta + b \le \theta_{max}` as the nonlinear optimal planner does.
+"""The thesis heuristic's segment responses on the flown nonlinear model (``planner_model``
+``nonlinear``, thesis 7.3.4): the least displacement by a bracketed search on the model. Main
+object: :class:`FlownSegmentResponse`.
 """
 
 from __future__ import annotations

@@ -1,15 +1,6 @@
-r"""The design model the schedulers plan on, for any model, fault effects included.
-
-:func:`genthermal.design.linear_design_model` replaces the copper loss :math:`I^2` by its
-least-squares line over the design current range (thesis eq. 5.3). A fault effect may add other
-losses that depend nonlinearly on the currents (a shorted turn :math:`R_{short}I_u^2`, an
-end-winding stray loss :math:`R_{stray}\sum_p I_p^2`, an excitation iron loss
-:math:`k_{exc}I_{exc}^2`). :func:`planning_design_model` treats them the same way: along the
-schedulers' load path (balanced phases :math:`I_u = I_v = I_w = I`, field current from the
-exciter law :func:`genthermal.exciter.exciter_current` at its default power factor) each such loss is replaced by its
-least-squares line :math:`q \approx \alpha I + \beta` over the same current range, written as
-:math:`\alpha (I_u + I_v + I_w)/3 + \beta`. The result is affine, so the schedulers and the
-Kalman filter use it unchanged.
+"""The design model the schedulers plan on, for any model with its fault effects: every loss that
+is nonlinear in the currents replaced by its least-squares line along the load path (thesis
+eq. 5.3). Main object: :func:`planning_design_model`.
 """
 
 from __future__ import annotations

@@ -1,30 +1,6 @@
-r"""Discrete load schedule as a mixed-integer linear program (thesis 8.3.1: loads move in chunks).
-
-Rests come in whole blocks of ``block_s`` (5 min) and loads move between generators in whole
-chunks of ``chunk_A``. On the linear design model the problem is then exactly a MILP, which HiGHS
-solves with a proof: a certified answer is within 1 % of the best discrete schedule for that model.
-
-Per segment :math:`k` a one-hot choice :math:`\lambda_{k,n}\in\{0,1\}` of the rest length
-:math:`n\in\{0..N\}` blocks, and integer chunk counts :math:`m_{g,k}` (:math:`d_{g,k} = c\,m_{g,k}`,
-:math:`\sum_g m_{g,k} = 0`). The rest couples a binary with the entry state, which is linearised
-exactly by disaggregation (convex hull): the entry state :math:`x^{in}_{g,k} = \sum_n z_{g,k,n}`
-with :math:`\underline\theta\lambda_{k,n} \le z_{g,k,n} \le \overline\theta\lambda_{k,n}`, and
-
-.. math::
-    s_{g,k} = \sum_n \left(\Phi^n z_{g,k,n} + (I - \Phi^n)x^{ss}_g\lambda_{k,n}\right),
-    \qquad \Phi = e^{L\,\Delta_{block}},
-
-the state when the segment starts. Inside the segment the temperatures at every check point are
-affine in :math:`s_{g,k}` and :math:`m_{g,k}` (exact zero-order hold), and so is the end state.
-Objective: :math:`\sum_{k,n} n\Delta_{block}\lambda_{k,n} + w\sum_{g,k} (T_k/3600)\,c\,|m_{g,k}|`
-(minutes). The state bounds :math:`\underline\theta, \overline\theta` come from the generator's
-steady states (:func:`_state_range`), which keeps the relaxation tight.
-
-Solved by HiGHS through ``scipy.optimize.milp``, which returns the incumbent and the proven bound
-when the time limit stops it (CasADi's ``conic`` plugin only when SciPy has no ``milp``). HiGHS stops
-at a relative gap of 1 %; the heuristic's and engineer's plans, rounded to the grid, give the
-incumbent to beat (warm start by cutoff). A plan the solver did not certify says so, with its gap,
-incumbent and bound, and which plan is flown: never a silent fallback.
+"""Discrete load schedule as a mixed-integer linear program (thesis 8.3.1): rests in whole blocks,
+loads moved in whole chunks, solved by HiGHS with a certificate. Main objects: :func:`milp_plan`,
+:class:`MilpSettings`.
 """
 
 from __future__ import annotations

@@ -1,24 +1,6 @@
-r"""Optimal load schedule by direct transcription in CasADi, solved by IPOPT with exact derivatives.
-
-Decision variables: per segment :math:`k` the displaced current :math:`d_{g,k}` of every generator
-(A) and the rest :math:`r_k` before it (continuous, free time), and the design-model state of every
-generator at every grid point. Problem (thesis eq. 7.5 with a small load-displacement penalty):
-
-.. math::
-    \min_{d, r, x}\; \sum_k r_k + w \sum_{g,k} \frac{T_k}{3600}\, d_{g,k}^2
-    \quad\text{s.t.}\quad
-    \theta^{w}_g(t_i) \le \theta_{lim},\; \theta^{fe}_g(t_i) \le \theta_{lim}\;\forall g, i,\quad
-    \sum_g d_{g,k} = 0,\quad 0 \le I_{ini,k}(t) - d_{g,k} \le I_{limit},\quad 0 \le r_k \le r_{max}.
-
-Inside a segment the state grid points are the back-off windows (at most one management cycle
-apart, :meth:`~genthermal.schedule.planning.plan.Segment.windows`) and the exact zero-order-hold step
-:math:`x^+ = E_hx + \Gamma_h(Bu + c)` is an equality constraint. The temperatures are constrained
-every ``check_s`` inside each interval through the exact affine map from the interval's first state,
-and also with the rise back-off :math:`(1+\kappa)\theta - \kappa\theta_{start}\le\theta_{lim}`
-(``problem.rise_backoff``). A rest is split into ``rest_substeps`` intervals of free length
-:math:`h = r_k/M` (time scaling), each the exact solution at constant input,
-:math:`x^+ = x_{ss} + Ve^{\Lambda h}V^{-1}(x - x_{ss})`. :math:`\theta_{lim}` is the planning limit
-(θmax minus the back-off margin). The heuristic provides the initial guess and the fallback.
+"""Optimal load schedule by direct transcription in CasADi, solved by IPOPT with exact derivatives
+(thesis eq. 7.5), and the lowest reachable peak (min-max). Main objects: :func:`optimal_plan`,
+:func:`lowest_reachable_peak`, :class:`OptimalSettings`.
 """
 
 from __future__ import annotations

@@ -1,39 +1,6 @@
-r"""Optimal load schedule on the flown nonlinear model: direct multiple shooting in CasADi, IPOPT.
-
-The problem carries :class:`~genthermal.schedule.planning.flown.FlownPlanning` (the manager's extended
-Kalman filters, their states and covariances). Per generator :math:`g` the plan steps the
-filter's model: the nonlinear model the manager believes in with the estimated disturbance heat
-flows held (:math:`w = M(d + \ell(u)m)`, as the filter predicts), by
-:func:`genthermal.discretise.step_expression` (ETD2RK, exact for the linear part) with the step
-matrices :math:`(e^{hL}, \Gamma_1, \Gamma_2)` as parameters, so one CasADi function serves every
-interval length. Derivatives are CasADi's (exact).
-
-Decision variables, per segment :math:`k` (the closed loop cuts the mission into control intervals
-of one management cycle, :func:`~genthermal.schedule.planning.plan.split_segments`, so this is per
-interval, landing included): the displaced current :math:`d_{g,k}` (A), the rest :math:`r_k`
-before the segment (min, free), and the multiple-shooting states after each rest and each
-interval. Problem (thesis eq. 7.5 with the load-displacement penalty of
-:mod:`genthermal.schedule.planning.optimal`):
-
-.. math::
-    \min\; \sum_k r_k + \frac{w}{60} \sum_{g,k} \frac{T_k}{3600} d_{g,k}^2
-    \quad\text{s.t.}\quad \theta_{g}(t) + b_{g,k} \le \theta_{max}\;\forall g, t,\quad
-    \sum_g d_{g,k} = 0,\quad 0 \le I_k - d_{g,k} \le I_{limit},\quad \sum_k r_k \le r_{budget}.
-
-Temperatures are constrained after every ETD2RK substep (at most ``substep_s`` apart) and at
-``rest_checks`` points of each rest. A rest holds the input constant and the model is affine in the
-state at a fixed input (temperature-dependent resistance is), so a rest of free length :math:`h`
-is the exact :math:`x_{ss} + e^{hJ}(x - x_{ss})` (:class:`~genthermal.discretise.ModalDecay` of the
-rest Jacobian :math:`J`). The back-off :math:`b_{g,k}` is the largest back-off of
-:class:`~genthermal.schedule.planning.flown.FlownPlanning` on segment :math:`k` along the initial guess;
-after solving, the plan is predicted at the filter's step (10 s) with its own back-off, and solved
-again from there (``backoff_passes``), the limit also tightened by what that prediction exceeded
-of it, if that prediction exceeds θmax.
-
-Two variants share the transcription: the min-max of the backed-off temperature (the lowest
-reachable peak), and **shedding**, where :math:`\sum_g d_{g,k} \ge 0` and the load not served
-costs :data:`~genthermal.schedule.planning.price.SHED_PRICE_MIN_PER_AH` minutes of rest per A·h, for when no rest within the budget
-and no displacement keeps θmax.
+"""Optimal load schedule on the flown nonlinear model: direct multiple shooting of the filter's
+model in CasADi, IPOPT. Main objects: :func:`flown_optimal_plan`, :class:`NonlinearSettings`.
+Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

@@ -1,40 +1,6 @@
-r"""The optimal scheduler's own load shedding, on the model the manager flies.
-
-When no schedule within the flight's rest budget keeps θmax, every scheduler has the shared shed
-plan (:func:`~genthermal.schedule.planning.shed.priced_shed_plan`): on the design models with the filters'
-disturbance heat flows, within θmax minus the manager's margin (2.5 K) and with the rise back-off,
-going forward through the segments each generator sheds the least constant load that keeps it
-within that limit, the others take what their room allows, after the one rest (now or right before
-the first shedding segment) that the manager's price (:mod:`~genthermal.schedule.planning.price`) finds
-worth its minutes. That plan is the baselines' (the thesis heuristic has no shedding; the
-engineer's heuristic is defined without it). Its forecast is pessimistic on the robustness grid's
-blockages: on case 50 each re-plan predicted 1.3-2.5 A·h unserved, and the flight left 0.90.
-
-The optimal scheduler also plans the same decision as one problem on the model it identified in
-flight (:func:`own_shed_plan`): the nonlinear planner's transcription on the flown model
-(:func:`~genthermal.schedule.planning.optimal_nlp.flown_optimal_plan` with ``shed``, the extended Kalman
-filters' models with their disturbance states), every generator, the healthy ones included, held
-below θmax with the back-off of the filters' covariance instead of the fixed margin, on the same
-segments, rest budget and current limits, with the objective rest (min) plus
-:data:`~genthermal.schedule.planning.price.SHED_PRICE_MIN_PER_AH` per A·h not served.
-
-**Which plan is flown** (:func:`chosen_shed_plan`): the own plan whenever its prediction on the
-flown model with the back-off stays within θmax on every generator (``feasible`` of
-:func:`~genthermal.schedule.planning.optimal_nlp.flown_optimal_plan`); otherwise the shared plan. Both
-costs at the manager's price (:func:`~genthermal.schedule.planning.price.schedule_cost_min`: rest plus the
-load each leaves unserved) are reported beside the choice, and each plan's forecast on the other's
-model too, so that a saving bought by the flown model's smaller back-off is visible. Either way the
-plan sheds load and is reported ``feasible: false``
-(:func:`~genthermal.schedule.flight.replanning.plan_with`).
-
-Until this rule, the cheaper of the two at the price was flown. The two costs are forecasts on
-different models, and on the robustness grid's blockages the design model's is the pessimistic
-one: the choice flipped from cycle to cycle. On case 10 the own plans, resting 4.0-5.4 min, took
-turns with shared plans resting 40-60 min, and the flight rested the whole 74.8-min budget with
-0.06 A·h unserved. Flying the own plan whenever it holds θmax on its forecast, the same flight
-rests 23.0 min with 0.07 A·h unserved (``genthermal sweep --cases 60 --only 10 --schedulers
-optimal``). The thesis heuristic on the flown model, which sheds with the nonlinear planner alone,
-had rested 43.7 min there.
+"""The optimal scheduler's own load shedding on the model the manager flies, chosen against the
+shared shed plan at the manager's price. Main objects: :func:`chosen_shed_plan`,
+:func:`on_flown_model`.
 """
 
 from __future__ import annotations

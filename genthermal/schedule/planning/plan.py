@@ -1,18 +1,6 @@
-r"""Schedules and what they do: segments of load demand, displaced current, rests, predictions.
-
-A mission is a list of :class:`Segment` objects (one per action, or what remains of an action in
-flight). A :class:`Schedule` gives, per segment :math:`k`,
-
-* the displaced current :math:`d_{g,k}` of every generator :math:`g` (A RMS per phase, positive
-  when the generator sheds load, negative when it takes load on; :math:`\sum_g d_{g,k} = 0`), so
-  generator :math:`g` carries :math:`I_{ini}(t) - d_{g,k}` during the segment (thesis eqs. 7.3-7.4);
-* the rest :math:`r_k` before the segment (s): all generators in the minimum power mode;
-* the generators **switched off** (load shed, :mod:`genthermal.schedule.planning.shed`): they carry 0 A
-  from the first segment on, rests included; what the others do not take of their load is not
-  served.
-
-:func:`build_timeline` samples a schedule on a uniform grid (rests rounded up to the grid);
-:func:`predict` runs it on the design models (:class:`PlanningProblem`).
+"""Schedules and what they do: segments of load demand (:class:`Segment`), displaced current and
+rests (:class:`Schedule`), timelines, the planning problem (:class:`PlanningProblem`), predictions
+on the design model (:func:`predict`) and a scheduler's answer (:class:`PlanResult`).
 """
 
 from __future__ import annotations

@@ -1,21 +1,6 @@
-"""The load manager's price: what a schedule costs in minutes of rest, load not served included.
-
-A plan that keeps every generator within its limit may still cost the aircraft two things: time
-in the minimum power mode (rest, which lengthens the mission) and load not served (shed). The
-manager weighs them with one price, :data:`SHED_PRICE_MIN_PER_AH` minutes of rest per A·h of
-phase current not served:
-
-.. math:: c = \\sum_k r_k / 60 + p \\sum_k \\max\\Big(0, \\sum_{g\\,on} d_{g,k} + \\sum_{g\\,off} I_{g,k}\\Big)\\,\\tau_k / 3600
-
-(rests :math:`r_k` in s, displacements :math:`d_{g,k}` in A, a switched-off generator's whole
-nominal charge :math:`I_{g,k}\\tau_k`). The same price is the objective of the nonlinear planner
-when it may shed (:mod:`~genthermal.schedule.planning.optimal_nlp`), of the hindsight plan
-(:mod:`~genthermal.schedule.sweeps.hindsight`), of the manager's choice between resting and shedding
-when no plan within the rest budget keeps the limit (:func:`~genthermal.schedule.flight.replanning.plan_with`,
-:func:`~genthermal.schedule.planning.shed.priced_shed_plan`), of the optimal scheduler's choice between that
-shed plan and its own on the flown model (:mod:`~genthermal.schedule.planning.optimal_shed`), and of the
-robustness grid's comparison of the schedulers (``cost_vs_best_baseline``,
-:mod:`~genthermal.schedule.sweeps.sweep`).
+"""The load manager's price: what a schedule costs in minutes of rest, load not served included
+(:data:`SHED_PRICE_MIN_PER_AH` minutes per A·h). Main objects: :func:`schedule_cost_min`,
+:func:`not_served_Ah`.
 """
 
 from __future__ import annotations

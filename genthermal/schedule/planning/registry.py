@@ -45,9 +45,6 @@ class Planner:
     settings_field: str = ""
     on_flown_model: bool = False
 
-    def settings_from(self, manager_settings) -> object:
-        """This planner's own settings: the manager's field for it, else the registered ones."""
-        return getattr(manager_settings, self.settings_field) if self.settings_field else self.settings
 
 
 _PLANNERS: dict[str, Planner] = {}

@@ -1,52 +1,6 @@
-r"""Load shedding: the manager's last resort when no schedule keeps a generator within θmax.
-
-When the lowest reachable peak of a generator (min-max over displacement and rests within the
-flight's remaining rest budget, :func:`~genthermal.schedule.planning.optimal.lowest_reachable_peak`) is
-above :math:`\theta_{max}`, rest and displacement cannot save it and the manager plans with
-:func:`shed_plan`; a generator still above :math:`\theta_{max}` when it carries nothing is
-**switched off** (0 A for the rest of the mission; a generator with a cooling fault is not brought
-back in flight):
-
-* going forward through the segments, without rests, each generator still on computes on the
-  linear design model (:class:`~genthermal.schedule.planning.heuristic.SegmentResponse`, temperatures
-  affine in its current) the least load it must shed to stay within the planning limit and,
-  when it needs none, the room it has for more (current limit and thermal room, as the
-  engineer's heuristic computes it, :func:`~genthermal.schedule.planning.heuristic.receiver_room`);
-* a generator takes on others' load only up to the planning limit minus ``receiver_margin_K``
-  (the manager's margin once more, :class:`~genthermal.schedule.flight.manager_settings.ManagerSettings`):
-  load moved onto it drives it where its model has not been checked in this flight;
-* and only as far as the heat it takes on does not make it exceed that limit later, flying its
-  own nominal load, where it would not without it
-  (:func:`~genthermal.schedule.planning.heuristic.future_room`): otherwise a healthy
-  generator helps in one segment and must shed its own load in the next (with offset-free
-  predictions the healthy generator of ``tests/test_closed_loop_shed.py``'s plant hot at rest
-  took 0.9 A in the combat cruise and shed 0.5 A of its own in the landing);
-* the load of the switched-off generators (at least their lowest nominal current in the
-  segment) and what the others must shed go to the generators with room, in proportion to it;
-* **pre-cooling**: a generator that breaches the limit on the nominal schedule anywhere in the
-  rest of the mission takes no one's load and, besides what it must shed, gives the others as
-  much of its load as their room left allows (the engineer's rule,
-  :mod:`genthermal.schedule.planning.engineer`): it arrives cooler at the segments where it must shed, so
-  less load goes unserved there and less rest is needed after the shedding. Measured on the
-  robustness grid's case 50 (a k_flow 0.15 blockage with a +23 K inlet rise on gen1 of 2, the
-  landing's first 5 min at the 7-A current limit): shedding only the least per segment kept
-  gen1 at its planning limit through 2 h of cruise (iron 105 °C at the landing); with
-  pre-cooling the engineer's heuristic's flight leaves 0.72 A·h unserved instead of 1.03 and
-  rests 52.7 min instead of 55.8 (``genthermal sweep --only 50``);
-* what nobody can take is **not served** (reported per generator in A·s and A·h of phase
-  current by :func:`not_served`);
-* over the next management cycle each generator is held within the limit with the rise of its
-  last cycle that its filter did not explain added (``problem.unexplained_rise_K``,
-  :func:`unexplained_rise`, growing linearly over the cycle): right after a fault's onset the
-  disturbance states take the new heating up over several cycles, and a prediction that holds
-  them underestimates the next cycle's rise. Measured on the robustness grid's case 15 (a k_flow
-  0.23 blockage with a +24 K inlet rise): the winding innovations of the blocked generator were
-  +5.3 and +13.3 K (standard deviation 0.55 and 0.88 K) in the two cycles after the onset; the
-  shed plans made without them kept its load but for 0.41 A, and it spent 240 s above θmax
-  (113.6 °C) before it was switched off, where at 0 A its winding falls by about 3 K a minute.
-
-A healthy generator is therefore never loaded beyond the planning limit of its design model;
-the mission goes on to its end.
+"""Load shedding, the manager's last resort when no schedule keeps a generator within θmax:
+shed the least load that keeps the limit, switch off a generator still too hot at 0 A. Main
+objects: :func:`shed_plan`, :func:`priced_shed_plan`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations

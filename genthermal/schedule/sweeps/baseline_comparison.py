@@ -1,18 +1,6 @@
-"""The optimal scheduler against the best baseline over the robustness grid, by rest and by the manager's price.
-
-Two comparisons per faulty case that the heuristic, the engineer's heuristic and the optimal
-scheduler all flew to the end (``rest_vs_best_baseline`` of a sweep JSON):
-
-* **rest** (the issue's key, as defined there): the optimal scheduler's added rest over that of
-  the best baseline, the one of the heuristic and the engineer's heuristic (and of the heuristic on
-  the flown model, :data:`OPTIONAL_BASELINES`, where the sweep flew it) that rests less
-  (``ratio``, ``mean_ratio``, ``cases_optimal_rests_more``). Rest alone is an honest measure only
-  where nobody sheds load: a flight that leaves load unserved buys its rest with it, so the rest
-  ratio is also given over the cases where no scheduler sheds (``without_shedding``);
-* **cost** at the manager's price (:mod:`genthermal.schedule.planning.price`): rest (min) plus
-  :data:`~genthermal.schedule.planning.price.SHED_PRICE_MIN_PER_AH` per A·h not served, the optimal
-  scheduler's over the best baseline's *by that cost* (``cost_vs_best_baseline``,
-  ``mean_cost_ratio``, ``cases_optimal_costs_more``).
+"""The optimal scheduler against the best baseline over the robustness grid, by rest and by the
+manager's price (``rest_vs_best_baseline`` of a sweep JSON). Main object:
+:func:`rest_versus_best_baseline`.
 """
 
 from __future__ import annotations

@@ -1,24 +1,6 @@
-r"""Hindsight plan of a faulty flight: the least added rest with the true plant and its fault known.
-
-What could a manager that knew everything have done? At the first fault's onset
-:math:`t_0` the true plant (nonlinear, with the scenario's ``plant_mismatch`` and its faults) is in
-the state the nominal mission leaves it in (no scheduler acts before a fault: the healthy plant
-keeps θmax on the nominal mission, which :func:`hindsight_plan` checks). From there the optimal
-scheduler on the flown model (:mod:`genthermal.schedule.planning.optimal_nlp`) plans the rest of the mission
-on an extended Kalman filter of the **true** plant with zero covariance and no back-off: every
-generator within θmax itself, the current limits, displacement and rest free per control interval of
-one management cycle (landing included), the flight's rest budget and longest rest per action. The
-plant's inlet of each generator is held at its value after the onset (the sweep's inlet rises are
-steps, ``inlet_rise_tau_s`` 0).
-
-When no schedule serving all load keeps θmax within the rest budget, the plan may leave load
-unserved at :data:`~genthermal.schedule.planning.price.SHED_PRICE_MIN_PER_AH` minutes of rest per
-A·h, the closed loop's own trade of rest for load not served. The result is what the closed loop
-should be compared with: its added rest and load not served.
-
-It is a hindsight *plan*, not a proof of a bound: IPOPT returns a local optimum of a non-convex
-problem from the heuristic's guess, and the closed loop re-plans every cycle on estimates, so it can
-rest more (never less, for the same load served, unless the local optimum is poor).
+"""Hindsight plan of a faulty flight: the least added rest with the true plant and its fault known
+from the onset, the reference the schedulers' rests are compared with. Main object:
+:func:`hindsight_plan`.
 """
 
 from __future__ import annotations

@@ -1,57 +1,6 @@
-"""Robustness sweep: closed-loop flights on plants the manager does not know, in worker processes.
-
-Each case draws (seeded) a mission of 2-8 h, 2-4 generators, plant parameters off by up to
-±30 % (``h_end_air``, ``h_top_air``, ``R0``, ``P_iron``, ``m_dot_fan``, each up or down) and one
-fault the manager is not told, at a random onset on a random generator: a coolant blockage (flow
-factor 0.15-0.6 and an inlet rise), a shorted turn, an end-winding stray loss or an excitation
-iron loss; a share of the cases are healthy (for the false-alarm rate). Every case is flown with
-every scheduler, one task per case in a worker process of one thread
-(:mod:`~genthermal.schedule.sweeps.sweep_workers`; on Dask when asked), the longest expected first (so
-that the long cases do not finish last on otherwise idle workers). The closed loop calls the scheduler only to
-re-plan (:func:`~genthermal.schedule.flight.closed_loop.fly`); a flight that never re-planned is
-therefore the flight of every scheduler (same plant, same seeded noise, same detector), and the
-other schedulers' records are that flight's, marked ``same_flight_as`` (most cases of the grid:
-a fault the manager finds in time or a plant that stays cool needs no re-plan), which saves
-flying it again. A flight that raises is recorded with
-``status`` ``error`` and the error; one that runs past ``flight_cpu_limit_s`` of processor time
-with ``timeout`` (:class:`~genthermal.schedule.flight.flight_result.FlightTimeout`, checked every
-management cycle; processor time, so that a machine busy with other work does not turn slow
-flights into timeouts); one
-still running when the whole sweep passes ``timeout_s`` with ``unfinished``: none is lost.
-
-Keys of :func:`summarise` (benchmark JSON):
-
-``robustness.cases``                 number of cases
-``robustness.breach_s``              per scheduler: the longest time above θmax over the cases (any generator), s
-``robustness.breach_free_fraction``  per scheduler: share of cases flown to the end with no time above θmax
-                                     (a flight that did not finish counts as not breach-free)
-``robustness.breached_cases``        per scheduler: the cases with time above θmax and how long, s
-``robustness.failed_flights``        flights that did not finish: case, scheduler, status, error
-``rest_vs_best_baseline``            ``per_case`` (faulty cases): optimal added rest, the best baseline
-                                     (heuristic or engineer, the one with less added rest) and its rest,
-                                     their ratio (None when the baseline does not rest), the load each
-                                     left unserved (A·h) and the hindsight plan's rest and load not served
-                                     (:mod:`~genthermal.schedule.sweeps.hindsight`; None when not computed);
-                                     ``mean_ratio``: total optimal rest / total best-baseline rest over
-                                     those cases; ``cases_optimal_rests_more``: cases where the optimal
-                                     scheduler rests more than the best baseline (any more: rests are
-                                     whole steps). Rest is ``rested_s``, the time flown in the minimum
-                                     power mode (records without it: ``added_rest_s`` below
-                                     :data:`~.baseline_comparison.REST_RESOLUTION_S` taken as none, 0 for a
-                                     flight that never re-planned). Beside it, at the manager's price
-                                     (rest min + 1000 min per A·h not served): per case ``optimal_cost_min``,
-                                     ``best_baseline_by_cost`` and its cost, ``cost_vs_best_baseline``;
-                                     ``mean_cost_ratio``, ``cases_optimal_costs_more``; and the rest ratio
-                                     over the cases where no scheduler sheds, ``without_shedding``
-                                     (:mod:`~genthermal.schedule.sweeps.baseline_comparison`)
-``flown_optimal_vs_best_baseline``   the same for the optimal scheduler on the flown model
-                                     (:data:`~.baseline_comparison.FLOWN_OPTIMAL`), when the sweep flew it
-``detect_delay_s``                   median and max over the faulty flights detected, how many were
-                                     detected, and the faulty flights not detected (case, scheduler)
-``false_alarms``                     fault alarms on generators without a started fault, total, and healthy flights flown
-``wall_s``                           per flight: median and max wall-clock time, s; ``total_flight_cpu``: the
-                                     flights' processor time added up, s (over the workers: the sweep's
-                                     wall-clock time on an otherwise idle machine, less the Dask overhead)
+"""Robustness sweep: seeded cases of missions, plants off by up to ±30 % and one untold fault,
+each flown closed loop with every scheduler in worker processes. Main objects: :func:`run_sweep`, :func:`robustness_case`,
+:data:`SWEEP_SCHEDULERS`. Figures: docs/results/robustness-grid.md.
 """
 
 from __future__ import annotations

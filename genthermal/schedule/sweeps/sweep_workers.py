@@ -1,12 +1,6 @@
-"""Where a sweep's flights run: worker processes of one thread each, never two threads on CasADi.
-
-CasADi's symbolic core is not thread-safe (:mod:`genthermal.collector`). :func:`fly_cases_in_processes`
-(the default) flies every case in a :class:`concurrent.futures.ProcessPoolExecutor` of processes
-started fresh (``spawn``: no copy of the parent's CasADi objects or threads), each running its
-flights in its main and only thread, and opens no port. A worker that dies breaks the pool: its
-flights and those not yet flown are recorded as errors, never re-run in a restarted worker.
-:func:`fly_cases_on_dask` runs them on a Dask scheduler instead (``--cluster``, or a local cluster
-with a dashboard, ``--dashboard``): Dask is the optional extra ``genthermal[sweep]``.
+"""Where a sweep's flights run: fresh worker processes of one thread each (CasADi is not
+thread-safe), or a Dask cluster when asked. Main objects: :func:`fly_cases_in_processes`,
+:func:`fly_cases_on_dask`.
 """
 
 from __future__ import annotations
