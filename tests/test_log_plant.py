@@ -3,8 +3,6 @@ and the bad logs: columns that are not the machine's sensors, a step that is not
 NaN or an unreadable value mid-flight."""
 
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd

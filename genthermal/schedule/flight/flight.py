@@ -8,16 +8,15 @@ from __future__ import annotations
 import dataclasses
 import os
 
-from ...errors import InputError
 from .flight_result import FlightResult
 from ..planning.registry import planner
-from .manager_settings import SCHEDULERS, ManagerSettings
+from .manager_settings import ManagerSettings
 from ..power_system import PowerSystem
 
 
 @dataclasses.dataclass(frozen=True)
 class Manager:
-    """The load manager: ``scheduler`` (a registered planner: :data:`SCHEDULERS` or one of yours,
+    """The load manager: ``scheduler`` (a registered planner: a built-in one or one of yours,
     :func:`~genthermal.schedule.planning.registry.register_planner`) with its ``settings``."""
 
     scheduler: str = "optimal"
