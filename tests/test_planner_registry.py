@@ -1,28 +1,26 @@
 """Planners by name: a scheduler written in one file outside genthermal is registered and flown."""
 
-import importlib.util
+import json
 from pathlib import Path
 
 import pytest
 
+from genthermal.cli import main
 from genthermal.errors import InputError
 from genthermal.schedule.flight.flight import Flight, Manager
 from genthermal.schedule.flight.manager_settings import SCHEDULERS, ManagerSettings
-from genthermal.schedule.planning.registry import (BUILT_IN_PLANNERS, planner, planner_names, register_planner,
-                                                  unregister_planner)
+from genthermal.schedule.planning.registry import (BUILT_IN_PLANNERS, load_planner_file, planner, planner_names,
+                                                  register_planner, unregister_planner)
 
-from test_plants import HOT_MISSION, LumpedPlant, _system
+from test_plants import EXAMPLE, HOT_MISSION, LumpedPlant, _system
 
 TOY_FILE = Path(__file__).resolve().parent / "toy_planner.py"
 
 
 @pytest.fixture()
 def toy():
-    """The toy planner of tests/toy_planner.py, loaded from its file and registered for one test."""
-    spec = importlib.util.spec_from_file_location("toy_planner", TOY_FILE)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    entry = module.register()
+    """The toy planner of tests/toy_planner.py, registered by running its file, for one test."""
+    entry = planner(load_planner_file(TOY_FILE))
     yield entry
     unregister_planner(entry.name)
 
@@ -70,3 +68,31 @@ def test_an_unregistered_planner_is_gone(toy):
     with pytest.raises(InputError, match="scheduler"):
         Manager(toy.name)
     assert register_planner(toy.name, toy.plan, toy.settings).name in planner_names()  # registered again
+
+
+def test_a_planner_file_is_flown_from_the_command_line(tmp_path):
+    _, path = _system(tmp_path, HOT_MISSION)
+    out = tmp_path / "flight.json"
+    try:
+        assert main(["fly", str(path), "--scheduler", str(TOY_FILE), "--plant", str(EXAMPLE), "--json", str(out)]) == 0
+    finally:
+        unregister_planner("rest_first")
+    summary = json.loads(out.read_text())
+    assert summary["rested_s"] > 0.0 and {plan["method"] for plan in summary["plans"]} == {"rest_first"}
+
+
+@pytest.mark.parametrize("text, words", [
+    ("raise RuntimeError('no solver here')", "raised RuntimeError: no solver here"),
+    ("x = 1", "registered 0 planners"),
+    ("from genthermal.schedule.planning.registry import register_planner\n"
+     "register_planner('one_a', lambda p, s, q: None)\nregister_planner('one_b', lambda p, s, q: None)",
+     "registered 2 planners"),
+])
+def test_a_planner_file_that_fails_is_a_clear_error(tmp_path, capsys, text, words):
+    _, path = _system(tmp_path, HOT_MISSION)
+    planner_file = tmp_path / "bad_planner.py"
+    planner_file.write_text(text + "\n")
+    assert main(["fly", str(path), "--scheduler", str(planner_file)]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "--scheduler" in err and "Traceback" not in err
+    assert not {"one_a", "one_b"} & set(planner_names())  # nothing half-registered is left

@@ -1,7 +1,8 @@
 """A scheduler of one file, as a user would write it: rest every generator before the first
 segment the plan would breach, doubling the rest until the prediction keeps the limit.
 
-Not a test module (no ``test_`` prefix): tests/test_planner_registry.py registers it and flies it.
+Not a test module (no ``test_`` prefix): it registers its planner when run
+(``fly --scheduler tests/toy_planner.py``); tests/test_planner_registry.py flies it.
 """
 
 import time
@@ -29,6 +30,4 @@ def rest_first_plan(problem, settings, previous):
     return evaluate(problem, schedule, NAME, time.perf_counter() - started)
 
 
-def register():
-    """Register the planner (once a session); returns its entry."""
-    return register_planner(NAME, rest_first_plan, settings={"first_rest_s": 60.0})
+ENTRY = register_planner(NAME, rest_first_plan, settings={"first_rest_s": 60.0})

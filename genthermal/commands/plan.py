@@ -17,8 +17,8 @@ from ..mission import load_mission
 from ..model_file import load_model
 from ..outputs import report_json
 from ..plants import is_external_plant
-from ..schedule.planning.registry import planner_names
-from ..schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS, SCHEDULERS,
+from ..schedule.planning.registry import load_planner_file, planner, planner_names
+from ..schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, PLANNER_MODELS, SCHEDULERS,
                                          ManagerSettings)
 from ..schedule.flight.open_loop import plan_mission
 from ..schedule.state_estimator import FLIGHT_FILTERS
@@ -31,7 +31,8 @@ def add_schedule_arguments(parser) -> None:
     """Arguments shared by ``plan`` and ``fly``."""
     parser.add_argument("scenario", help="scenario name (see scenarios/) or path to a YAML file with "
                         "generators and faults (see genthermal.schedule.power_system)")
-    parser.add_argument("--scheduler", default="optimal", help=f"{' | '.join(SCHEDULERS)} (default optimal)")
+    parser.add_argument("--scheduler", default="optimal", help=f"{' | '.join(SCHEDULERS)} (default optimal), or a "
+                        "Python file that registers a planner (my_planner.py: running it is your decision)")
     parser.add_argument("--json", help="write the summary as JSON to this file")
     parser.add_argument("--plot", help="PNG file for currents and temperatures")
     parser.add_argument("--margin", default=None,
@@ -81,6 +82,8 @@ def _number_in(option: str, text: str, low: float, high: float, what: str) -> fl
 
 def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     """The power system and settings the arguments describe; InputError names a bad option."""
+    if str(args.scheduler).endswith(".py"):  # a planner file of the user's: registers one planner
+        args.scheduler = load_planner_file(args.scheduler)
     if args.scheduler not in planner_names():
         raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(planner_names())}")
     margin = ManagerSettings.margin_K if args.margin is None else _number_in("--margin", args.margin, 0.0, 50.0,
@@ -93,7 +96,7 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     planner_model = getattr(args, "planner_model", ManagerSettings.planner_model)
     if planner_model not in PLANNER_MODELS:
         raise InputError("--planner-model", planner_model, f"must be one of {', '.join(PLANNER_MODELS)}")
-    if planner_model == "nonlinear" and args.scheduler not in FLOWN_SCHEDULERS:
+    if planner_model == "nonlinear" and not planner(args.scheduler).on_flown_model:
         raise InputError("--planner-model", planner_model, "only the optimal scheduler and the thesis heuristic plan "
                          "on the flown model: use --scheduler optimal or heuristic (the engineer's heuristic and the "
                          "MILP plan on the design model)")

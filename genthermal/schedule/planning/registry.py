@@ -2,13 +2,16 @@
 
 A planner is a function ``plan(problem, settings, previous) -> PlanResult`` on a
 :class:`~genthermal.schedule.planning.plan.PlanningProblem`; a new scheduler is one file that calls
-:func:`register_planner`. The built-in ones (thesis heuristic, engineer, optimal, MILP) are
+:func:`register_planner` (``fly --scheduler my_planner.py`` runs it: :func:`load_planner_file`). The built-in ones (thesis heuristic, engineer, optimal, MILP) are
 registered below, each with the field of the manager's settings that holds its own settings.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
+import sys
+from pathlib import Path
 from typing import Callable
 
 from ...errors import InputError
@@ -88,6 +91,47 @@ def planner_names() -> tuple:
     """The names of the registered planners, the built-in ones first."""
     return tuple(_PLANNERS)
 
+
+def load_planner_file(path, option: str = "--scheduler") -> str:
+    """Run the Python file ``path``, which registers one planner (:func:`register_planner`); its name.
+
+    Running the file is a trust decision made on the command line (``fly --scheduler my_planner.py``),
+    as for a plant file. A file whose planner is registered already in this process is not run again.
+
+    Raises
+    ------
+    InputError
+        Naming ``option`` and the file: it does not exist, raises on import, or registers no planner
+        or more than one.
+    """
+    path = Path(path).resolve()
+    if _LOADED_FILES.get(str(path)) in _PLANNERS:
+        return _LOADED_FILES[str(path)]
+    if not path.is_file():
+        raise InputError(option, str(path), "no such Python file")
+    before = set(_PLANNERS)
+    name = f"genthermal_user_planner_{abs(hash(str(path)))}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as error:  # noqa: BLE001 - whatever the user's file raises is named, never a traceback
+        sys.modules.pop(name, None)
+        for added in set(_PLANNERS) - before:
+            _PLANNERS.pop(added)
+        raise InputError(option, str(path), f"running the planner file raised {type(error).__name__}: {error}") from None
+    added = [n for n in _PLANNERS if n not in before]
+    if len(added) != 1:
+        for extra in added:
+            _PLANNERS.pop(extra)
+        raise InputError(option, str(path), f"the planner file registered {len(added)} planners "
+                         f"({', '.join(added) or 'none'}); it registers one with register_planner(name, plan)")
+    _LOADED_FILES[str(path)] = added[0]
+    return added[0]
+
+
+_LOADED_FILES: dict[str, str] = {}
 
 register_planner("heuristic", lambda problem, settings, previous: heuristic_plan(problem, settings),
                  on_flown_model=True, settings_field="heuristic")
