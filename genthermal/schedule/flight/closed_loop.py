@@ -114,8 +114,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     ----------
     system : PowerSystem
         The generators, the mission, its faults and the true plants (:meth:`PowerSystem.from_mission`).
-    scheduler : {"heuristic", "engineer", "optimal", "milp"}
-        Who re-plans when a breach is predicted.
+    scheduler : str
+        Who re-plans when a breach is predicted: heuristic, engineer, optimal, milp or a planner
+        registered by name (:func:`~genthermal.schedule.planning.registry.register_planner`).
     settings : ManagerSettings
         Management cycle, margin, filter, rest budget, noise seed and each scheduler's settings.
     plant : Plant, optional
