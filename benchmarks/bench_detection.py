@@ -40,7 +40,7 @@ reproducible. JSON keys:
 ``wall_s``                       wall-clock time of the benchmark, s
 ``provenance``                   the command line and the git commit it ran at
 ``baseline``                     the same flights judged by the detector the disturbance detector replaced
-                                 (:mod:`genthermal.schedule.innovation_detector`, a CUSUM on the linear
+                                 (:mod:`genthermal.schedule.monitoring.innovation_detector`, a CUSUM on the linear
                                  Kalman filter's differential winding innovations, run on each flight's
                                  record): ``false_alarms``, ``false_alarms_healthy``, ``detected``,
                                  ``detect_delay_s`` (median, max), ``per_type`` delays, ``flights_with_false_alarms``
@@ -66,15 +66,15 @@ import numpy as np
 
 from genthermal.mission import Mission
 from genthermal.commands.sweep import source_commit
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import SCHEDULERS, ManagerSettings
-from genthermal.schedule.innovation_detector import innovation_cusum_alarms
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import SCHEDULERS, ManagerSettings
+from genthermal.schedule.monitoring.innovation_detector import innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sweep import MISMATCH_PARAMETERS, random_actions
+from genthermal.schedule.sweeps.sweep import MISMATCH_PARAMETERS, random_actions
 
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
-#: Fault parameter ranges: the robustness grid's (``genthermal.schedule.sweep.robustness_case``).
+#: Fault parameter ranges: the robustness grid's (``genthermal.schedule.sweeps.sweep.robustness_case``).
 FAULT_RANGES = {"phase_short_circuit": ("R_short", 0.1, 0.5),
                 "end_winding_stray_loss": ("R_stray", 0.1, 0.4),
                 "excitation_iron_loss": ("k_exc", 30.0, 150.0)}

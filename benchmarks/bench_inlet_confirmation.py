@@ -9,7 +9,7 @@ limit 88 °C, the healthy flight 0.1-0.2 K below its planning limit), flown with
   ``replans_caused`` as in ``bench_sensor_flights``, the claim and its delay, the hold;
 * ``rise``: the air at gen1's inlet really rises (``inlet_rise``, a step or with a time constant,
   and a partial blockage recirculating 5 K); no sensor may be claimed. Flown twice, with the hold
-  (:mod:`genthermal.schedule.unconfirmed_inlet`) and without it (``unconfirmed_rise_K`` 0: the
+  (:mod:`genthermal.schedule.monitoring.unconfirmed_inlet`) and without it (``unconfirmed_rise_K`` 0: the
   warmer reading planned at once, the rule before it): the first re-plan after the onset of each,
   how the hold ended (confirmed by the record check, and when), the hottest winding and the time
   above the limit.
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from bench_sensor_flights import LIMIT_C, compared, flight
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.input_watch import InputWatchSettings
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.monitoring.input_watch import InputWatchSettings
 from genthermal.schedule.report import flight_summary
 
 #: (generator, value K, onset min) of the inlet-sensor biases.

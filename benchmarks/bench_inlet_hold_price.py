@@ -1,6 +1,6 @@
 """The price of holding a warmer inlet reading on real inlet rises: chapter-7 and blockage flights.
 
-The inlet hold (:mod:`genthermal.schedule.unconfirmed_inlet`) keeps a warmer coolant-inlet reading
+The inlet hold (:mod:`genthermal.schedule.monitoring.unconfirmed_inlet`) keeps a warmer coolant-inlet reading
 out of the plan and the filter until the physics confirms it. On a real rise that may delay the
 manager's first action. Each scenario is flown with every scheduler twice: with the hold
 (``InputWatchSettings()``) and without it (``unconfirmed_rise_K`` 0: the warmer reading planned and
@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.input_watch import InputWatchSettings
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.monitoring.input_watch import InputWatchSettings
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

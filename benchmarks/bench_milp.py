@@ -3,7 +3,7 @@
 Missions of 2, 4, 8 and 16 h are built from the thesis Fig. 7.7 flight (``blockage_large``: the
 coolant blockage of gen1 at 66 min, flow factor 0.2, inlet +31 K): 2 h shortens its cruise, 8 and
 16 h repeat 60 min of cruise before landing. Each is planned open loop (design model,
-:func:`genthermal.schedule.open_loop.plan_mission`) with 2, 3 and 4 generators by the MILP and,
+:func:`genthermal.schedule.flight.open_loop.plan_mission`) with 2, 3 and 4 generators by the MILP and,
 for the ratio of added rest, by the optimal (NLP) scheduler.
 
 Usage::
@@ -27,9 +27,9 @@ import json
 import time
 
 from genthermal.mission import Mission
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.open_loop import plan_mission
-from genthermal.schedule.milp import MilpSettings
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.flight.open_loop import plan_mission
+from genthermal.schedule.planning.milp import MilpSettings
 from genthermal.schedule.power_system import PowerSystem
 
 #: Thesis Fig. 7.7 flight up to the fault (66 min): (condition number, minutes).

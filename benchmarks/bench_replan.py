@@ -29,9 +29,9 @@ import time
 import numpy as np
 
 from genthermal.mission import load_mission
-from genthermal.schedule import closed_loop
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import PLANNER_MODELS, ManagerSettings
+from genthermal.schedule.flight import closed_loop
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import PLANNER_MODELS, ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

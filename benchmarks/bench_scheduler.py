@@ -1,12 +1,12 @@
 """Closed-loop benchmark of the load schedulers: thesis heuristic vs optimal (IPOPT) vs MILP (HiGHS).
 
 Scenarios: 3 missions × 2 fault onsets × 5 severities = 30 (``--quick``: 1 × 2 × 3 = 6). Every
-scenario is flown closed loop (:func:`genthermal.schedule.closed_loop.fly`) on the true plant, which
+scenario is flown closed loop (:func:`genthermal.schedule.flight.closed_loop.fly`) on the true plant, which
 differs from the design model (h_end_air × 0.9, R0 × 1.05), with each scheduler; the optimal
 scheduler is also flown without the back-off (margin 0 K, rise back-off 0) to measure its cost.
 
 The manager is not told the faults (it detects and identifies them in flight). With
-``--robustness N`` it also flies the robustness grid of :mod:`genthermal.schedule.sweep` (N cases,
+``--robustness N`` it also flies the robustness grid of :mod:`genthermal.schedule.sweeps.sweep` (N cases,
 plants off by up to ±30 %, faults of four kinds, 2-4 generators, 2-8 h) on Dask (``--cluster``
 for an existing scheduler) and adds its keys (``robustness``, ``rest_vs_best_baseline``,
 ``detect_delay_s``, ``false_alarms``) to the JSON.
@@ -25,7 +25,7 @@ Prints a markdown table, writes the JSON (``scenarios``, ``summary``,
 
 The optimal scheduler's claim is measured against the stronger baseline of each scenario (issue 9:
 the thesis heuristic or the engineer's heuristic, whichever rests less):
-``scenario_rest_vs_best_baseline`` is :func:`genthermal.schedule.baseline_comparison.rest_versus_best_baseline`
+``scenario_rest_vs_best_baseline`` is :func:`genthermal.schedule.sweeps.baseline_comparison.rest_versus_best_baseline`
 over the 30 scenarios (all faulty; rest is the time flown in the minimum power mode, the robustness
 grid's measure) and ``rest_ratio_optimal_over_best_baseline`` its ``mean_ratio`` (total optimal
 rest / total best-baseline rest; None when no baseline rests). ``rest_ratio_optimal_over_heuristic``
@@ -46,11 +46,11 @@ import matplotlib
 import numpy as np
 
 from genthermal.mission import Mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import SCHEDULERS, ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import SCHEDULERS, ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.baseline_comparison import rest_versus_best_baseline
+from genthermal.schedule.sweeps.baseline_comparison import rest_versus_best_baseline
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -155,7 +155,7 @@ def best_baseline_comparison(records: list) -> dict:
     Returns
     -------
     dict
-        :func:`~genthermal.schedule.sweep.rest_versus_best_baseline` of the scenarios, every one
+        :func:`~genthermal.schedule.sweeps.sweep.rest_versus_best_baseline` of the scenarios, every one
         faulty (``per_case``, ``mean_ratio``, ``optimal_total_rest_s`` and
         ``best_baseline_total_rest_s`` in s, ``cases_optimal_rests_more``).
     """
@@ -233,7 +233,7 @@ def main(argv=None) -> int:
                             "scenarios_breaching_without_margin": sum(r["runs"]["optimal_no_margin"]["breach_s"] > 0
                                                                       for r in records)}
     if args.robustness:
-        from genthermal.schedule.sweep import robustness_case, run_sweep, summarise as summarise_grid
+        from genthermal.schedule.sweeps.sweep import robustness_case, run_sweep, summarise as summarise_grid
 
         schedulers = ("heuristic", "engineer", "optimal")
         grid = run_sweep([robustness_case(i) for i in range(args.robustness)], schedulers, args.cluster, args.workers)

@@ -37,8 +37,8 @@ import yaml
 
 from genthermal.mission import load_mission
 from genthermal.resources import SCENARIO_DIR
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

@@ -13,14 +13,14 @@ the largest violation, in K of winding temperature past each outcome's band, ove
 outcomes: the +4 K and +16 K manager thresholds (1-K bands), the no-action blockage (109 °C 44 ± 10 min
 after the fault) and the managed blockage (displacement alone in the three K-conditions, a 10-min
 rest before landing, both generators at most 111 °C, no current limit)
-(:mod:`genthermal.machines.chapter7_feasibility`). Then traces the Pareto front (the least worst
+(:mod:`studies.chapter7_feasibility`). Then traces the Pareto front (the least worst
 violation of the other outcomes with the managed peaks capped) and two variants: the rig's 20-min
 rest and an inlet rise that follows gen1's load (7.3.3: it "is dependent upon both the fault and the
 load"). ``--quick``: the main study from the shipped calibration only, one round, no variants.
 
 ``--inlet-follows-load`` runs the study with the load share of the inlet rise free (every start,
 no Pareto trace or variants); with ``--write`` its solution becomes the shipped calibration
-``genco_rf201a:chapter7`` (:data:`~genthermal.machines.chapter7.PARAMETER_FILE`: the seven machine
+``genco_rf201a:chapter7`` (:data:`~studies.chapter7.PARAMETER_FILE`: the seven machine
 values) and the blockage it fits is printed for the chapter-7 scenarios (``fault``).
 
 ``--rated-current`` holds the receiver to the mission's rated current (7 A) at every instant, the
@@ -53,12 +53,13 @@ from genthermal.machines import build_model
 import yaml
 
 from genthermal.mission import load_mission
-from genthermal.machines.chapter7 import DT_S, FIT_BOUNDS, PARAMETER_FILE
-from genthermal.machines.chapter7_feasibility import (H_AIR_GAP_BOUNDS, MACHINE_NAMES, default_starts, pareto_trace,
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: studies/
+from studies.chapter7 import DT_S, FIT_BOUNDS, PARAMETER_FILE
+from studies.chapter7_feasibility import (H_AIR_GAP_BOUNDS, MACHINE_NAMES, default_starts, pareto_trace,
                                                       study)
-from genthermal.machines.chapter7_managed import REST_BEFORE_LANDING_S
+from studies.chapter7_managed import REST_BEFORE_LANDING_S
 from genthermal.model_file import load_model
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 
 #: Provenance of every value the study with a load-following inlet ships.
 SOURCE = "fitted to thesis ch. 7 outcomes (benchmarks/chapter7_feasibility.py, inlet follows load)"
@@ -102,7 +103,7 @@ def write_calibration(best: dict, path: Path, source: str = SOURCE, command: str
             "source": f"{source}: {bounds[n][3]}, bounds {bounds[n][0]:g}-{bounds[n][1]:g} {bounds[n][2]}"
                       + (" (at its bound)" if n in at_bound else "")}
         for n in MACHINE_NAMES}}
-    header = ("# Chapter-7 calibration of the Genco RF201A (genthermal.machines.chapter7_feasibility), written by\n"
+    header = ("# Chapter-7 calibration of the Genco RF201A (studies.chapter7_feasibility), written by\n"
               f"# benchmarks/chapter7_feasibility.py {command}. load_model('genco_rf201a:chapter7')\n"
               "# reads it. The chapter-7 scenarios fly the blockage the same study fits:\n"
               f"# {json.dumps(scenario_fault(best))}\n")

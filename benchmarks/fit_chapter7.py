@@ -5,12 +5,12 @@
 Fits the assumed cooling and loss values of the Genco RF201A (h_top_air, h_end_air, R0, P_iron,
 h_ambient, m_dot_fan), the large blockage's flow fraction and convection exponent, and the time
 constant of its inlet rise to continuous proxies of the thesis's chapter-7 outcomes
-(:mod:`genthermal.machines.chapter7`), with IPOPT and exact derivatives. ``--write`` replaces
+(:mod:`studies.chapter7`), with IPOPT and exact derivatives. ``--write`` replaces
 ``genthermal/machines/genco_rf201a_chapter7.yaml``; the blockage values (k_flow, n_flow,
 inlet_rise_tau_min) go to ``scenarios/chapter7_blockage_large.yaml`` by hand (they are printed).
 ``--n-flow 0.8`` holds the convection exponent at the turbulent Dittus-Boelter value instead of
 fitting it (the comparison in the README's "Reproducing the thesis"). ``--managed`` adds the
-managed large blockage (:mod:`genthermal.machines.chapter7_managed`: displacement alone in the three
+managed large blockage (:mod:`studies.chapter7_managed`: displacement alone in the three
 K-conditions after the fault and a 10-min rest before landing keep both generators within θmax) to
 the fit; the proxies then conflict (README), so the shipped calibration is fitted without it.
 Whether any calibration meets every chapter-7 outcome within the thesis's tolerances, with all
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -31,7 +32,8 @@ import yaml
 
 from genthermal.coolant import OUTLET_DIAMETER_MM
 from genthermal.machines import build_model
-from genthermal.machines.chapter7 import FIT_BOUNDS, PARAMETER_FILE, SOURCE, fit_chapter7
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: studies/
+from studies.chapter7 import FIT_BOUNDS, PARAMETER_FILE, SOURCE, fit_chapter7
 
 MACHINE_PARAMETERS = ("h_top_air", "h_end_air", "R0", "P_iron", "h_ambient", "m_dot_fan")
 
@@ -67,7 +69,7 @@ def main() -> None:
                           f"{FIT_BOUNDS[n][2]}"}
             for n in MACHINE_PARAMETERS}}
         path = Path(__file__).resolve().parents[1] / "genthermal" / "machines" / PARAMETER_FILE
-        header = ("# Chapter-7 calibration of the Genco RF201A (genthermal.machines.chapter7), written by\n"
+        header = ("# Chapter-7 calibration of the Genco RF201A (studies.chapter7), written by\n"
                   "# benchmarks/fit_chapter7.py --write. load_model('genco_rf201a:chapter7') reads it.\n")
         path.write_text(header + yaml.safe_dump(document, sort_keys=False))
 

@@ -4,14 +4,14 @@
 
 Thesis 7.3.3 (Figs 7.13-7.15) manages the large blockage "using only load displacement" in the
 three K-conditions after the fault and a 10-min rest before landing, with breaches of 110.7 and
-111 °C. :func:`genthermal.machines.chapter7_managed.best_displacement` gives, on the plant (two
+111 °C. :func:`studies.chapter7_managed.best_displacement` gives, on the plant (two
 copies of the chapter-7 calibration, no manager and no current limit), the lowest worst winding
 peak any constant displacement per K-condition reaches. This script takes it for the blockage as
 shipped (``scenarios/chapter7_blockage_large.yaml``) and with one part of the fault changed at a
 time (``variants``: inlet rise alone, flow reduction alone, a smaller or stepped inlet rise, the
 turbulent exponent, the default calibration's orifice flow), and along the flow fraction with the
 inlet's time constant refitted so that the no-action blockage still reaches 109 °C 44 min after the
-fault (``flow_scan``, :func:`genthermal.machines.chapter7.fit_inlet_time_constant`). ``--flights``
+fault (``flow_scan``, :func:`studies.chapter7.fit_inlet_time_constant`). ``--flights``
 also flies the thesis heuristic (closed loop, the scenario's settings) on the scan's unblocked end
 (flow fraction 1, inlet step) with and without the scenario's rated-current limit.
 """
@@ -21,14 +21,16 @@ from __future__ import annotations
 import argparse
 import json
 import tempfile
+import sys
 import time
 from pathlib import Path
 
 import yaml
 
-from genthermal.machines.chapter7 import (BLOCKAGE_INLET_RISE_C, ONSET_S, fit_inlet_time_constant,
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: studies/
+from studies.chapter7 import (BLOCKAGE_INLET_RISE_C, ONSET_S, fit_inlet_time_constant,
                                           no_action_blockage_minutes)
-from genthermal.machines.chapter7_managed import best_displacement
+from studies.chapter7_managed import best_displacement
 from genthermal.machines import build_model
 from genthermal.model_file import load_model
 from genthermal.mission import load_mission

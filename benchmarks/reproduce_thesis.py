@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -39,12 +40,14 @@ from genthermal.machines import build_model
 from genthermal.measurements import dataframe_to_measurements
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings, infeasible_response, planning_margin_K
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings, infeasible_response, planning_margin_K
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.simulate import simulate
 from genthermal.synth import synthesize
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: studies/
 
 #: The synthetic rig: parameters off the model's (as the demo's rig).
 RIG_MISMATCH = {"h_end_air": 0.85, "h_top_air": 1.1, "R0": 1.05, "P_iron": 1.2}
@@ -236,7 +239,7 @@ def _blockage_reason(outcome, displaced: bool, rested: bool, only_displaced: boo
 
 def feasibility_study(chapter7, default, receiver_limit_A: float | None = None, per_level: bool = False,
                       simulation_model_manager: bool = False) -> dict:
-    """The minimax feasibility study over every chapter-7 outcome (:mod:`genthermal.machines.chapter7_feasibility`,
+    """The minimax feasibility study over every chapter-7 outcome (:mod:`studies.chapter7_feasibility`,
     from the shipped calibration, three rounds of manager lags, the inlet rise's load share free as
     the shipped calibration was fitted): the least worst violation any calibration within the
     physical bounds reaches, its sharp-peak check and the outcomes at it. ``receiver_limit_A``
@@ -244,7 +247,7 @@ def feasibility_study(chapter7, default, receiver_limit_A: float | None = None, 
     gives each level (5-min start-up, continuous) of a K-condition its own displaced current;
     ``simulation_model_manager`` holds the manager lags at 0 K (a manager predicting on the
     simulation model, 7.3.4)."""
-    from genthermal.machines.chapter7_feasibility import default_starts, study
+    from studies.chapter7_feasibility import default_starts, study
 
     lags_K = dict.fromkeys(("landing", "cruise_combat"), 0.0) if simulation_model_manager else None
     result = study(chapter7, default, rounds=1 if simulation_model_manager else 3,
@@ -475,7 +478,7 @@ def chapter_7(default, chapter7, quick):
                       "and be predicted within 4 K of 110 °C at landing (ch. 7; genthermal's design model predicts the "
                       "landing peak 3 K above the plant, so the plant is 3 K cooler still); the default follows ch. 5 "
                       f"({110 - peaks['default']['landing']:.0f} K of margin at landing), genco_rf201a:chapter7 follows ch. 7"))
-    from genthermal.machines.chapter7 import no_action_blockage_minutes
+    from studies.chapter7 import no_action_blockage_minutes
 
     default_minutes = no_action_blockage_minutes(default, outlet_flow_fraction(10.0), 0.8, 0.0)
     fault = PowerSystem.from_mission(load_mission("chapter7_blockage_large")).faults[0]
@@ -492,8 +495,8 @@ def chapter_7(default, chapter7, quick):
                       "inlet at the low end of the thesis's 51 ± 5 °C; with the inlet rise as a step it would be "
                       f"{no_action_blockage_minutes(plant, fault.values['k_flow'], fault.values['n_flow'], 0.0, fault.inlet_rise_C):.0f} min"
                       if abs(chapter7_minutes - 44) <= 10 else "see the feasibility study"))
-    from genthermal.machines.chapter7 import ONSET_S
-    from genthermal.machines.chapter7_managed import best_displacement
+    from studies.chapter7 import ONSET_S
+    from studies.chapter7_managed import best_displacement
 
     managed = best_displacement(plant, fault.values["k_flow"], fault.values["n_flow"], fault.inlet_rise_C,
                                 fault.inlet_rise_tau_s, ONSET_S, inlet_load_share=fault.inlet_load_share)

@@ -9,11 +9,11 @@ Usage::
 ``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
 seed, some or all of the grid's schedulers) that every re-flown scheduler flew to the end in place of
 those schedulers' flights of the same cases of the whole grid, recomputes every summary key with
-:func:`genthermal.schedule.sweep.summarise`, records the re-fly under ``provenance.merged`` and
+:func:`genthermal.schedule.sweeps.sweep.summarise`, records the re-fly under ``provenance.merged`` and
 writes the whole grid's JSON back before reporting on it. ``--add`` joins the flights of the same
 grid flown with other schedulers (``genthermal sweep --schedulers heuristic_flown``, same
 ``--cases`` and seed) to each case, recomputes every summary key over all the schedulers (the best
-baseline then counts the added ones, :mod:`genthermal.schedule.baseline_comparison`) and records
+baseline then counts the added ones, :mod:`genthermal.schedule.sweeps.baseline_comparison`) and records
 that sweep under ``provenance.added``.
 
 Prints two markdown tables: one row per scheduler (cases flown to the end, breach-free share,
@@ -40,7 +40,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from genthermal.schedule.baseline_comparison import FLOWN_OPTIMAL, FLOWN_OPTIMAL_KEY  # noqa: E402
+from genthermal.schedule.sweeps.baseline_comparison import FLOWN_OPTIMAL, FLOWN_OPTIMAL_KEY  # noqa: E402
 
 SCHEDULER_COLOURS = {"heuristic": "tab:blue", "engineer": "tab:orange", "optimal": "tab:green", "milp": "tab:red",
                      "heuristic_flown": "tab:purple", FLOWN_OPTIMAL: "tab:olive"}
@@ -81,10 +81,10 @@ def _ratio_text(ratio) -> str:
 def comparison(report: dict, key: str = "rest_vs_best_baseline") -> dict | None:
     """The report's ``key`` comparison (``rest_vs_best_baseline`` or ``FLOWN_OPTIMAL_KEY``); the first
     recomputed from its cases when the JSON predates the comparison at the manager's price
-    (:mod:`genthermal.schedule.baseline_comparison`)."""
+    (:mod:`genthermal.schedule.sweeps.baseline_comparison`)."""
     rest = report.get(key)
     if rest and "mean_cost_ratio" not in rest:
-        from genthermal.schedule.baseline_comparison import rest_versus_best_baseline
+        from genthermal.schedule.sweeps.baseline_comparison import rest_versus_best_baseline
 
         rest = rest_versus_best_baseline(report["cases"])
     return rest
@@ -149,7 +149,7 @@ def merge_cases(report: dict, partial: dict) -> dict:
     ValueError
         When ``partial`` names a case the grid does not have, or flies a scheduler the grid does not.
     """
-    from genthermal.schedule.sweep import summarise
+    from genthermal.schedule.sweeps.sweep import summarise
 
     schedulers, refly_schedulers = list(report["robustness"]["breach_s"]), list(partial["robustness"]["breach_s"])
     if not set(refly_schedulers) <= set(schedulers):
@@ -180,7 +180,7 @@ def add_schedulers(report: dict, other: dict) -> dict:
     ValueError
         When the two grids differ in their cases or share a scheduler.
     """
-    from genthermal.schedule.sweep import summarise
+    from genthermal.schedule.sweeps.sweep import summarise
 
     schedulers, added = list(report["robustness"]["breach_s"]), list(other["robustness"]["breach_s"])
     shared = sorted(set(schedulers) & set(added))

@@ -38,9 +38,9 @@ _EXPORTS = {
     "ExtendedKalmanFilter": "genthermal.estimation.ekf",
     # load planning and flights
     "PowerSystem": "genthermal.schedule.power_system",
-    "ManagerSettings": "genthermal.schedule.manager_settings",
-    "plan_mission": "genthermal.schedule.open_loop",
-    "fly": "genthermal.schedule.closed_loop",
+    "ManagerSettings": "genthermal.schedule.flight.manager_settings",
+    "plan_mission": "genthermal.schedule.flight.open_loop",
+    "fly": "genthermal.schedule.flight.closed_loop",
     # code generation
     "generate_c": "genthermal.codegen",
     "export_fmu": "genthermal.fmu",

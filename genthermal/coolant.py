@@ -74,7 +74,7 @@ def inlet_load_factor(current_A, share_current_A, load_share):
     copper loss relative to the undisplaced share, so moving load off the blocked generator cools
     its inlet. The rise the scenario states is the one at the undisplaced load (:math:`f = 1`).
     The thesis gives no value of :math:`\alpha`; the chapter-7 calibration fits it
-    (:mod:`genthermal.machines.chapter7_feasibility`, ``genco_rf201a:chapter7``).
+    (:mod:`studies.chapter7_feasibility`, ``genco_rf201a:chapter7``).
 
     Works on numbers, numpy arrays and CasADi expressions alike (the feasibility study
     differentiates through it); numeric arguments are checked.

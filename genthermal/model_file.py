@@ -62,9 +62,9 @@ def load_model(spec_or_path: str | os.PathLike, from_data: bool = False) -> Ther
     head, sep, tail = text.rpartition(":")
     name, variant = (head, tail) if sep and tail in (*VARIANTS, *PARAMETER_SETS) else (text, "")
     if name in MACHINES and variant in PARAMETER_SETS and not Path(text).is_file():
-        from .machines.chapter7 import parameter_file
+        from .machines.parameter_sets import parameter_file
 
-        return model_from_document(yaml.safe_load(parameter_file().read_text()), text)
+        return model_from_document(yaml.safe_load(parameter_file(variant).read_text()), text)
     if variant not in PARAMETER_SETS and not (Path(text).is_file() and not name.endswith(".py")) \
             and is_machine_reference(name):
         return _build(name, variant or "nonlinear", from_file=False, from_data=from_data)

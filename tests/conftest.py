@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")  # figures go to files in the tests, whatever the user's default
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: the studies/ package
 
 from genthermal.design import linear_design_model
 from genthermal.machines import build_model

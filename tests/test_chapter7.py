@@ -7,8 +7,8 @@ import pytest
 
 from genthermal.errors import InputError
 from genthermal.machines import build_model
-from genthermal.machines.chapter7 import BLOCKAGE_MINUTES, FIT_BOUNDS, ONSET_S, PLANNING_LIMIT_C, no_action_blockage_minutes
-from genthermal.machines.chapter7_lag import manager_prediction_lag
+from studies.chapter7 import BLOCKAGE_MINUTES, FIT_BOUNDS, ONSET_S, PLANNING_LIMIT_C, no_action_blockage_minutes
+from studies.chapter7_lag import manager_prediction_lag
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
 from genthermal.schedule.power_system import PowerSystem
@@ -72,7 +72,7 @@ def test_the_managed_blockage_keeps_the_plant_within_the_thesis_breaches(plant, 
     a 10-min rest before landing keep both generators within 111 °C (its breaches of 110.7 and
     111 °C), on the plant with the scenario's blockage, gen1's inlet following its load. Without
     that share the same blockage cannot: the rise stays whatever gen1 gives away."""
-    from genthermal.machines.chapter7_managed import best_displacement
+    from studies.chapter7_managed import best_displacement
 
     assert blockage.inlet_load_share == 1.0
     arguments = (plant, blockage.values["k_flow"], blockage.values["n_flow"], blockage.inlet_rise_C,
@@ -134,7 +134,7 @@ def test_chapter7_scenarios_fly_the_chapter7_machine():
 
 
 def test_a_fixed_convection_exponent_outside_its_bounds_names_the_field():
-    from genthermal.machines.chapter7 import fit_chapter7
+    from studies.chapter7 import fit_chapter7
 
     for bad in (0.2, 1.5, float("nan")):
         with pytest.raises(InputError, match="n_flow"):
@@ -157,8 +157,8 @@ def _flown(scenario):
     """Per action of the chapter-7 scenario flown by the heuristic in closed loop (fault not told):
     (rest before or within it, min; largest current gen1 sheds in it, A; whether its first step is
     a rest), and the result."""
-    from genthermal.schedule.closed_loop import fly
-    from genthermal.schedule.manager_settings import ManagerSettings
+    from genthermal.schedule.flight.closed_loop import fly
+    from genthermal.schedule.flight.manager_settings import ManagerSettings
 
     system = PowerSystem.from_mission(load_mission(scenario))
     result = fly(system, "heuristic", ManagerSettings())

@@ -1,4 +1,4 @@
-"""The chapter-7 feasibility study (genthermal.machines.chapter7_feasibility): every outcome as a
+"""The chapter-7 feasibility study (studies.chapter7_feasibility): every outcome as a
 violation in K, the symbolic inlet rise equal to the scenarios' numeric one, the load-following
 rise, and the minimax solve honouring its epigraph and its Pareto cap."""
 
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from genthermal.errors import InputError
-from genthermal.machines.chapter7 import ONSET_S, blockable, no_action_blockage_minutes
-from genthermal.machines.chapter7_feasibility import (MANAGED_LIMIT_C, FeasibilityProblem, Start,
+from studies.chapter7 import ONSET_S, blockable, no_action_blockage_minutes
+from studies.chapter7_feasibility import (MANAGED_LIMIT_C, FeasibilityProblem, Start,
                                                       minimise_worst_violation)
-from genthermal.machines.chapter7_managed import CONDITIONS, ManagedBlockageProxy, managed_timeline
+from studies.chapter7_managed import CONDITIONS, ManagedBlockageProxy, managed_timeline
 from genthermal.model_file import load_model
 
 #: A blockage with a load-independent inlet (the previous calibration's: k_flow 0.53, n 0.5, +31 K, 41.5 min).
@@ -52,7 +52,7 @@ def test_lags_must_be_given_for_both_thresholds(chapter7):
 def test_study_holds_the_lags_it_is_given(chapter7):
     """The simulation-model manager's study (lags 0 K) passes its lags to the problem instead of
     measuring them: a lag missing from them is named before any solve."""
-    from genthermal.machines.chapter7_feasibility import study
+    from studies.chapter7_feasibility import study
 
     with pytest.raises(InputError, match="lags.cruise_combat"):
         study(chapter7, chapter7, lags_K={"landing": 0.0})
@@ -186,7 +186,7 @@ def test_feasibility_benchmark_refuses_a_rest_outside_the_budget(capsys, benchma
 def test_the_managed_outcome_rests_as_long_as_the_study_is_told(chapter7):
     """The rig's 20-min rest (``rest_s``) puts both generators in minimum power mode for 20 min
     before landing and moves landing 10 min later than the thesis's 10-min rest does."""
-    from genthermal.machines.chapter7_managed import REST_PERCENT, managed_timeline
+    from studies.chapter7_managed import REST_PERCENT, managed_timeline
 
     thesis, rig = managed_timeline(60.0), managed_timeline(60.0, rest_s=1200.0)
     assert thesis["rest"].sum() == 10 and rig["rest"].sum() == 20
@@ -200,7 +200,7 @@ def test_the_managed_outcome_rests_as_long_as_the_study_is_told(chapter7):
 def test_receiver_headroom_is_the_rated_current_less_each_conditions_highest_load():
     """A constant displacement per K-condition fits under the limit only up to the limit less the
     condition's highest nominal current; none where the load reaches it, and a bad limit is named."""
-    from genthermal.machines.chapter7_managed import receiver_headroom_A
+    from studies.chapter7_managed import receiver_headroom_A
 
     nominal = np.array([5.0, 6.0, 7.0, 4.0, 6.5])
     masks = np.array([[1, 1, 0, 0, 0], [0, 0, 1, 1, 0], [0, 0, 0, 0, 1]], dtype=float)
@@ -242,7 +242,7 @@ def test_rated_reading_ships_with_its_own_provenance(tmp_path, benchmark_script)
     import yaml
 
     module = benchmark_script("chapter7_feasibility")
-    from genthermal.machines.chapter7_feasibility import MACHINE_NAMES
+    from studies.chapter7_feasibility import MACHINE_NAMES
 
     best = {"values": {n: 1.0 for n in MACHINE_NAMES} | {"k_flow": 0.5, "n_flow": 0.6}, "at_bound": ["R0"],
             "inlet_rise_K": 28.0, "inlet_tau_min": 30.0, "inlet_load_share": 1.0}

@@ -6,8 +6,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from genthermal.machines.chapter7 import ONSET_S, blockable
-from genthermal.machines.chapter7_managed import (CONDITIONS, LIMIT_C, REST_BEFORE_LANDING_S, REST_PERCENT,
+from studies.chapter7 import ONSET_S, blockable
+from studies.chapter7_managed import (CONDITIONS, LIMIT_C, REST_BEFORE_LANDING_S, REST_PERCENT,
                                                   ManagedBlockageProxy, best_displacement, managed_timeline,
                                                   smooth_excess)
 from genthermal.mission import load_mission
@@ -96,7 +96,7 @@ def test_bad_inputs_name_their_field(chapter7):
 def test_level_masks_split_each_condition_into_its_start_up_and_continuous_levels():
     """Each K-condition's 5-min start-up level and its continuous level (Table 7.1) partition its
     mask; landing's start-up level runs at 100 %, its continuous level at 76.7 %."""
-    from genthermal.machines.chapter7_managed import START_UP_S, level_masks
+    from studies.chapter7_managed import START_UP_S, level_masks
 
     line = managed_timeline(60.0)
     masks, names = level_masks(line)

@@ -100,11 +100,11 @@ def test_the_words_agree_with_the_library():
     from genthermal.estimation.arx_search import INPUT_SIGNALS
     from genthermal.estimation.prediction import DEFAULT_EVERY_MIN, DEFAULT_MARGIN_K, THESIS_STARTS_MIN
     from genthermal.machines.registry import BUILT_IN
-    from genthermal.schedule.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS,
+    from genthermal.schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS,
                                                       SCHEDULERS, ManagerSettings)
-    from genthermal.schedule.shed import INFEASIBLE_RESPONSES
+    from genthermal.schedule.planning.shed import INFEASIBLE_RESPONSES
     from genthermal.schedule.state_estimator import FLIGHT_FILTERS
-    from genthermal.schedule.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, SWEEP_SCHEDULERS
+    from genthermal.schedule.sweeps.sweep import DEFAULT_FLIGHT_CPU_LIMIT_S, SWEEP_SCHEDULERS
     from genthermal.synth import DEFAULT_CURRENT_NOISE, THESIS_NOISE_VARIANCE_K2
 
     assert words.BUILT_IN_MACHINES == tuple(BUILT_IN) and words.DEFAULT_MODEL in BUILT_IN

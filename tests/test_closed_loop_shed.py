@@ -9,12 +9,12 @@ import pytest
 
 from genthermal.cli import main
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import DEFAULT_REST_BUDGET_FRACTION, ManagerSettings
-from genthermal.schedule.plan import PlanningProblem, Schedule, build_timeline, mission_segments, predict
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import DEFAULT_REST_BUDGET_FRACTION, ManagerSettings
+from genthermal.schedule.planning.plan import PlanningProblem, Schedule, build_timeline, mission_segments, predict
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.shed import not_served, shed_plan
+from genthermal.schedule.planning.shed import not_served, shed_plan
 
 from flight_scenarios import SHORT
 
@@ -135,7 +135,7 @@ def test_shed_plan_keeps_the_generators_on_within_the_planning_limit(tmp_path):
 
 
 def test_a_generator_too_hot_even_carrying_nothing_is_switched_off(tmp_path):
-    from genthermal.schedule.replanning import plan_with
+    from genthermal.schedule.flight.replanning import plan_with
 
     system = _system(tmp_path, HOT_AT_REST)
     segments = mission_segments(system.mission)
@@ -155,8 +155,9 @@ def test_with_no_margin_a_receiver_on_thetamax_to_rounding_is_not_switched_off(t
     """The chapter-7 scenarios plan to θmax itself (margin 0): a receiver then takes load up to θmax,
     where its predicted peak lands a few 1e-14 K above it (measured in the large-blockage flight:
     110.00000000000003 °C). That is not "too hot even carrying nothing": it stays on."""
-    from genthermal.schedule import replanning, shed
-    from genthermal.schedule.plan import PlanResult
+    from genthermal.schedule.flight import replanning
+    from genthermal.schedule.planning import shed
+    from genthermal.schedule.planning.plan import PlanResult
 
     system = _system(tmp_path, HOT_AT_REST)
     segments = mission_segments(system.mission)
@@ -189,7 +190,7 @@ def test_fly_command_rest_budget_option(tmp_path, capsys):
 
 
 def test_unexplained_rise_is_the_innovation_beyond_its_noise():
-    from genthermal.schedule.shed import unexplained_rise
+    from genthermal.schedule.planning.shed import unexplained_rise
 
     np.testing.assert_allclose(unexplained_rise([13.25, 0.5, -4.0, np.nan], [0.88, 0.28, 0.5, 0.5]),
                                [13.25 - 3 * 0.88, 0.0, 0.0, 0.0])

@@ -7,7 +7,7 @@ import weakref
 import pytest
 
 from genthermal.collector import collector_in_this_thread
-from genthermal.schedule import sweep
+from genthermal.schedule.sweeps import sweep
 
 
 class _Node:

@@ -16,8 +16,8 @@ from genthermal.diagnose.trajectory import ParametricSimulator
 from genthermal.errors import CompilerNotFoundError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
-from genthermal.schedule.milp import _segment_maps
-from genthermal.schedule.plan import PlanningProblem, Segment
+from genthermal.schedule.planning.milp import _segment_maps
+from genthermal.schedule.planning.plan import PlanningProblem, Segment
 from genthermal.schedule.power_system import AffineGenerator
 from genthermal.simulate import simulate
 

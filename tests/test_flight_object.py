@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from genthermal.errors import InputError
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.flight import Flight, Manager
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.flight import Flight, Manager
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 
 from test_plants import SHORT_MISSION, FailsAt, LumpedPlant, _system
 

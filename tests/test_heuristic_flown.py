@@ -8,14 +8,14 @@ import pytest
 
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.flown import FlownPlanning
-from genthermal.schedule.heuristic import heuristic_plan
-from genthermal.schedule.heuristic_flown import ROOT_TOLERANCE_A, ROOT_TOLERANCE_K, FlownSegmentResponse, _least_feasible
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import PlanningProblem, Segment, predict
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.planning.flown import FlownPlanning
+from genthermal.schedule.planning.heuristic import heuristic_plan
+from genthermal.schedule.planning.heuristic_flown import ROOT_TOLERANCE_A, ROOT_TOLERANCE_K, FlownSegmentResponse, _least_feasible
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import PlanningProblem, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator, PowerSystem
-from genthermal.schedule.replanning import flight_segments
+from genthermal.schedule.flight.replanning import flight_segments
 
 BLOCKAGE = {"k_flow": 0.2, "n_flow": 0.0}
 INLETS_C = np.array([51.0, 20.0])  # the faulty generator's inlet after the large blockage (thesis 7.3.3)
@@ -155,7 +155,7 @@ def test_schedulers_defined_on_the_design_model_refuse_the_flown_model():
     one, the flight names the field and the value before flying."""
     from genthermal.errors import InputError
 
-    from genthermal.schedule.open_loop import plan_mission
+    from genthermal.schedule.flight.open_loop import plan_mission
 
     system = PowerSystem.from_mission(load_mission("chapter7_blockage_large"))
     for scheduler in ("engineer", "milp"):

@@ -4,8 +4,8 @@ import pytest
 
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
-from genthermal.schedule.hindsight import hindsight_plan, hindsight_problem, hindsight_schedule
-from genthermal.schedule.plan import build_timeline, generator_inputs
+from genthermal.schedule.sweeps.hindsight import hindsight_plan, hindsight_problem, hindsight_schedule
+from genthermal.schedule.planning.plan import build_timeline, generator_inputs
 from genthermal.simulate import simulate
 from genthermal.schedule.power_system import PowerSystem
 

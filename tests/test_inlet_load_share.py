@@ -9,7 +9,7 @@ import pytest
 from genthermal.coolant import inlet_load_factor, inlet_rise
 from genthermal.errors import InputError
 from genthermal.mission import Mission
-from genthermal.schedule.closed_loop import true_inputs
+from genthermal.schedule.flight.closed_loop import true_inputs
 from genthermal.schedule.power_system import PowerSystem
 
 
@@ -93,8 +93,8 @@ def test_the_closed_loops_plant_flies_the_load_following_inlet():
     the currents it flies: with load moved off the blocked generator a load-following rise leaves it
     cooler than a fixed one does; undisplaced the two are the same plant run."""
     from genthermal.plants.model_plant import ModelPlant
-    from genthermal.schedule.closed_loop import plant_inputs, plant_setup
-    from genthermal.schedule.plan import Schedule, build_timeline, mission_segments
+    from genthermal.schedule.flight.closed_loop import plant_inputs, plant_setup
+    from genthermal.schedule.planning.plan import Schedule, build_timeline, mission_segments
 
     def end_winding(share, displaced_A):
         system = _system(share)

@@ -6,7 +6,7 @@ import pytest
 from genthermal.errors import InputError
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.mission import Mission
-from genthermal.schedule.innovation_detector import InnovationCusumSettings, innovation_cusum_alarms
+from genthermal.schedule.monitoring.innovation_detector import InnovationCusumSettings, innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
 
 DT, CYCLE = 10.0, 30  # 10-s steps, 5-min cycles
@@ -68,7 +68,7 @@ def test_bad_records_and_settings_name_the_field(generator):
 
 def _stepped(generator, record, references=None, settings=InnovationCusumSettings()):
     """Run :class:`InnovationCusum` cycle by cycle over ``record``; the alarms ``(cycle, g)``."""
-    from genthermal.schedule.innovation_detector import InnovationCusum
+    from genthermal.schedule.monitoring.innovation_detector import InnovationCusum
 
     currents, inlet, measured = record
     test = InnovationCusum(currents.shape[0], DT, 20.0, generator, settings)
@@ -98,7 +98,7 @@ def test_a_generator_without_a_reference_is_not_tested(generator):
 
 
 def test_switching_a_filter_to_another_model_carries_its_nodes_and_restarts_its_sum(generator):
-    from genthermal.schedule.innovation_detector import InnovationCusum
+    from genthermal.schedule.monitoring.innovation_detector import InnovationCusum
 
     test = InnovationCusum(2, DT, 20.0, generator)
     test.x[0] = test.x[0] + 5.0

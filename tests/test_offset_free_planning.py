@@ -6,7 +6,7 @@ import pytest
 
 from genthermal.errors import InputError
 from genthermal.estimation.ekf import node_heat_capacities
-from genthermal.schedule.linearise import planning_design_model
+from genthermal.schedule.planning.linearise import planning_design_model
 from genthermal.schedule.state_estimator import StateEstimator, planning_generator
 from genthermal.schedule.power_system import AffineGenerator
 

@@ -7,13 +7,13 @@ import pytest
 
 from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
-from genthermal.schedule.flown import FlownPlanning
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.optimal_shed import chosen_shed_plan, on_flown_model, shed_guess
-from genthermal.schedule.plan import PlanningProblem, PlanResult, Schedule, Segment, predict
+from genthermal.schedule.planning.flown import FlownPlanning
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.optimal_shed import chosen_shed_plan, on_flown_model, shed_guess
+from genthermal.schedule.planning.plan import PlanningProblem, PlanResult, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator
-from genthermal.schedule.price import PRICE_TOLERANCE_MIN, schedule_cost_min
-from genthermal.schedule.replanning import plan_with
+from genthermal.schedule.planning.price import PRICE_TOLERANCE_MIN, schedule_cost_min
+from genthermal.schedule.flight.replanning import plan_with
 
 BLOCKAGE = {"k_flow": 0.2, "n_flow": 0.0}
 NAMES = ("gen1", "gen2")
@@ -134,7 +134,7 @@ def test_closed_loop_on_a_plant_hot_at_rest_sheds_less_with_the_own_plan(tmp_pat
     0.36 A·h (370 min), and neither generator goes above θmax."""
     from test_closed_loop_shed import HOT_AT_REST, _system
 
-    from genthermal.schedule.closed_loop import fly
+    from genthermal.schedule.flight.closed_loop import fly
     from genthermal.schedule.report import flight_summary
 
     def cost(summary):

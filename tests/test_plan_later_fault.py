@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule import open_loop
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.open_loop import plan_mission
-from genthermal.schedule.plan import FEASIBLE_TOLERANCE_K
+from genthermal.schedule.flight import open_loop
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.flight.open_loop import plan_mission
+from genthermal.schedule.planning.plan import FEASIBLE_TOLERANCE_K
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

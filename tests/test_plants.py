@@ -18,8 +18,8 @@ from genthermal.errors import InputError
 from genthermal.mission import load_mission
 from genthermal.plants import Readings
 from genthermal.plants.python_plant import load_python_plant
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

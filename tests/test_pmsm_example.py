@@ -150,7 +150,7 @@ def test_diagnosis_finds_the_applicable_effect(motor):
 
 def test_the_generator_power_system_refuses_the_motor(motor):
     from genthermal.mission import load_mission
-    from genthermal.schedule.linearise import planning_design_model
+    from genthermal.schedule.planning.linearise import planning_design_model
     from genthermal.schedule.power_system import PowerSystem
 
     with pytest.raises(InputError, match="machine has no generator role"):

@@ -78,8 +78,8 @@ def test_every_exported_function_documents_what_it_returns(name):
 RESULT_METHODS = [("genthermal.diagnose", "Diagnosis", "to_pandas"), ("genthermal.diagnose", "Diagnosis", "plot"),
                   ("genthermal.diagnose", "CalibrationResult", "to_pandas"),
                   ("genthermal.diagnose", "CalibrationResult", "plot"),
-                  ("genthermal.schedule.flight_result", "FlightResult", "to_pandas"),
-                  ("genthermal.schedule.flight_result", "FlightResult", "plot")]
+                  ("genthermal.schedule.flight.flight_result", "FlightResult", "to_pandas"),
+                  ("genthermal.schedule.flight.flight_result", "FlightResult", "plot")]
 
 
 @pytest.mark.parametrize("module, cls, method", RESULT_METHODS)

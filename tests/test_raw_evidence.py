@@ -1,11 +1,11 @@
-"""A sensor fault fitted on the fit grid must show in the raw record (genthermal.schedule.raw_evidence)."""
+"""A sensor fault fitted on the fit grid must show in the raw record (genthermal.schedule.monitoring.raw_evidence)."""
 
 import numpy as np
 import pytest
 
 from genthermal.errors import InputError
 from genthermal.diagnose.search import noise_std
-from genthermal.schedule.raw_evidence import (RawEvidenceSettings, noise_factor, step_near,
+from genthermal.schedule.monitoring.raw_evidence import (RawEvidenceSettings, noise_factor, step_near,
                                               stuck_spread, unsupported)
 from genthermal.sensor_faults import SensorFault
 

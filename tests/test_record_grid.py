@@ -1,5 +1,5 @@
 """The in-flight record on the identification grid: inputs averaged over the interval each grid
-row is held for, not sampled at the grid times (genthermal/schedule/record_grid.py)."""
+row is held for, not sampled at the grid times (genthermal/schedule/monitoring/record_grid.py)."""
 
 import numpy as np
 import pandas as pd
@@ -7,8 +7,8 @@ import pytest
 
 from genthermal.diagnose.compare import compare, measured_series
 from genthermal.errors import InputError
-from genthermal.schedule.monitor import record_frame
-from genthermal.schedule.record_grid import on_fit_grid
+from genthermal.schedule.monitoring.monitor import record_frame
+from genthermal.schedule.monitoring.record_grid import on_fit_grid
 from genthermal.simulate import simulate
 
 STEP_S, FIT_DT_S, CYCLE_S = 10.0, 60.0, 300.0
@@ -61,10 +61,10 @@ def test_a_flight_whose_fit_grid_is_not_a_whole_number_of_steps_is_refused_befor
     import dataclasses
 
     from genthermal.mission import load_mission
-    from genthermal.schedule.closed_loop import fly
-    from genthermal.schedule.manager_settings import ManagerSettings
+    from genthermal.schedule.flight.closed_loop import fly
+    from genthermal.schedule.flight.manager_settings import ManagerSettings
     from genthermal.schedule.power_system import PowerSystem
-    from genthermal.schedule.sensor_watch import SensorWatchSettings
+    from genthermal.schedule.monitoring.sensor_watch import SensorWatchSettings
 
     system = PowerSystem.from_mission(load_mission("blockage_large"))
     settings = dataclasses.replace(ManagerSettings(), sensor_watch=SensorWatchSettings(identify_dt_s=45.0))

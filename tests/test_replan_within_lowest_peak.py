@@ -1,13 +1,16 @@
 """When no schedule keeps the margin, the re-plan within the lowest reachable peak flies the
 scheduler's plan whenever it keeps that limit by the tolerance every plan is judged with."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule import replanning
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import FEASIBLE_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, mission_segments
+from genthermal.schedule.flight import replanning
+from genthermal.schedule.planning import registry
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import FEASIBLE_TOLERANCE_K, PlanningProblem, PlanResult, Schedule, mission_segments
 from genthermal.schedule.power_system import PowerSystem
 
 from flight_scenarios import SHORT
@@ -58,7 +61,8 @@ def test_scheduler_plan_within_the_tolerance_of_the_relaxed_limit_is_flown(probl
         return shed
     monkeypatch.setattr(replanning, "lowest_reachable_peak", min_max)
     monkeypatch.setattr(replanning, "priced_shed_plan", costly_shed)
-    monkeypatch.setattr(replanning, "engineer_plan", engineer)
+    monkeypatch.setitem(registry._PLANNERS, "engineer", dataclasses.replace(
+        registry.planner("engineer"), plan=lambda p, settings, previous: engineer(p, settings)))
     result = replanning.plan_with("engineer", problem, ManagerSettings(), system.generator_names, system.limit_C)
     assert result.schedule.added_rest_s == flown_rest_s
     assert not result.feasible and "margin not kept" in result.warnings[-1]

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule.engineer import engineer_plan
-from genthermal.schedule.heuristic import heuristic_plan
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import PlanningProblem, mission_segments, rest_available_s
+from genthermal.schedule.planning.engineer import engineer_plan
+from genthermal.schedule.planning.heuristic import heuristic_plan
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import PlanningProblem, mission_segments, rest_available_s
 from genthermal.schedule.power_system import PowerSystem
-from genthermal.schedule.replanning import first_rest_max_s, planning_problem
+from genthermal.schedule.flight.replanning import first_rest_max_s, planning_problem
 
 from flight_scenarios import SHORT
 

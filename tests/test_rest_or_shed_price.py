@@ -2,17 +2,20 @@
 load that rest keeps served is worth more than its minutes, and when only the margin is lost the
 cheaper of the lowest-peak schedule and the margin-keeping shed plan is flown."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule import replanning
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.plan import PlanningProblem, PlanResult, Schedule, mission_segments
+from genthermal.schedule.flight import replanning
+from genthermal.schedule.planning import registry
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.planning.plan import PlanningProblem, PlanResult, Schedule, mission_segments
 from genthermal.schedule.power_system import PowerSystem
-from genthermal.schedule.price import (SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, not_served_per_segment_Ah,
+from genthermal.schedule.planning.price import (SHED_PRICE_MIN_PER_AH, cost_min, not_served_Ah, not_served_per_segment_Ah,
                                       schedule_cost_min)
-from genthermal.schedule.shed import priced_shed_plan, shed_rest_candidates_s, shed_switching_off
+from genthermal.schedule.planning.shed import priced_shed_plan, shed_rest_candidates_s, shed_switching_off
 
 from flight_scenarios import SHORT
 
@@ -113,7 +116,8 @@ def test_margin_lost_flies_the_cheaper_of_resting_and_shedding(system, monkeypat
         result.details.update(shedding=[0], cost_min=shed_cost_min)
         return result
     monkeypatch.setattr(replanning, "lowest_reachable_peak", lambda p, s: plan(3600.0, lowest_peak_C, False, "min-max"))
-    monkeypatch.setattr(replanning, "engineer_plan", engineer)
+    monkeypatch.setitem(registry._PLANNERS, "engineer", dataclasses.replace(
+        registry.planner("engineer"), plan=lambda p, settings, previous: engineer(p, settings)))
     monkeypatch.setattr(replanning, "priced_shed_plan", shed)
     result = replanning.plan_with("engineer", problem, ManagerSettings(), system.generator_names, system.limit_C)
     assert result.method == flown and not result.feasible

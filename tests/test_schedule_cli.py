@@ -6,7 +6,7 @@ import pytest
 
 from genthermal.cli import main
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import fly
+from genthermal.schedule.flight.closed_loop import fly
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

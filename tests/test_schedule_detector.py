@@ -1,4 +1,4 @@
-"""Fault detection on the EKF's disturbance states (genthermal.schedule.detector) and in flight."""
+"""Fault detection on the EKF's disturbance states (genthermal.schedule.monitoring.detector) and in flight."""
 
 import numpy as np
 import pytest
@@ -7,10 +7,10 @@ from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
 from genthermal.estimation.kalman import KalmanFilter
 from genthermal.mission import Mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.state_estimator import FLIGHT_EKF_SETTINGS
-from genthermal.schedule.detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
+from genthermal.schedule.monitoring.detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

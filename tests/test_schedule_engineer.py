@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from genthermal.schedule.engineer import EngineerSettings, engineer_plan
-from genthermal.schedule.heuristic import heuristic_plan
-from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict
+from genthermal.schedule.planning.engineer import EngineerSettings, engineer_plan
+from genthermal.schedule.planning.heuristic import heuristic_plan
+from genthermal.schedule.planning.plan import PlanningProblem, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator
 
 HOT_INLET_C = 51.0

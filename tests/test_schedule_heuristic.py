@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from genthermal.schedule.heuristic import heuristic_plan
-from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict
+from genthermal.schedule.planning.heuristic import heuristic_plan
+from genthermal.schedule.planning.plan import PlanningProblem, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator
 
 HOT_INLET_C = 51.0
@@ -87,7 +87,7 @@ def test_forward_sweep_handles_each_segment(faulty, healthy):
 
 @pytest.mark.parametrize("n_steps", [0, 1, 2, 5, 64, 361])
 def test_affine_states_is_the_step_by_step_recurrence(n_steps):
-    from genthermal.schedule.plan import affine_states
+    from genthermal.schedule.planning.plan import affine_states
 
     rng = np.random.default_rng(n_steps)
     E = 0.9 * np.eye(4) + 0.02 * rng.random((4, 4))  # stable, coupled, not symmetric

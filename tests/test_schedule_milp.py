@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.open_loop import plan_mission
-from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
-from genthermal.schedule.plan import PlanningProblem, Segment, predict
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.flight.open_loop import plan_mission
+from genthermal.schedule.planning.milp import MilpSettings, milp_objective, milp_plan
+from genthermal.schedule.planning.plan import PlanningProblem, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator, PowerSystem
 from genthermal.schedule.report import flight_summary, summary_text
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from genthermal.cli import main
-from genthermal.schedule.linearise import planning_design_model
-from genthermal.schedule.monitor import Cusum
+from genthermal.schedule.planning.linearise import planning_design_model
+from genthermal.schedule.monitoring.monitor import Cusum
 from genthermal.schedule.power_system import AffineGenerator
 
 from flight_scenarios import SHORT as BLOCKAGE
@@ -71,7 +71,7 @@ def _filtered_winding_errors(plant_model, filter_names, hours=1.5, dt=10.0, seed
     """Fly one generator of a mismatched plant (R0 × 1.2, h_end_air × 0.8) at 90 % load for
     ``hours`` with noisy measurements; return each filter's winding error (K) of the state it
     hands the planner at the end."""
-    from genthermal.schedule.linearise import planning_design_model
+    from genthermal.schedule.planning.linearise import planning_design_model
     from genthermal.schedule.state_estimator import StateEstimator
 
     plant = plant_model.with_parameters("assumed", "test mismatch", R0=1.2 * plant_model.parameters.value("R0"),
@@ -116,8 +116,8 @@ def test_identification_admits_only_effects_that_heat_the_machine(k_flow, expect
     from genthermal.machines import build_model
     from genthermal.mission import load_mission
     from genthermal.resources import SCENARIO_DIR
-    from genthermal.schedule.fault_identification import identify_fault
-    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.fault_identification import identify_fault
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
     from genthermal.synth import synthesize
 
     model = build_model()
@@ -138,8 +138,8 @@ def test_identification_fits_the_convection_exponent_of_a_blockage_that_holds_co
     from genthermal.machines import build_model
     from genthermal.mission import load_mission
     from genthermal.resources import SCENARIO_DIR
-    from genthermal.schedule.fault_identification import identify_fault
-    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.fault_identification import identify_fault
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
     from genthermal.synth import synthesize
 
     model = build_model()
@@ -162,8 +162,8 @@ def test_the_blockage_interval_narrows_as_the_record_grows_and_the_manager_belie
     from genthermal.machines import build_model
     from genthermal.mission import load_mission
     from genthermal.resources import SCENARIO_DIR
-    from genthermal.schedule.fault_identification import identify_fault
-    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.fault_identification import identify_fault
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
     from genthermal.synth import synthesize
 
     model = build_model()
@@ -185,7 +185,7 @@ def test_the_blockage_interval_narrows_as_the_record_grows_and_the_manager_belie
 
 def test_the_believed_value_of_a_loss_is_the_high_end_of_its_interval():
     from genthermal.diagnose.interval import ParameterInterval
-    from genthermal.schedule.fault_identification import Identification
+    from genthermal.schedule.monitoring.fault_identification import Identification
 
     interval = ParameterInterval("R_short", 0.3, 0.2, 0.45, 0.95, 100.0, False, False)
     found = Identification(0, 3600.0, "phase_short_circuit", {"R_short": 0.3}, 1800.0, -50.0, 1.0, 0.2, None, 1.0,
@@ -198,14 +198,14 @@ def test_the_believed_value_of_a_loss_is_the_high_end_of_its_interval():
 
 def test_the_interval_coverage_must_be_a_probability():
     from genthermal.errors import InputError
-    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
 
     with pytest.raises(InputError, match="interval_level"):
         DetectionSettings(interval_level=1.0)
 
 
 def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_effect():
-    from genthermal.schedule.fault_identification import FAULT_EFFECTS, flight_catalogue, registered_effect_name
+    from genthermal.schedule.monitoring.fault_identification import FAULT_EFFECTS, flight_catalogue, registered_effect_name
 
     catalogue = flight_catalogue()
     variants = [name for name in catalogue if name not in FAULT_EFFECTS]
@@ -217,7 +217,7 @@ def test_flight_catalogue_adds_a_free_shape_variant_named_after_the_registered_e
 
 
 def test_a_refinement_within_the_tolerance_confirms_the_belief():
-    from genthermal.schedule.fault_identification import confirms
+    from genthermal.schedule.monitoring.fault_identification import confirms
 
     believed = (("coolant_flow_reduction", (("k_flow", 0.197),)),)
     assert confirms((("coolant_flow_reduction", (("k_flow", 0.174),)),), believed, 0.25)

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from genthermal.mission import load_mission
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.open_loop import plan_mission
-from genthermal.schedule.replanning import plan_with
-from genthermal.schedule.optimal import lowest_reachable_peak
-from genthermal.schedule.milp import MilpSettings, milp_objective, milp_plan
-from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, predict
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.flight.open_loop import plan_mission
+from genthermal.schedule.flight.replanning import plan_with
+from genthermal.schedule.planning.optimal import lowest_reachable_peak
+from genthermal.schedule.planning.milp import MilpSettings, milp_objective, milp_plan
+from genthermal.schedule.planning.plan import PlanningProblem, Schedule, Segment, predict
 from genthermal.schedule.power_system import AffineGenerator, PowerSystem
 
 
@@ -114,8 +114,8 @@ def test_while_shedding_the_manager_keeps_shedding_rather_than_use_up_the_margin
 def test_the_optimal_scheduler_keeps_the_plan_with_the_least_rest_of_its_candidates(tiny, monkeypatch):
     """IPOPT's local optimum is one candidate among the heuristic's, the engineer's and the previous
     plan, all judged on the same problem: a baseline's plan that rests less is flown, and says so."""
-    import genthermal.schedule.optimal as optimal
-    from genthermal.schedule.plan import evaluate
+    import genthermal.schedule.planning.optimal as optimal
+    from genthermal.schedule.planning.plan import evaluate
 
     honest = optimal.optimal_plan(tiny)
     assert honest.feasible and honest.method == "optimal"
@@ -132,8 +132,8 @@ def test_the_optimal_scheduler_keeps_the_plan_with_the_least_rest_of_its_candida
 
 
 def test_a_previous_plan_that_sheds_load_is_no_candidate(tiny):
-    from genthermal.schedule.optimal import least_cost, optimal_plan, serves_all_load
-    from genthermal.schedule.plan import evaluate
+    from genthermal.schedule.planning.optimal import least_cost, optimal_plan, serves_all_load
+    from genthermal.schedule.planning.plan import evaluate
 
     shedding = Schedule(np.array([[2.0, 2.0], [0.0, 0.0]]), np.zeros(2))  # gen1's 2 A go to nobody
     assert not serves_all_load(tiny, shedding) and not serves_all_load(tiny, None)

@@ -8,12 +8,12 @@ import pytest
 from genthermal.cli import main
 from genthermal.errors import InputError
 from genthermal.estimation.ekf import ExtendedKalmanFilter
-from genthermal.schedule.manager_settings import ManagerSettings
-from genthermal.schedule.replanning import plan_with
-from genthermal.schedule.flown import FlownPlanning, update_steps
-from genthermal.schedule.optimal import OptimalSettings, optimal_plan
-from genthermal.schedule.optimal_nlp import FlownTranscription, NonlinearSettings, flown_optimal_plan
-from genthermal.schedule.plan import PlanningProblem, Schedule, Segment, build_timeline, predict, split_segments
+from genthermal.schedule.flight.manager_settings import ManagerSettings
+from genthermal.schedule.flight.replanning import plan_with
+from genthermal.schedule.planning.flown import FlownPlanning, update_steps
+from genthermal.schedule.planning.optimal import OptimalSettings, optimal_plan
+from genthermal.schedule.planning.optimal_nlp import FlownTranscription, NonlinearSettings, flown_optimal_plan
+from genthermal.schedule.planning.plan import PlanningProblem, Schedule, Segment, build_timeline, predict, split_segments
 from genthermal.schedule.power_system import AffineGenerator
 
 BLOCKAGE = {"k_flow": 0.2, "n_flow": 0.0}
@@ -205,8 +205,8 @@ def test_design_model_shedding_of_a_flown_problem_is_posed_and_judged_on_the_des
     shed plan's receivers are predicted on the design model (before, with the flown filters still
     in the problem, the prediction of one receiver raised an IndexError) and the plan is judged
     there, not on the flown model with its back-off."""
-    from genthermal.schedule.replanning import on_design_model
-    from genthermal.schedule.shed import shed_plan
+    from genthermal.schedule.flight.replanning import on_design_model
+    from genthermal.schedule.planning.shed import shed_plan
 
     models, filters = believed
     generators = [AffineGenerator(design_model.with_effect("coolant_flow_reduction", **BLOCKAGE)),
@@ -268,7 +268,7 @@ def test_solver_cache_keeps_only_the_most_recently_used_structures(believed, des
     ``MAX_CACHED_SOLVERS``: a long flight whose re-plans kept changing the structure built one
     solver per re-plan and held them all (a grid worker passed 10 GB). A structure used again is
     kept, the least recently used one goes, and an evicted one is rebuilt when needed."""
-    import genthermal.schedule.optimal_nlp as optimal_nlp
+    import genthermal.schedule.planning.optimal_nlp as optimal_nlp
 
     models, _ = believed
     filters = [ExtendedKalmanFilter(m, 10.0) for m in models]  # a cache of their own

@@ -5,7 +5,7 @@ import pytest
 from genthermal.cli import main
 from genthermal.mission import Mission
 from genthermal.schedule.power_system import PowerSystem
-from genthermal.schedule.sweep import FAULT_TYPES, robustness_case, summarise
+from genthermal.schedule.sweeps.sweep import FAULT_TYPES, robustness_case, summarise
 
 
 def test_cases_cover_the_grid_and_differ_from_the_planning_model():
@@ -107,7 +107,7 @@ def test_cost_at_the_managers_price_when_one_scheduler_sheds_and_another_rests()
 
 
 def test_hindsight_records_join_their_case():
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
 
     document = robustness_case(5)
     flights = [{"case": document["name"], "scheduler": sweep.HINDSIGHT, "status": "ok",
@@ -119,8 +119,8 @@ def test_hindsight_records_join_their_case():
 
 
 def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
-    import genthermal.schedule.closed_loop as closed_loop
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.flight.closed_loop as closed_loop
+    import genthermal.schedule.sweeps.sweep as sweep
 
     document = robustness_case(6)  # 2 generators, 4.5 h
 
@@ -142,7 +142,7 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
 
 
 def test_cpu_limit_must_be_positive():
-    from genthermal.schedule.manager_settings import ManagerSettings
+    from genthermal.schedule.flight.manager_settings import ManagerSettings
 
     with pytest.raises(ValueError, match="cpu_limit_s"):
         ManagerSettings(cpu_limit_s=0.0)
@@ -156,7 +156,7 @@ def test_sweep_rejects_an_unknown_scheduler(tmp_path, capsys):
 def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsys, monkeypatch):
     import json
 
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
     records = [{"name": "a", "faulty": False, "runs": {"engineer": run(0, 0.0)}}]
     monkeypatch.setattr(sweep, "run_sweep", lambda documents, schedulers, *rest, **options: records)
     assert main(["sweep", "--cases", "1", "--schedulers", "engineer"]) == 0
@@ -173,7 +173,7 @@ def test_sweep_prints_json_without_a_file_and_writes_one_with_it(tmp_path, capsy
 def test_a_flight_without_a_re_plan_is_every_schedulers_flight():
     """The scheduler is called only to re-plan: a flight that never re-planned, flown again with
     another scheduler, is the same flight (the sweep then reuses it)."""
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
 
     document = {"name": "case900:healthy:2gen:1.0h", "actions": [{"condition": c, "duration_min": 15} for c in (1, 2, 3, 5)],
                 "generators": {"count": 2, "plant_mismatch": {"h_end_air": 1.2, "R0": 0.8}}, "faults": []}
@@ -189,7 +189,7 @@ def test_a_flight_without_a_re_plan_is_every_schedulers_flight():
 def test_sweep_only_flies_the_named_cases_of_the_grid_and_checks_them(monkeypatch, capsys):
     import json
 
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
     flown = {}
 
     def fake(documents, schedulers, *rest, **options):
@@ -211,7 +211,7 @@ def test_sweep_only_flies_the_named_cases_of_the_grid_and_checks_them(monkeypatc
 
 
 def test_schedulers_share_a_flight_only_when_they_plan_on_the_same_model():
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
 
     assert sweep.planner_model_of("optimal", "nonlinear") == "nonlinear"
     assert sweep.planner_model_of("engineer", "nonlinear") == "affine"
@@ -286,7 +286,7 @@ def test_the_flown_heuristic_counts_as_a_baseline_where_the_sweep_flew_it():
 
 
 def test_the_sweep_flies_the_flown_heuristic_on_the_nonlinear_model():
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
 
     assert sweep.planner_model_of(sweep.FLOWN_HEURISTIC, "affine") == "nonlinear"
     assert sweep.FLOWN_HEURISTIC in sweep.SWEEP_SCHEDULERS
@@ -295,7 +295,7 @@ def test_the_sweep_flies_the_flown_heuristic_on_the_nonlinear_model():
 def test_the_sweep_flies_the_optimal_scheduler_on_the_flown_model_under_its_own_name():
     """``optimal_flown`` is the optimal scheduler planning on the nonlinear model whatever the
     sweep's ``--planner-model``, so one grid holds both optimal flights side by side."""
-    import genthermal.schedule.sweep as sweep
+    import genthermal.schedule.sweeps.sweep as sweep
 
     assert sweep.FLOWN_OPTIMAL in sweep.SWEEP_SCHEDULERS
     assert sweep.planner_model_of(sweep.FLOWN_OPTIMAL, "affine") == "nonlinear"

@@ -6,7 +6,7 @@ import pytest
 from genthermal.coolant import outlet_flow_fraction
 from genthermal.errors import InputError
 from genthermal.mission import Mission, load_mission
-from genthermal.schedule.plan import Schedule, build_timeline, mission_segments, remaining_after
+from genthermal.schedule.planning.plan import Schedule, build_timeline, mission_segments, remaining_after
 from genthermal.schedule.power_system import PowerSystem
 
 ACTIONS = [{"condition": "taxi", "duration_min": 15}, {"condition": "landing", "duration_min": 20}]
@@ -63,7 +63,7 @@ def test_a_scenario_margin_is_what_the_manager_plans_to_unless_the_option_overri
     import argparse
 
     from genthermal.commands.plan import add_schedule_arguments, settings_from_args
-    from genthermal.schedule.manager_settings import DEFAULT_MARGIN_K, ManagerSettings, planning_margin_K
+    from genthermal.schedule.flight.manager_settings import DEFAULT_MARGIN_K, ManagerSettings, planning_margin_K
 
     assert planning_margin_K(system_from(generators={"margin_K": 0}), ManagerSettings()) == 0.0
     assert planning_margin_K(system_from(), ManagerSettings()) == DEFAULT_MARGIN_K
@@ -105,7 +105,7 @@ def test_a_scenario_filter_is_the_one_flown_unless_the_option_overrides_it():
 
     from genthermal.commands.fly import register
     from genthermal.commands.plan import settings_from_args
-    from genthermal.schedule.manager_settings import ManagerSettings, flight_filter
+    from genthermal.schedule.flight.manager_settings import ManagerSettings, flight_filter
 
     assert flight_filter(system_from(generators={"filter": "kf"}), ManagerSettings()) == "kf"
     assert flight_filter(system_from(), ManagerSettings()) == ManagerSettings().filter == "ekf"
@@ -119,8 +119,8 @@ def test_a_scenario_filter_is_the_one_flown_unless_the_option_overrides_it():
 
 
 def test_the_nonlinear_planner_refuses_a_scenario_that_flies_the_linear_filter():
-    from genthermal.schedule.closed_loop import fly
-    from genthermal.schedule.manager_settings import ManagerSettings
+    from genthermal.schedule.flight.closed_loop import fly
+    from genthermal.schedule.flight.manager_settings import ManagerSettings
 
     system = PowerSystem.from_mission(load_mission("chapter7_inlet_3C"))
     with pytest.raises(InputError) as error:

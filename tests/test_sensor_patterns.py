@@ -3,8 +3,8 @@ unit whose sensor is masked."""
 
 import numpy as np
 
-from genthermal.schedule.detector import DetectorSettings, DisturbanceDetector
-from genthermal.schedule.sensor_patterns import frozen_since, opposite_flows
+from genthermal.schedule.monitoring.detector import DetectorSettings, DisturbanceDetector
+from genthermal.schedule.monitoring.sensor_patterns import frozen_since, opposite_flows
 
 
 def _noisy(n, seed=0):
@@ -53,7 +53,7 @@ def test_a_masked_unit_is_neither_tested_nor_a_reference():
 
 
 def test_an_excess_above_the_healthy_range_is_held_until_an_alarm_or_the_longest_hold():
-    from genthermal.schedule.sensor_patterns import UnconfirmedExcess
+    from genthermal.schedule.monitoring.sensor_patterns import UnconfirmedExcess
 
     held = UnconfirmedExcess([0.56, 1.15], max_hold_s=3600.0, n_generators=3)
     r = np.array([[0.65, 0.3], [0.2, 1.3], [0.9, -0.2]])

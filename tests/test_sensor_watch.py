@@ -11,12 +11,12 @@ import yaml
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
 from genthermal.resources import SCENARIO_DIR
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sensor_injection import SensorFaultInjector, parse_sensor_faults
-from genthermal.schedule.sensor_watch import CORRECTED, SensorWatchSettings
+from genthermal.schedule.flight.sensor_injection import SensorFaultInjector, parse_sensor_faults
+from genthermal.schedule.monitoring.sensor_watch import CORRECTED, SensorWatchSettings
 
 NAMES = ("gen1", "gen2")
 OUTPUTS = ("T_winding", "T_iron")
@@ -215,7 +215,7 @@ def test_a_real_blockage_is_not_masked_as_a_fast_sensor_drift():
     """Robustness grid case 0 (a k_flow 0.16 blockage the manager is not told): the record check
     once claimed the blocked unit's winding and iron readings as +179 and +52 K/h drifts, masked
     both and let the winding reach 255 °C. Drifts faster than ``max_drift_K_per_h`` are refused."""
-    from genthermal.schedule.sweep import fly_flight, robustness_case
+    from genthermal.schedule.sweeps.sweep import fly_flight, robustness_case
 
     flight = fly_flight(robustness_case(0), "heuristic", cpu_limit_s=None)
     assert flight["status"] == "ok", flight
@@ -233,7 +233,7 @@ def test_a_machine_fault_on_a_mismatched_plant_is_not_claimed_as_a_sensor_fault(
     loss on gen2 of 2): the healthy gen1's iron reading was claimed 2.86 K low. The raw 10-s record
     shows no step at the fitted onsets (raw_evidence): no claim, the check's refusal recorded, and
     the heating is identified on the faulty unit alone."""
-    from genthermal.schedule.sweep import fly_flight, robustness_case
+    from genthermal.schedule.sweeps.sweep import fly_flight, robustness_case
 
     document = robustness_case(case)
     flight = fly_flight(document, "optimal", cpu_limit_s=None)
@@ -282,9 +282,9 @@ def test_a_biased_ambient_sensor_is_named_by_its_step_and_changes_no_load(tmp_pa
 
 def test_a_steady_ambient_reading_is_never_claimed_for_a_step(tmp_path):
     """The step test looks at one unit's reading against the others': with no step, nothing."""
-    from genthermal.schedule.input_watch import InputWatch, InputWatchSettings
-    from genthermal.schedule.sensor_watch import SensorWatch, SensorWatchSettings
-    from genthermal.schedule.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.input_watch import InputWatch, InputWatchSettings
+    from genthermal.schedule.monitoring.sensor_watch import SensorWatch, SensorWatchSettings
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
 
     system = _system(tmp_path, [])
     watch = InputWatch(SensorWatch(system, SensorWatchSettings(), DetectionSettings()), InputWatchSettings(),
@@ -355,7 +355,7 @@ def test_a_real_inlet_rise_is_confirmed_a_cycle_later_and_planned(tmp_path):
 def test_without_the_inlet_hold_the_same_high_reading_moves_the_load(tmp_path, healthy_flight):
     """The comparison case of the test above: with nothing held back, the plan takes the 3-K warmer
     reading at its onset."""
-    from genthermal.schedule.input_watch import InputWatchSettings
+    from genthermal.schedule.monitoring.input_watch import InputWatchSettings
 
     settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(unconfirmed_rise_K=0.0))
     result = fly(_system(tmp_path, [INLET_HIGH]), "engineer", settings)
@@ -365,7 +365,7 @@ def test_without_the_inlet_hold_the_same_high_reading_moves_the_load(tmp_path, h
 
 
 def test_without_the_input_watch_the_same_inlet_bias_is_believed_a_machine_fault(tmp_path):
-    from genthermal.schedule.input_watch import InputWatchSettings
+    from genthermal.schedule.monitoring.input_watch import InputWatchSettings
 
     fault = {"generator": 2, "sensor": "T_inlet", "kind": "bias", "onset_min": 60, "value": -3.0}
     settings = dataclasses.replace(ManagerSettings(), input_watch=InputWatchSettings(enabled=False))
@@ -400,7 +400,7 @@ def test_a_real_inlet_rise_on_one_unit_is_not_claimed_as_its_inlet_sensor(tmp_pa
                                           ("max_checks", 2.5), ("unconfirmed_rise_K", -1.0),
                                           ("max_unconfirmed_s", float("inf")), ("shared_step_K", 0.0)])
 def test_bad_input_watch_settings_name_the_field(field, value):
-    from genthermal.schedule.input_watch import InputWatchSettings
+    from genthermal.schedule.monitoring.input_watch import InputWatchSettings
 
     with pytest.raises(InputError) as error:
         InputWatchSettings(**{field: value})
@@ -412,8 +412,8 @@ def test_a_sensor_claimed_noisier_is_kept_not_masked(tmp_path):
     filter, the record and the fault test, and the claim does not explain the alarm away (masked,
     the blocked unit of the robustness grid's case 45 flew to 139 °C unobserved)."""
     from genthermal.diagnose.sensor_faults import SensorFault, SensorHypothesis
-    from genthermal.schedule.monitor import DetectionSettings
-    from genthermal.schedule.sensor_watch import NOISE_KEPT, SensorWatch, SensorWatchSettings
+    from genthermal.schedule.monitoring.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.sensor_watch import NOISE_KEPT, SensorWatch, SensorWatchSettings
 
     watch = SensorWatch(_system(tmp_path, []), SensorWatchSettings(), DetectionSettings())
 

@@ -12,7 +12,7 @@ import pytest
 
 from genthermal.cli import main
 from genthermal.errors import InputError
-from genthermal.schedule import sweep, sweep_workers
+from genthermal.schedule.sweeps import sweep, sweep_workers
 
 try:
     import psutil  # lists the sockets of the worker processes

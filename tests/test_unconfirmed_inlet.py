@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from genthermal.schedule.unconfirmed_inlet import UnconfirmedInlet
+from genthermal.schedule.monitoring.unconfirmed_inlet import UnconfirmedInlet
 
 
 def test_a_small_rise_is_held_whole_and_a_large_one_only_up_to_the_bound():

@@ -14,8 +14,8 @@ from genthermal.cli import main
 from genthermal.commands.plan import add_schedule_arguments, settings_from_args
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
-from genthermal.schedule.closed_loop import fly
-from genthermal.schedule.manager_settings import ManagerSettings, infeasible_response
+from genthermal.schedule.flight.closed_loop import fly
+from genthermal.schedule.flight.manager_settings import ManagerSettings, infeasible_response
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 

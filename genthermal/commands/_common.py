@@ -81,13 +81,32 @@ class _Choice:
         return cli_spelling(text)
 
 
-def add_choice_argument(parser: argparse.ArgumentParser, option: str, choices, help: str, **kwargs) -> None:
+class _ChoicesOrFile(tuple):
+    """The named choices, and any file name ending in ``suffix`` (a plug-in the user gives)."""
+
+    def __new__(cls, choices, suffix: str):
+        made = super().__new__(cls, choices)
+        made.suffix = suffix
+        return made
+
+    def __contains__(self, item) -> bool:
+        return tuple.__contains__(self, item) or str(item).endswith(self.suffix)
+
+
+def add_choice_argument(parser: argparse.ArgumentParser, option: str, choices, help: str,
+                        or_file: str | None = None, **kwargs) -> None:
     """Add an option taking one of ``choices`` (lower-case, hyphenated), shown as ``{a,b}``.
 
     An unknown value is a usage error naming the option and the value (exit code 2); the old
-    spellings of :data:`~genthermal.commands._vocabulary.OLD_SPELLINGS` are accepted.
+    spellings of :data:`~genthermal.commands._vocabulary.OLD_SPELLINGS` are accepted. With
+    ``or_file`` (a suffix such as ``".py"``) a file name with that suffix is accepted too, shown as
+    ``{a,b}|FILE.py``.
     """
-    parser.add_argument(option, choices=tuple(choices), type=_Choice(choices), help=help, **kwargs)
+    if or_file is None:
+        parser.add_argument(option, choices=tuple(choices), type=_Choice(choices), help=help, **kwargs)
+        return
+    parser.add_argument(option, choices=_ChoicesOrFile(choices, or_file), type=_Choice(choices), help=help,
+                        metavar="{" + ",".join(choices) + "}|FILE" + or_file, **kwargs)
 
 
 def parse_assignments(items: list[str], option: str = "--param") -> dict[str, float]:

@@ -14,15 +14,15 @@ DEFAULT_MODEL = "genco_rf201a"
 
 #: ``--filter`` of estimate and fly (``genthermal.schedule.state_estimator.FLIGHT_FILTERS``).
 FILTERS = ("ekf", "kf")
-#: ``--scheduler`` of plan and fly (``genthermal.schedule.manager_settings.SCHEDULERS``).
+#: ``--scheduler`` of plan and fly (``genthermal.schedule.flight.manager_settings.SCHEDULERS``).
 SCHEDULERS = ("heuristic", "engineer", "optimal", "milp")
 #: Schedulers that can plan on the flown model (``manager_settings.FLOWN_SCHEDULERS``).
 FLOWN_SCHEDULERS = ("optimal", "heuristic")
-#: ``--schedulers`` of sweep (``genthermal.schedule.sweep.SWEEP_SCHEDULERS``, hyphenated).
+#: ``--schedulers`` of sweep (``genthermal.schedule.sweeps.sweep.SWEEP_SCHEDULERS``, hyphenated).
 SWEEP_SCHEDULERS = ("heuristic", "engineer", "optimal", "milp", "heuristic-flown", "optimal-flown")
 #: ``--planner-model`` of plan, fly and sweep (``manager_settings.PLANNER_MODELS``).
 PLANNER_MODELS = ("affine", "nonlinear")
-#: ``--when-infeasible`` of plan and fly (``genthermal.schedule.shed.INFEASIBLE_RESPONSES``, hyphenated).
+#: ``--when-infeasible`` of plan and fly (``genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES``, hyphenated).
 INFEASIBLE_RESPONSES = ("shed", "best-effort")
 #: ``--phases`` of diagnose (``genthermal.diagnose.discovery.Discovery`` ``phases``).
 PHASES = ("auto", "resolved", "lumped")
@@ -40,7 +40,7 @@ OLD_SPELLINGS = {"heuristic_flown": "heuristic-flown", "optimal_flown": "optimal
 
 #: Defaults the help quotes: ``ManagerSettings`` (margin_K, rise_backoff, confidence_sigmas,
 #: when_infeasible, filter, cycle_s / 60), ``manager_settings.DEFAULT_REST_BUDGET_FRACTION``,
-#: ``schedule.sweep.DEFAULT_FLIGHT_CPU_LIMIT_S``, ``synth`` noise, ``estimation.prediction``.
+#: ``schedule.sweeps.sweep.DEFAULT_FLIGHT_CPU_LIMIT_S``, ``synth`` noise, ``estimation.prediction``.
 MANAGER_DEFAULTS = {"margin_K": 2.5, "rise_backoff": 0.3, "confidence_sigmas": 2.0, "when_infeasible": "shed",
                     "filter": "ekf", "cycle_min": 5.0, "planner_model": "affine"}
 DEFAULT_REST_BUDGET_FRACTION = 0.25

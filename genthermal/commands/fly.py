@@ -1,6 +1,7 @@
-"""``genthermal fly SCENARIO [--scheduler NAME] [--json FILE] [--plot FILE]``: closed-loop load
-management (thesis 7.2) on a true plant that differs from the planning model, with detection and
-identification of faults the manager is not told. Reference: docs/guide/flights.md, docs/guide/cli.md.
+"""``genthermal fly SCENARIO [--scheduler NAME|FILE.py] [--plant NAME|FILE] [--json FILE] [--plot FILE]``:
+closed-loop load management (thesis 7.2) on a true plant that differs from the planning model (a
+model, an FMU, a Python plant or a replayed log), with detection and identification of faults the
+manager is not told. Reference: docs/guide/flights.md, docs/guide/cli.md.
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ FLY_DESCRIPTION = ("Closed-loop load management (thesis 7.2) on the true plant: 
                    "manager is not told the faults unless --tell-fault. With --planner-model nonlinear the optimal "
                    "scheduler (or the thesis heuristic, per K-condition) plans on the filter's nonlinear model with "
                    "a back-off from the filter's covariance instead of --margin. --plant also takes an FMI 2.0 "
-                   "co-simulation FMU or a Python file defining make_plant() (genthermal.plants); a plant that "
+                   "co-simulation FMU, a Python file defining make_plant() or a recorded flight to replay (--record CSV: the "
+                   "manager's decisions are then scored, not applied) (genthermal.plants); a plant that "
                    "fails in flight stops the flight with the fault recorded and the record so far written "
                    "(exit code 3).")
 
@@ -38,20 +40,27 @@ def register(subparsers) -> None:
                         help="filter in the loop — ekf: extended Kalman filter on the flown model (--model) with "
                         "disturbance heat flows; kf: the thesis's linear filter on its design model (default: "
                         f"the scenario's generators.filter, else {MANAGER_DEFAULTS['filter']})")
+    parser.add_argument("--record", metavar="FILE.csv", help="write the flight's record (time, temperatures, "
+                        "currents, rests) as CSV, kept when the plant fails; --plant FILE.csv replays it")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     """Fly and print the summary."""
+    from ..outputs import write_csv
     from ..plants import external_plant, is_external_plant
     from ..progress import working
-    from ..schedule.closed_loop import fly
+    from ..schedule.flight.closed_loop import fly
     from ..schedule.report import flight_summary
 
     system, settings = settings_from_args(args)
-    plant = external_plant(args.plant) if is_external_plant(args.plant) else None
+    sensors = tuple(system.planning_model.output_names)
+    plant = external_plant(args.plant, sensors) if is_external_plant(args.plant) else None
     print(system.describe() + (f"\n  plant: {args.plant}" if plant is not None else ""))
-    if plant is not None and any(f.effect for f in system.faults):
+    if getattr(plant, "replays_log", False):
+        print("note: the plant is a replayed log: the manager's decisions are recorded and scored, not applied",
+              file=sys.stderr)
+    elif plant is not None and any(f.effect for f in system.faults):
         print("note: genthermal applies no fault effect to this plant; its inputs carry the faults' inlet rises and "
               "its reset is told the faults (PlantSetup.faults): what they do inside is the plant's", file=sys.stderr)
     try:
@@ -61,6 +70,9 @@ def run(args) -> int:
         getattr(plant, "close", lambda: None)()
     summary = flight_summary(result)
     summary["plans"] = result.plans
+    if args.record:
+        write_csv(result.to_pandas(), args.record)
+        print(f"wrote {args.record}")
     write_outputs(args, summary, result, system.limit_C)
     if result.plant_fault is not None:
         print(f"genthermal fly: plant fault at {result.plant_fault['time_s']:g} s: {result.plant_fault['message']}; "

@@ -11,8 +11,8 @@ import dataclasses
 from ..errors import InputError
 from ._common import (add_choice_argument, add_json_argument, add_model_arguments, load_model_option,
                       parse_assignments, with_overrides)
-from ._vocabulary import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, INFEASIBLE_RESPONSES, MANAGER_DEFAULTS,
-                          PLANNER_MODELS, SCHEDULERS, library_value)
+from ._vocabulary import (DEFAULT_REST_BUDGET_FRACTION, INFEASIBLE_RESPONSES, MANAGER_DEFAULTS, PLANNER_MODELS,
+                          SCHEDULERS, library_value)
 
 #: What ``plan --description`` says (``fly`` has its own).
 PLAN_DESCRIPTION = ("Open-loop load-management plan on the linear design model (thesis chapter 7): the mission is "
@@ -27,8 +27,9 @@ def add_schedule_arguments(parser) -> None:
     """Arguments shared by ``plan`` and ``fly``."""
     parser.add_argument("scenario", help="scenario name (see scenarios/) or path to a YAML file with "
                         "generators and faults (see genthermal.schedule.power_system)")
-    add_choice_argument(parser, "--scheduler", SCHEDULERS, default="optimal", help="the load manager's "
-                        "scheduler (default optimal)")
+    add_choice_argument(parser, "--scheduler", SCHEDULERS, default="optimal", or_file=".py",
+                        help="the load manager's scheduler (default optimal), or a Python file that registers a "
+                        "planner (my_planner.py: running it is your decision; see docs/guide/flights.md)")
     add_json_argument(parser, "the summary (peaks, breach, rest, shed load, plans; schedule table of plan)")
     parser.add_argument("--plot", metavar="FILE.png", help="write a plot of the currents and temperatures")
     parser.add_argument("--margin", default=None, metavar="K",
@@ -62,7 +63,8 @@ def add_schedule_arguments(parser) -> None:
                         "machine; --param changes it, and so the default plant built from it)", default=None)
     parser.add_argument("--plant", metavar="NAME|FILE", help="true plant of every generator before its faults: "
                         "a built-in name or a model file; default the planning model with the scenario's plant_mismatch. fly also "
-                        "takes an FMI 2.0 co-simulation FMU (model.fmu) or a Python file defining make_plant() "
+                        "takes an FMI 2.0 co-simulation FMU (model.fmu), a recorded flight to replay (log.csv) or a "
+                        "Python file defining make_plant() "
                         "(my_plant.py: running it is your decision; see docs/guide/flights.md)")
 
 
@@ -81,10 +83,15 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     """The power system and settings the arguments describe; InputError names a bad option."""
     from ..mission import load_mission
     from ..plants import is_external_plant
-    from ..schedule.manager_settings import ManagerSettings
+    from ..schedule.flight.manager_settings import ManagerSettings
+    from ..schedule.planning.registry import load_planner_file, planner, planner_names
     from ..schedule.power_system import PowerSystem
 
     parse_assignments(getattr(args, "param", None) or [])  # a malformed --param is refused before any model is built
+    if str(args.scheduler).endswith(".py"):  # a planner file of the user's: registers one planner
+        args.scheduler = load_planner_file(args.scheduler)
+    if args.scheduler not in planner_names():
+        raise InputError("--scheduler", args.scheduler, f"must be one of {', '.join(planner_names())}")
     margin = ManagerSettings.margin_K if args.margin is None else _number_in("--margin", args.margin, 0.0, 50.0,
                                                                               "a number of kelvin")
     backoff = _number_in("--rise-backoff", args.rise_backoff, 0.0, 5.0, "a fraction")
@@ -93,7 +100,7 @@ def settings_from_args(args) -> tuple[PowerSystem, ManagerSettings]:
     if getattr(args, "rest_budget_min", None) is not None:
         budget_min = _number_in("--rest-budget-min", args.rest_budget_min, 0.0, 24 * 60.0, "a number of minutes")
     planner_model = getattr(args, "planner_model", ManagerSettings.planner_model)
-    if planner_model == "nonlinear" and args.scheduler not in FLOWN_SCHEDULERS:
+    if planner_model == "nonlinear" and not planner(args.scheduler).on_flown_model:
         raise InputError("--planner-model", planner_model, "only the optimal scheduler and the thesis heuristic plan "
                          "on the flown model: use --scheduler optimal or heuristic (the engineer's heuristic and the "
                          "MILP plan on the design model)")
@@ -167,11 +174,11 @@ def run(args) -> int:
     """Plan, print the schedule table and the summary."""
     from ..plants import is_external_plant
     from ..progress import working
-    from ..schedule.open_loop import plan_mission
+    from ..schedule.flight.open_loop import plan_mission
     from ..schedule.report import flight_summary
 
     if is_external_plant(args.plant):
-        raise InputError("--plant", args.plant, "plan flies its plan on the planning model; an FMU or a Python "
+        raise InputError("--plant", args.plant, "plan flies its plan on the planning model; an FMU, a log or a Python "
                          "plant is flown with genthermal fly")
     system, settings = settings_from_args(args)
     print(system.describe())

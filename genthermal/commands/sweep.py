@@ -1,5 +1,5 @@
 """``genthermal sweep --cases N [--schedulers a,b] [--json FILE]``: the robustness grid of closed-loop
-flights (:mod:`genthermal.schedule.sweep`) in local worker processes, or on Dask
+flights (:mod:`genthermal.schedule.sweeps.sweep`) in local worker processes, or on Dask
 (genthermal[sweep]). Reference: docs/results/robustness-grid.md and docs/guide/cli.md.
 """
 
@@ -66,7 +66,7 @@ def run(args) -> int:
     """Run the sweep; print the summary and write every case to ``--json``, or print it all."""
     from ..outputs import finite_document, report_json
     from ..progress import enabled as progress_enabled
-    from ..schedule.sweep import robustness_case, run_sweep, summarise
+    from ..schedule.sweeps.sweep import robustness_case, run_sweep, summarise
 
     schedulers = [cli_spelling(s.strip()) for s in args.schedulers.split(",") if s.strip()]
     bad = [s for s in schedulers if s not in SWEEP_SCHEDULERS]

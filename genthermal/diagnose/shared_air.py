@@ -21,7 +21,7 @@ from .sensor_faults import PREFERENCE_BIC, SensorHypothesis
 #: √2 · 0.40 = 0.57 K in root-sum-square, rounded to 0.6 K.
 SHARED_AIR_TOLERANCE_K = 0.6
 #: A disagreement of the two readings that counts, K (as the flight's input watch,
-#: :attr:`~genthermal.schedule.input_watch.InputWatchSettings.disagreement_K`: a 1-K input error is
+#: :attr:`~genthermal.schedule.monitoring.input_watch.InputWatchSettings.disagreement_K`: a 1-K input error is
 #: what the plan's margin can take).
 MIN_CHANGE_K = 1.0
 #: The two readings must agree over at least this share of the record before the onset.

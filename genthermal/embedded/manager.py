@@ -25,7 +25,7 @@ from ..errors import InputError
 from ..estimation.kalman import KalmanFilter, output_matrices
 from ..mission import input_columns
 from ..exciter import exciter_line
-from ..schedule.manager_settings import DEFAULT_MARGIN_K
+from ..schedule.flight.manager_settings import DEFAULT_MARGIN_K
 from ..schedule.power_system import PowerSystem
 from . import toolchain
 

@@ -1,16 +1,6 @@
-"""The thesis generator: Genco RF201A, 5 kVA, 415/240 V, 7 A per phase, 1500 rpm, air-cooled by
-an internal fan (thesis chapter 3), as the 12-division network of thesis chapter 4.
-
-Nodes: 8 capacitive (frame, stator back iron, stator teeth, slot winding, two end windings, rotor,
-shaft), 4 air nodes and 7 intermediate solid nodes: 19 nodes → 12 → 8 states (thesis 4.2.4).
-Air path of the internal fan: coolant inlet → end air in → (air gap | top air) → end air out →
-outlet.
-
-Every value carries its provenance. Values the thesis leaves out are ``assumed`` with a one-line
-reason; the convection coefficients, fan flow, phase resistance and iron loss were then chosen so
-that at rated load (7 A balanced, 20 °C inlet and ambient) the slot winding settles near 100 °C,
-the iron clearly cooler, with a winding time constant of tens of minutes (thesis Figs 4.16-4.22;
-chapter 7: normal missions stay below 110 °C, a coolant blockage breaks it).
+"""The thesis generator: Genco RF201A, 5 kVA, 415/240 V, 7 A per phase, 1500 rpm, air-cooled by an
+internal fan (thesis chapter 3), as the 12-division network of thesis chapter 4. Every value
+carries its provenance (thesis, literature or assumed with a reason).
 """
 
 from __future__ import annotations

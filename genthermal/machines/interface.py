@@ -1,14 +1,5 @@
-"""What a machine tells its consumers: inputs, sensors, ratings, thermal limits, roles, input laws.
-
-A :class:`MachineInterface` is the one place where a machine names its inputs (with units), which
-state each measured CSV column is (and its noise), its rated current, the thermal limit of each
-sensor, the parts effects can act on (:class:`Role`) and laws that derive one input from others
-(the generator's exciter). Consumers (CSV schema, ``synth``, filters, comparison, schedulers,
-reports, plots) read these from ``model.spec.interface``; none of them names a machine's node,
-sensor or rating.
-
-A :class:`Machine` bundles the interface with the machine's parameter set and network builder: it
-is what a plug-in provides (see :mod:`genthermal.machines.registry`).
+"""What a machine tells its consumers: inputs, sensors, ratings, thermal limits, roles and input
+laws. Main objects: :class:`MachineInterface`, :class:`Machine`, :class:`Sensor`, :class:`Role`.
 """
 
 from __future__ import annotations

@@ -1,24 +1,6 @@
-"""Find a machine by name, entry point or file: machines are plug-ins.
-
-``resolve_machine(reference)`` accepts, in this order:
-
-1. a built-in name (:data:`BUILT_IN`, e.g. ``genco_rf201a``);
-2. the name of an entry point in the group :data:`ENTRY_POINT_GROUP` (``genthermal.machines``) of
-   an installed package, whose object is a :class:`~genthermal.machines.interface.Machine` (or a
-   module with a ``MACHINE`` attribute); a package declares it in its ``pyproject.toml``::
-
-       [project.entry-points."genthermal.machines"]
-       my_motor = "my_package.my_motor:MACHINE"
-
-3. the path of a Python file (``path/to/machine.py``) that defines ``MACHINE``, or
-   ``path/to/file.py:ATTRIBUTE`` for another attribute name.
-
-Nothing under ``genthermal/`` changes when a user adds a machine.
-
-A machine file is code. A reference that comes from a data file (a model file's ``machine:``, a
-scenario's ``generators.machine``; ``from_data=True``) may name one only when the user trusted it
-for the run (:func:`trusted_machine_files`, the command line's ``--trust-machine FILE.py``): opening
-a data file never runs code it names.
+"""Find a machine by name, entry point or file: machines are plug-ins. Main objects:
+:func:`resolve_machine`, :func:`known_machines`, :data:`BUILT_IN`; running a machine file:
+docs/guide/safety.md.
 """
 
 from __future__ import annotations

@@ -3,7 +3,8 @@
 * :mod:`.protocol` — :class:`Plant`, :class:`PlantSetup`, :class:`Readings`, the checks of a plant's answers;
 * :mod:`.model_plant` — the genthermal model plant (the default);
 * :mod:`.fmu_plant` — an FMI 2.0 co-simulation FMU through FMPy (``--plant model.fmu``);
-* :mod:`.python_plant` — a user's plant in a Python file (``--plant my_plant.py``).
+* :mod:`.python_plant` — a user's plant in a Python file (``--plant my_plant.py``);
+* :mod:`.log_plant` — a recorded flight replayed (``--plant log.csv``): decisions scored, not applied.
 """
 
 from __future__ import annotations
@@ -16,15 +17,20 @@ __all__ = ["Plant", "PlantFault", "PlantSetup", "Readings", "external_plant", "i
 
 
 def is_external_plant(value) -> bool:
-    """Whether a ``--plant`` value names an FMU or a Python file rather than a genthermal model."""
-    return value is not None and Path(str(value)).suffix.lower() in (".fmu", ".py")
+    """Whether a ``--plant`` value names an FMU, a Python file or a log rather than a genthermal model."""
+    return value is not None and Path(str(value)).suffix.lower() in (".fmu", ".py", ".csv")
 
 
-def external_plant(value):
-    """The plant of ``--plant value``: an :class:`~.fmu_plant.FmuPlant` for ``.fmu``, the plant of a
+def external_plant(value, sensor_names=()):
+    """The plant of ``--plant value``: an :class:`~.fmu_plant.FmuPlant` for ``.fmu``, a replayed log
+    (:class:`~.log_plant.LogPlant`, of the machine's ``sensor_names``) for ``.csv``, the plant of a
     Python file (:func:`~.python_plant.load_python_plant`) for ``.py``."""
-    if Path(str(value)).suffix.lower() == ".fmu":
+    suffix = Path(str(value)).suffix.lower()
+    if suffix == ".fmu":
         from .fmu_plant import FmuPlant
         return FmuPlant(value)
+    if suffix == ".csv":
+        from .log_plant import LogPlant
+        return LogPlant(value, sensor_names)
     from .python_plant import load_python_plant
     return load_python_plant(value)

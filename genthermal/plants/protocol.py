@@ -57,11 +57,15 @@ class Readings:
         (n_generators, n_sensors, n) temperatures, °C, in the order of ``sensor_names``.
     sensor_names : tuple of str
         The sensors read; the manager checks they are the machine's (:func:`checked_readings`).
+    applied_A : numpy.ndarray, optional
+        (n_generators, n) the phase currents the plant really carried over each step, A RMS, when
+        they are not the commanded ones (a replayed log); None: the commanded currents.
     """
 
     time_s: np.ndarray
     values: np.ndarray
     sensor_names: tuple
+    applied_A: np.ndarray | None = None
 
 
 @runtime_checkable

@@ -1,28 +1,23 @@
-"""Load management of several generators (thesis chapter 7).
+"""Load management of several generators (thesis chapter 7), as composed roles.
 
-* :mod:`.power_system` — N generators sharing a mission's load, faults with onsets, the design
-  model as matrices (:class:`AffineGenerator`);
-* :mod:`.plan` — segments, schedules (displaced current, rests), timelines, predictions;
-* :mod:`.heuristic` — the thesis algorithm (eqs. 7.1-7.5, Fig. 7.2);
-* :mod:`.optimal` — direct transcription in CasADi, IPOPT;
-* :mod:`.milp` — discrete rests and load chunks as a MILP, HiGHS;
-* :mod:`.closed_loop` — open-loop plans and the closed loop of thesis 7.2 (Kalman filter, re-plans);
-* :mod:`.report` — summary keys, plots and the demo;
-* :mod:`.flight` — ``Flight(plant, manager, mission).run()``, the flight as composed roles.
+* :mod:`.power_system` — the generators sharing a mission's load, their faults, the design model;
+* :mod:`.state_estimator` — each generator's filter in flight (the estimator role);
+* :mod:`.planning` — schedules and the planners (thesis heuristic, engineer, optimal, MILP, shedding);
+* :mod:`.monitoring` — fault detection and identification, the sensor watches (the monitor role);
+* :mod:`.flight` — the closed loop of thesis 7.2, ``Flight(plant, manager, mission).run()``;
+* :mod:`.sweeps` — the robustness grid in worker processes;
+* :mod:`.report` — summary keys, plots and the demo.
 """
 
-from .closed_loop import fly
-from .flight import Flight, Manager
-
-from .manager_settings import SCHEDULERS, ManagerSettings
-
-from .open_loop import plan_mission
-
-from .replanning import plan_with
-from .heuristic import HeuristicSettings, heuristic_plan
-from .milp import MilpSettings, milp_plan
-from .optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
-from .plan import PlanningProblem, PlanResult, Schedule, Segment, mission_segments, predict
+from .flight.closed_loop import fly
+from .flight.flight import Flight, Manager
+from .flight.manager_settings import SCHEDULERS, ManagerSettings
+from .flight.open_loop import plan_mission
+from .flight.replanning import plan_with
+from .planning.heuristic import HeuristicSettings, heuristic_plan
+from .planning.milp import MilpSettings, milp_plan
+from .planning.optimal import OptimalSettings, lowest_reachable_peak, optimal_plan
+from .planning.plan import PlanningProblem, PlanResult, Schedule, Segment, mission_segments, predict
 from .power_system import AffineGenerator, Fault, PowerSystem
 
 __all__ = ["SCHEDULERS", "AffineGenerator", "Fault", "Flight", "Manager", "HeuristicSettings", "ManagerSettings", "MilpSettings",

@@ -1,43 +1,6 @@
-r"""A power system of N ≥ 2 generators sharing one mission's load demand, with faults at onsets.
-
-Every generator carries the mission's load profile :math:`I_{ini}(t)` (thesis 7.3.2: "initially
-applied to both generators"), so the total demand is :math:`N\,I_{ini}(t)`. A load manager may move
-current between generators (load displacement, thesis eqs. 7.3-7.4) or put all of them into the
-minimum power mode (generator resting, thesis eq. 7.1).
-
-Scenario keys (top level of a mission YAML, kept unchecked by :mod:`genthermal.mission` and
-validated here)::
-
-    generators:                    # optional mapping
-      count: 2                     # >= 2 (default 2), or names: [left, right]
-      rest_percent: 27.3           # minimum power mode, % of rated (default: condition 1 continuous)
-      limit_C: 110                 # temperature limit theta_max, degC (default: the machine's limit of its
-                                   # protected sensor; the thesis generator's 110, thesis 7.3.1)
-      current_limit_percent: 100   # highest phase current a generator may carry, % of rated
-      filter: kf                   # the filter in the load manager's loop (ekf|kf; default: the manager's own)
-      margin_K: 0                  # the load manager's back-off margin below limit_C, K (default: the
-                                   # manager's, 2.5 K; 0: plan to theta_max itself, as the thesis
-                                   # heuristic does, eqs. 7.1-7.5); --margin overrides it
-      when_infeasible: best_effort # when even the lowest reachable peak is above limit_C: shed (default,
-                                   # shed load) or best_effort (fly the scheduler's own plan, all load
-                                   # served: the thesis heuristic has no shedding); --when-infeasible
-                                   # overrides it
-      plant_mismatch: {h_end_air: 0.9, R0: 1.05}   # true plant parameter = nominal x factor
-      machine: genco_rf201a        # or genco_rf201a:chapter7 (the chapter-7 calibration), or any machine
-                                   # with the generator role (a plug-in name or a .py machine file)
-    faults:                        # optional list
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.2, inlet_rise_C: 31}
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 31,
-         inlet_rise_tau_min: 40}   # the inlet approaches +31 K with a 40-min time constant
-      - {generator: 1, kind: coolant_blockage, onset_min: 66, k_flow: 0.6, inlet_rise_C: 26,
-         inlet_load_share: 1}      # the rise follows gen1's load: (I1/I_share)^2 of it (coolant.inlet_load_factor)
-      - {generator: gen1, kind: coolant_blockage, onset_min: 66, outlet_diameter_mm: 10, n_flow: 0.8}
-      - {generator: 1, kind: inlet_rise, onset_min: 66, inlet_rise_C: 16}
-      - {generator: 2, kind: effect, effect: phase_short_circuit, onset_min: 90, values: {R_short: 0.3}}
-
-Blockage mapping: an outlet plate of diameter ``outlet_diameter_mm`` gives the coolant flow fraction
-of the orifice relation :func:`genthermal.coolant.outlet_flow_fraction` (0.11 for the thesis's
-10 mm plate on the 50 mm outlet); the blockage effect lowers the internal convection with it.
+"""A power system of N ≥ 2 generators sharing one mission's load demand, with faults at onsets,
+the true plants and the design model as matrices. Main objects: :class:`PowerSystem`,
+:class:`AffineGenerator`, :class:`Fault`. Method: docs/guide/flight-methods.md.
 """
 
 from __future__ import annotations
@@ -61,7 +24,7 @@ from ..machines import DEFAULT_MACHINE
 from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
-from .shed import INFEASIBLE_RESPONSES
+from .planning.shed import INFEASIBLE_RESPONSES
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -81,7 +44,7 @@ def _filter_name(config: Mapping) -> str | None:
 
 
 def _infeasible_response(value, field: str = "generators.when_infeasible") -> str | None:
-    """``value`` checked against :data:`genthermal.schedule.shed.INFEASIBLE_RESPONSES` (None
+    """``value`` checked against :data:`genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES` (None
     passes: the manager's own); InputError naming ``field`` otherwise."""
     if value is None:
         return None
@@ -414,17 +377,17 @@ class PowerSystem:
         model with ``plant_mismatch`` applied.
     margin_K : float, optional
         The scenario's back-off margin of the load manager below ``limit_C``, K; None (default):
-        the manager's own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.margin_K`).
+        the manager's own (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.margin_K`).
     filter : str, optional
         The scenario's filter in the loop (``generators.filter``: ``"ekf"`` or ``"kf"``, e.g. the
         thesis's linear filter in the thesis-reproduction scenarios); None (default): the manager's
-        own (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.filter`).
+        own (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.filter`).
     when_infeasible : str, optional
         The scenario's response when even the lowest reachable peak is above ``limit_C``
-        (``generators.when_infeasible``, one of :data:`~genthermal.schedule.shed.INFEASIBLE_RESPONSES`:
+        (``generators.when_infeasible``, one of :data:`~genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES`:
         ``shed`` or ``best_effort``, e.g. the thesis heuristic's best effort in the
         thesis-reproduction scenarios); None (default): the manager's own
-        (:attr:`~genthermal.schedule.manager_settings.ManagerSettings.when_infeasible`).
+        (:attr:`~genthermal.schedule.flight.manager_settings.ManagerSettings.when_infeasible`).
     """
 
     mission: Mission
@@ -625,10 +588,10 @@ class PowerSystem:
     def design_generator_for(self, effects=(), base=None) -> AffineGenerator:
         """Design model of ``base`` (default the planning model) with ``effects`` (``(name,
         ((parameter, value), ...))`` pairs, applied in order), linearised by
-        :func:`~genthermal.schedule.linearise.planning_design_model`. ``base`` may differ from the
+        :func:`~genthermal.schedule.planning.linearise.planning_design_model`. ``base`` may differ from the
         planning model in parameter values only (a recalibration): its values are set on the
         planning model's design model, which shares its compiled functions."""
-        from .linearise import planning_design_model
+        from .planning.linearise import planning_design_model
 
         def build_planning():
             if not effects and self.model is None:

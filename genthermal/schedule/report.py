@@ -1,56 +1,20 @@
-"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``), plots and the scheduler demo.
-
-Keys of :func:`flight_summary`:
-
-``mission_time_s``      end of the last action, s
-``added_rest_s``        mission time minus the nominal mission duration, s (with the rounding of
-                        every action's duration to the step: a few seconds either way)
-``rested_s``            time flown in the minimum power mode (the rests), s: whole steps, exact
-``max_T_winding``       per generator name, highest winding temperature, °C (true plant when flown)
-``max_T_iron``          per generator name, highest iron temperature, °C
-``breach_s``            time with any generator above θmax, s
-``replans``             number of (re-)plans
-``median_solve_s``      median wall-clock time of a plan, s (0 without plans)
-``displaced_Ah``        phase current moved from one generator to another times time, A·h
-``feasible``            every plan kept the prediction (back-off included) within the planning
-                        limit and no load was shed
-``lowest_reachable_peak_C``  highest lowest-reachable peak of the infeasible plans, °C (None: all
-                        plans feasible)
-``manager_response``    what the manager did about infeasible plans (rest, displacement, shed)
-``rest_budget_s``       the flight's rest budget, s (:class:`ManagerSettings` ``rest_budget_s``)
-``shed``                load shedding: ``events`` (time_s, the generators shedding load and those
-                        switched off then, lowest reachable peak and the action where it falls,
-                        response), ``generators`` (names that shed load), ``switched_off`` (names),
-                        ``not_served_As`` / ``not_served_Ah`` per generator (phase current not
-                        carried by anyone, A·s / A·h), ``first_s`` / ``last_s`` of the load not
-                        served (None without)
-``management_cycles``   cycles of the closed loop (0 for a plan)
-``plant_fault``         the plant's failure that stopped the flight (time_s, cycle, kind, message, the
-                        mode the manager holds), None when it answered throughout (closed loop)
-
-Closed loop only (:mod:`genthermal.schedule.monitor`; judged against the scenario's faults, which
-the manager is not told unless ``tell_fault``):
-
-``tell_fault``          whether the manager was handed the faults
-``detected_at_s``       first fault alarm on a generator whose fault had started, s (None: none)
-``detect_delay_s``      that alarm minus the fault's onset, s
-``identified``          one entry per identification: generator, effect, parameters, onset, confidence
-                        (ΔBIC, fit before/after, runner-up, equivalent explanations)
-``false_alarms``        fault alarms on a generator with no fault started at that time
-``recalibrations``      in-flight recalibrations of the planning model: time, generator, parameters
+"""Summaries (the JSON keys of ``genthermal plan`` / ``fly``: docs/guide/flight-reference.md),
+plots and the scheduler comparison table. Main objects: :func:`flight_summary`,
+:func:`plot_flight`, :func:`summary_text`.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..plots import finish_figure, plt
-from .flight_result import FlightResult
-from .manager_settings import ManagerSettings
-from .power_system import PowerSystem
-from .shed import not_served
+from .planning.shed import not_served
+
+if TYPE_CHECKING:
+    from .flight.flight_result import FlightResult
+
 
 def flight_summary(result: FlightResult) -> dict:
     """The summary keys (module docstring) of a flown or planned mission."""
@@ -85,6 +49,8 @@ def flight_summary(result: FlightResult) -> dict:
     }
     if result.closed_loop:
         summary["plant_fault"] = getattr(result, "plant_fault", None)
+        if getattr(result, "replay", None) is not None:
+            summary["replay"] = result.replay
     if result.closed_loop and result.monitor is not None:
         summary.update(detection_summary(result))
     if getattr(result, "sensor_watch", None) is not None:
@@ -197,45 +163,3 @@ def comparison_table(summaries: dict) -> str:
                     f"{max(s['max_T_winding'].values()):.1f} | {s['breach_s']:.0f} | {s['replans']} | "
                     f"{s['median_solve_s']:.2f} | {s['displaced_Ah']:.2f} |")
     return "\n".join(rows)
-
-
-def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
-    """Fly the large-blockage mission closed loop with the thesis heuristic, the engineer's
-    heuristic (the strongest simple baseline) and the optimal scheduler on the flown model.
-
-    The optimal scheduler plans on the model the manager flies (``planner_model="nonlinear"``: the
-    extended Kalman filter's nonlinear model, state, disturbances and covariance back-off); the
-    baselines plan on the offset-free design model, as ``genthermal fly`` does by default.
-
-    Parameters
-    ----------
-    out_dir : path-like
-        Folder for ``schedule_heuristic.png``, ``schedule_engineer.png`` and ``schedule_optimal.png``.
-    scenario : str
-        Shipped scenario name or path.
-
-    Returns
-    -------
-    dict
-        ``scenario``, ``summaries`` (scheduler → :func:`flight_summary`), ``table`` (markdown) and
-        ``plots`` (paths).
-    """
-    from ..mission import load_mission
-    from .closed_loop import fly
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    system = PowerSystem.from_mission(load_mission(scenario))
-    flights = {"heuristic": ManagerSettings(), "engineer": ManagerSettings(),
-               "optimal": ManagerSettings(planner_model="nonlinear")}
-    summaries, plots = {}, []
-    for scheduler, settings in flights.items():
-        result = fly(system, scheduler, settings)
-        summaries[scheduler] = flight_summary(result)
-        path = out / f"schedule_{scheduler}.png"
-        plot_flight(result, path=path)
-        plots.append(str(path))
-    table = comparison_table(summaries)
-    print(f"== Load management, {system.mission.name} (closed loop, true plant; optimal on the flown model) =="
-          f"\n{system.describe()}\n{table}")
-    return {"scenario": system.mission.name, "summaries": summaries, "table": table, "plots": plots}

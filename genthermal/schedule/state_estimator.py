@@ -1,17 +1,6 @@
-r"""The filter of each generator in flight, on the model the manager believes in.
-
-**Filter.** :class:`StateEstimator` runs a filter (``FLIGHT_FILTERS``) on the model of what the
-manager believes: the flown (planning) model with the effects identified so far. The default
-``ekf`` is the extended Kalman filter of :mod:`genthermal.estimation.ekf` on that nonlinear model,
-with disturbance heat flows; ``kf`` is the thesis linear filter on its design model. The affine
-planner plans on the design model: :func:`planner_state` hands it the filter's node temperatures
-and :func:`planning_generator` the extended Kalman filter's disturbance heat flows (constant and
-load-scaled), held over the whole plan as the filter's own forecasts hold them, so that every
-prediction of every scheduler is offset-free for every generator, healthy ones included: a
-model whose cooling is 10 % short no longer lets the planner load a healthy generator past
-θmax (``tests/test_closed_loop_shed.py``, the plant hot at rest). The nonlinear planner
-(``ManagerSettings.planner_model``) plans on the filter's own model, state, disturbances and
-covariance (:mod:`genthermal.schedule.flown`).
+"""The filter of each generator in flight, on the model the manager believes in (the extended
+Kalman filter with disturbance heat flows, or the thesis linear filter). Main objects:
+:class:`StateEstimator`, :func:`believed_model`, :func:`planning_generator`.
 """
 
 from __future__ import annotations
@@ -24,7 +13,7 @@ from ..estimation.kalman import KalmanFilter
 
 #: Noise settings of the flight EKF: constant and load-scaled heat flows only, as random walks
 #: of 8 and 15 W per hour, no coolant-scaled states, no change detection. The fault detector's
-#: drifts and thresholds (:class:`~genthermal.schedule.detector.DetectorSettings`) were measured
+#: drifts and thresholds (:class:`~genthermal.schedule.monitoring.detector.DetectorSettings`) were measured
 #: on this filter (``benchmarks/bench_detection.py``), and its CUSUM is itself the flight's change
 #: detection, so the flight keeps it; ``genthermal estimate`` uses the slower defaults of
 #: :mod:`genthermal.estimation.ekf` with its own change test.

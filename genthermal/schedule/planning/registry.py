@@ -1,0 +1,144 @@
+"""Planners by name: ``plan_with(scheduler, ...)`` and ``fly --scheduler`` look the scheduler up here.
+
+A planner is a function ``plan(problem, settings, previous) -> PlanResult`` on a
+:class:`~genthermal.schedule.planning.plan.PlanningProblem`; a new scheduler is one file that calls
+:func:`register_planner` (``fly --scheduler my_planner.py`` runs it: :func:`load_planner_file`). The built-in ones (thesis heuristic, engineer, optimal, MILP) are
+registered below, each with the field of the manager's settings that holds its own settings.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import sys
+from pathlib import Path
+from typing import Callable
+
+from ...errors import InputError
+from .engineer import engineer_plan
+from .heuristic import heuristic_plan
+from .milp import milp_plan
+from .optimal import optimal_plan
+
+
+@dataclasses.dataclass(frozen=True)
+class Planner:
+    """A registered scheduler.
+
+    Attributes
+    ----------
+    name : str
+        What ``--scheduler`` names it.
+    plan : callable
+        ``plan(problem, settings, previous)``: ``problem`` a PlanningProblem, ``settings`` its own
+        settings (below), ``previous`` the schedule flown so far (a warm start) or None; returns a
+        PlanResult.
+    settings : object
+        Its settings when no field of the manager's settings holds them.
+    settings_field : str
+        The field of :class:`~genthermal.schedule.flight.manager_settings.ManagerSettings` with its
+        settings (``heuristic``, ``optimal``, ...), empty for a planner registered from outside.
+    on_flown_model : bool
+        Whether it can plan on the flown nonlinear model (``planner_model: nonlinear``).
+    """
+
+    name: str
+    plan: Callable
+    settings: object = None
+    settings_field: str = ""
+    on_flown_model: bool = False
+
+
+
+_PLANNERS: dict[str, Planner] = {}
+
+
+def register_planner(name: str, plan: Callable, settings=None, on_flown_model: bool = False,
+                     settings_field: str = "") -> Planner:
+    """Register ``plan`` as the scheduler ``name`` (see :class:`Planner`); returns its entry.
+
+    Raises
+    ------
+    InputError
+        ``name`` is empty, not an identifier-like word, or already registered; ``plan`` is not callable.
+    """
+    if not isinstance(name, str) or not name.replace("_", "").replace("-", "").isalnum():
+        raise InputError("scheduler", name, "a planner's name is a word of letters, digits, '_' or '-'")
+    if name in _PLANNERS:
+        raise InputError("scheduler", name, "a planner of that name is registered already")
+    if not callable(plan):
+        raise InputError("scheduler", name, f"its plan is a {type(plan).__name__}, not a function")
+    entry = Planner(name, plan, settings, settings_field, on_flown_model)
+    _PLANNERS[name] = entry
+    return entry
+
+
+def unregister_planner(name: str) -> None:
+    """Remove the planner ``name`` registered from outside (the built-in ones stay)."""
+    if name in BUILT_IN_PLANNERS:
+        raise InputError("scheduler", name, "a built-in planner cannot be removed")
+    _PLANNERS.pop(name, None)
+
+
+def planner(name: str) -> Planner:
+    """The registered planner ``name``; an InputError naming ``scheduler`` and the known names."""
+    if name not in _PLANNERS:
+        raise InputError("scheduler", name, f"must be one of {', '.join(_PLANNERS)}")
+    return _PLANNERS[name]
+
+
+def planner_names() -> tuple:
+    """The names of the registered planners, the built-in ones first."""
+    return tuple(_PLANNERS)
+
+
+def load_planner_file(path, option: str = "--scheduler") -> str:
+    """Run the Python file ``path``, which registers one planner (:func:`register_planner`); its name.
+
+    Running the file is a trust decision made on the command line (``fly --scheduler my_planner.py``),
+    as for a plant file. A file whose planner is registered already in this process is not run again.
+
+    Raises
+    ------
+    InputError
+        Naming ``option`` and the file: it does not exist, raises on import, or registers no planner
+        or more than one.
+    """
+    path = Path(path).resolve()
+    if _LOADED_FILES.get(str(path)) in _PLANNERS:
+        return _LOADED_FILES[str(path)]
+    if not path.is_file():
+        raise InputError(option, str(path), "no such Python file")
+    before = set(_PLANNERS)
+    name = f"genthermal_user_planner_{abs(hash(str(path)))}"
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as error:  # noqa: BLE001 - whatever the user's file raises is named, never a traceback
+        sys.modules.pop(name, None)
+        for added in set(_PLANNERS) - before:
+            _PLANNERS.pop(added)
+        raise InputError(option, str(path), f"running the planner file raised {type(error).__name__}: {error}") from None
+    added = [n for n in _PLANNERS if n not in before]
+    if len(added) != 1:
+        for extra in added:
+            _PLANNERS.pop(extra)
+        raise InputError(option, str(path), f"the planner file registered {len(added)} planners "
+                         f"({', '.join(added) or 'none'}); it registers one with register_planner(name, plan)")
+    _LOADED_FILES[str(path)] = added[0]
+    return added[0]
+
+
+_LOADED_FILES: dict[str, str] = {}
+
+register_planner("heuristic", lambda problem, settings, previous: heuristic_plan(problem, settings),
+                 on_flown_model=True, settings_field="heuristic")
+register_planner("engineer", lambda problem, settings, previous: engineer_plan(problem, settings),
+                 settings_field="engineer")
+register_planner("optimal", optimal_plan, on_flown_model=True, settings_field="optimal")
+register_planner("milp", lambda problem, settings, previous: milp_plan(problem, settings), settings_field="milp")
+
+#: The planners genthermal ships.
+BUILT_IN_PLANNERS = planner_names()
