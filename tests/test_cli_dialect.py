@@ -70,13 +70,17 @@ def test_choices_are_written_one_way(name):
     for action in PARSERS[name]._actions:
         if action.dest == "help" or not action.option_strings:
             continue
+        choice_or_file = f"{{{','.join(action.choices)}}}|FILE{getattr(action.choices, 'suffix', '')}" \
+            if action.choices else None
         if action.choices:
-            assert action.metavar is None, f"{name} {action.option_strings}: shown as {{a,b}}, not {action.metavar}"
+            assert action.metavar is None or (hasattr(action.choices, "suffix") and action.metavar == choice_or_file), \
+                f"{name} {action.option_strings}: shown as {{a,b}} (or {{a,b}}|FILE.py), not {action.metavar}"
             for choice in action.choices:
                 assert CHOICE_WORD.match(choice) or choice in COLUMN_CHOICES, (name, action.option_strings, choice)
             assert " | " not in (action.help or "")
         metavar = action.metavar or ""
-        assert "|" not in metavar or metavar == "NAME|FILE", f"{name} {action.option_strings}: metavar {metavar}"
+        assert "|" not in metavar or metavar in ("NAME|FILE", choice_or_file), \
+            f"{name} {action.option_strings}: metavar {metavar}"
 
 
 def test_old_spellings_the_docs_use_are_hidden_and_still_accepted():

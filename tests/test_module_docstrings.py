@@ -8,12 +8,6 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "genthermal"
 MAX_DOCSTRING_LINES = 12
-#: Modules whose docstrings other work is trimming; the coordinator empties this after the merge.
-NOT_YET_TRIMMED = (
-    "genthermal/schedule/",
-    "genthermal/machines/",
-    "genthermal/plants/",
-)
 #: A commit hash (7-40 hex digits with both a digit and a letter) or an issue number.
 HISTORY = re.compile(r"\b(?=[0-9a-f]*[0-9])(?=[0-9a-f]*[a-f])[0-9a-f]{7,40}\b|\bissues?\s*#?\d+|\bcommit\b",
                      re.IGNORECASE)
@@ -31,10 +25,6 @@ def module_docstring(path: Path) -> str | None:
     return ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")), clean=True)
 
 
-def trimmed(path: Path) -> bool:
-    return not relative(path).startswith(NOT_YET_TRIMMED)
-
-
 def docstring_problems(docstring: str | None) -> list[str]:
     """What is wrong with one module docstring (an empty list when nothing is)."""
     if not docstring or not docstring.strip():
@@ -47,7 +37,7 @@ def docstring_problems(docstring: str | None) -> list[str]:
     return problems
 
 
-@pytest.mark.parametrize("path", [p for p in module_paths() if trimmed(p)], ids=relative)
+@pytest.mark.parametrize("path", module_paths(), ids=relative)
 def test_a_module_docstring_says_in_a_few_lines_what_the_module_does(path):
     problems = docstring_problems(module_docstring(path))
     assert not problems, f"{relative(path)}: {'; '.join(problems)}"
@@ -58,12 +48,6 @@ def test_the_pages_a_module_docstring_points_to_exist(path):
     named = re.findall(r"\bdocs/[\w/.-]+\.md\b", module_docstring(path) or "")
     missing = [page for page in named if not (PACKAGE.parent / page).is_file()]
     assert not missing, f"{relative(path)} points to missing pages: {missing}"
-
-
-def test_the_allow_list_names_only_what_exists():
-    """An entry of NOT_YET_TRIMMED that matches no module is stale and must go."""
-    stale = [entry for entry in NOT_YET_TRIMMED if not any(relative(p).startswith(entry) for p in module_paths())]
-    assert not stale, stale
 
 
 @pytest.mark.parametrize("docstring, problem", [
