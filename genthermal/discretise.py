@@ -1,7 +1,9 @@
 r"""Discrete-time steps of a ThermalModel with inputs held constant over each step (ZOH).
 
 Write the model as :math:`\dot x = Lx + N(x,u)` with :math:`L = \partial f/\partial x` at
-:math:`x = 0, u = 0` (the network without input-dependent terms). With
+:math:`x = 0, u = 0` (the network without input-dependent terms; inputs a machine names in
+``linearisation_inputs`` are taken at that value instead, so that a conductance rising steeply with
+speed is in :math:`L` at mid-range and only its change is explicit). With
 :math:`E = e^{hL}`, :math:`\Gamma_1 = \int_0^h e^{Ls}ds` and
 :math:`\Gamma_2 = \int_0^h e^{L(h-s)}s\,ds`, all from one matrix exponential (below):
 
@@ -318,8 +320,12 @@ def parametric_step(model: ThermalModel, x: ca.SX, u: ca.SX, p: ca.SX, dt_s: flo
 
 
 def _state_matrix(model: ThermalModel, p):
-    """:math:`L = \\partial f/\\partial x` at ``x = 0, u = 0`` for parameters ``p`` (DM or SX)."""
-    return model.functions["jac_x"](ca.DM.zeros(model.n_states), ca.DM.zeros(len(model.input_names)), p)
+    """:math:`L = \\partial f/\\partial x` at ``x = 0`` and the machine's linearisation inputs
+    (``spec.interface.linearisation_inputs``, others 0) for parameters ``p`` (DM or SX)."""
+    interface = getattr(model.spec, "interface", None)
+    named = getattr(interface, "linearisation_inputs", None) or {}
+    u = np.array([float(named.get(name, 0.0)) for name in model.input_names])
+    return model.functions["jac_x"](ca.DM.zeros(model.n_states), ca.DM(u), p)
 
 
 def step_expression(model: ThermalModel, x, u, w, p, dt_s: float, phis) -> ca.SX:
