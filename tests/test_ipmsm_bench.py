@@ -214,3 +214,57 @@ def test_calibrate_names_a_weight_on_an_unknown_sensor(capsys):
                  "--weight", "T_magnet=4"])
     assert code == 2
     assert "--weight T_magnet = 'T_magnet': not a sensor of ipmsm_bench" in capsys.readouterr().err
+
+
+def test_effects_can_be_left_out_one_by_one(machine):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("ipmsm_machine_module", MACHINE_FILE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    full = build_model(str(MACHINE_FILE))
+    assert {"rotor", "rotor_core"} <= set(full.state_names)
+    one_rotor = module.parameters_without("rotor_core_node")
+    assert "C_rotor_core" not in one_rotor
+    whole = full.parameters["C_rotor"].value + full.parameters["C_rotor_core"].value
+    assert math.isclose(one_rotor["C_rotor"].value, whole)  # the rotor node carries the core's capacity
+    assert "rotor_core" not in build_model(str(MACHINE_FILE), parameters=one_rotor).state_names
+    plain = build_model(f"{MACHINE_FILE}:MACHINE_PLAIN")
+    assert "rotor_core" not in plain.state_names and "gap_speed_exponent" not in plain.parameters
+    with pytest.raises(ValueError, match="unknown effect 'windage'"):
+        module.parameters_without("windage")
+
+
+def test_speed_power_laws_vanish_at_rest_with_finite_derivatives(model):
+    """Magnet loss and air-gap rise are (n/n_ref)^b laws: zero heat at standstill, and the fit's
+    derivative with respect to the exponent finite there (no log(0))."""
+    import casadi as ca
+
+    x, u, p = ca.SX.sym("x", model.n_states), ca.SX.sym("u", len(model.input_names)), ca.SX.sym("p", len(model.p0))
+    rhs = model.functions["rhs"](x, u, p)
+    exponents = [model.parameter_names.index(n) for n in ("pm_speed_exponent", "gap_speed_exponent")]
+    derivative = ca.Function("d", [x, u, p], [ca.jacobian(rhs, p[exponents])])
+    at_rest = model.input_vector(motor_speed=0.0, i_d=-100.0, i_q=150.0, T_water=25.0, T_ambient=23.0)
+    x0 = np.linspace(30.0, 60.0, model.n_states)
+    rotor = model.state_names.index("rotor")
+    rest = np.asarray(derivative(x0, at_rest, model.p0))
+    assert np.all(np.isfinite(rest)) and np.allclose(rest[rotor], 0.0, atol=1e-6)
+    half = np.asarray(derivative(x0, model.input_vector(motor_speed=2000.0, i_q=150.0, T_water=25.0,
+                                                        T_ambient=23.0), model.p0))
+    assert np.all(np.isfinite(half)) and abs(half[rotor, 0]) > 0
+
+
+def test_the_full_model_steps_stably_at_top_speed_with_a_steep_end_space_convection(model):
+    """Extreme fitted values (a light end-space air node, end-space convection rising 10-fold by
+    4000 rpm) once made 10-s steps diverge; the step's linear part at 2000 rpm keeps them stable."""
+    import casadi as ca
+
+    from genthermal.discretise import discretise
+
+    steep = model.with_parameters(provenance="fitted", source="test", C_end_space_air=170.0,
+                                  G_end_winding_air=90.0, k_end_space_speed=10.0)
+    step = discretise(steep, 10.0).step
+    xs = ca.SX.sym("x", steep.n_states)
+    top = steep.input_vector(motor_speed=4000.0, i_d=-150.0, i_q=250.0, T_water=25.0, T_ambient=23.0)
+    A = np.asarray(ca.Function("A", [xs], [ca.jacobian(step(xs, top), xs)])(np.full(steep.n_states, 40.0)))
+    assert np.max(np.abs(np.linalg.eigvals(A))) < 1.0

@@ -3,17 +3,21 @@ r"""A water-cooled interior permanent-magnet motor on a test bench, as a genther
 The motor of the public bench data set of Liu et al. (IEEE Trans. Power Electronics 2024, doi
 10.1109/TPEL.2024.3409388, MIT licence): a water-jacketed IPMSM up to about 4000 rpm, 160 N·m and
 65 kW electrical, logged at 1 Hz with 13 thermocouples. The network is the one a thermal engineer
-draws for such a machine (9 nodes, 8 of them with heat capacity)::
+draws for such a machine (11 nodes, 10 of them with heat capacity)::
 
                  water (jacket, boundary)
                    │
                yoke_outer ─────── endcap ── ambient (boundary)
-                   │                 │  └── shaft_bearing ── rotor
-               yoke_inner            │                        │  (air gap)
-               │       └── tooth ────┼──────────────────────── ┤
-           winding_slot ──┘          │                        │
-               │                     │                        │
-           end_winding ──────── end_space_air ────────────────┘
+                   │                 │  └── shaft_bearing ── rotor_core
+               yoke_inner            │                           │
+               │       └── tooth ────┼────── (air gap) ────── rotor
+           winding_slot ──┘          │                           │
+               │                     │                           │
+           end_winding ──────── end_space_air ───────────────────┘
+
+The rotor is two nodes: ``rotor``, the magnets with the lamination around their pockets (its
+sensor, the heat of the magnet loss, the air-gap surface), and ``rotor_core``, the lamination
+inside them with the shaft's active length (the path to the shaft and bearings).
 
 Sensors (the logger's columns): ``activewind_1/2`` and ``slotside`` in the slot winding,
 ``endwind_1/2`` on the end windings, ``slotopen`` at the tooth tip, ``slotbottom`` in the yoke
@@ -27,20 +31,25 @@ Losses (each a small term the catalogue of effects names):
   :math:`k_{ac}` factor is the AC, proximity and skin, part);
 * iron in tooth and yoke, :math:`P_{fe} = (P_h\,n/n_{ref} + P_e(n/n_{ref})^2)(1 + k_{fe,i}\,i^2/I_{ref}^2)`
   (hysteresis and eddy, flux density rising with the load current);
-* magnet eddy-current loss in the rotor, :math:`P_{pm} = P_{pm,ref}(n/n_{ref})^2(1 + k_{pm,i}\,i^2/I_{ref}^2)`;
+* magnet eddy-current loss in the rotor, :math:`P_{pm} = P_{pm,ref}(n/n_{ref})^{c}(1 + k_{pm,i}\,i^2/I_{ref}^2)`
+  (slot and armature-field harmonics; :math:`c` = 2 for resistance-limited eddy currents, less
+  when skin effect limits them);
 * bearing friction in the bearing node, :math:`P_{fr} = P_{fr,ref}\,n/n_{ref}`.
 
-Convection in the air gap and end space rises with speed,
-:math:`G(n) = G_0 + G_n\,n/n_{ref}` (Taylor-Couette and end-space flow: the Nusselt number grows
-with the rotational Reynolds number, roughly linearly over this speed range).
+Convection in the air gap rises with speed, :math:`G(n) = G_0 + G_n(n/n_{ref})^{b}` (Taylor-Couette
+flow: the Nusselt number grows as a power of the Taylor number), in the end space
+:math:`G(n) = G_0(1 + k\,n/n_{ref})`. The discrete step takes its linear part at 2000 rpm
+(``linearisation_inputs``), so that these rises stay stable at every speed.
 
 Geometry is not published with the data set: every geometric value below is ``assumed`` with the
-reason, sized for a ~60 kW water-jacketed IPMSM (stator ~220 mm outside, ~150 mm stack). The
+reason, sized for a ~60 kW water-jacketed IPMSM (stator ~220 mm outside, ~150 mm stack); heat
+capacities stay within :data:`CAPACITY_RANGE` of their estimate. The
 phase resistance is estimated from the bench's own electrical power at standstill. Calibration
 (``genthermal calibrate`` on several profiles) carries the rest.
 
 ``MACHINE`` is the full model; ``MACHINE_PLAIN`` the plain one a first attempt would write (copper
-loss only, constant convection): the tutorial ``docs/tutorials/real_motor.md`` starts from it.
+loss only, constant convection, one rotor node): the tutorial ``docs/tutorials/real_motor.md``
+starts from it; :func:`parameters_without` leaves out any of the effects.
 The logger's column map is :data:`COLUMN_MAP`, read from ``columns.yaml`` beside this file.
 """
 
@@ -67,6 +76,12 @@ THERMOCOUPLE_NOISE_K2 = 0.02
 WINDING_LIMIT_C = 140.0
 #: Loss maps' reference speed, rpm (the top speed of the profiles).
 N_REF_RPM = 4000.0
+#: Offset of the speed ratio in the power laws of speed (keeps their derivative finite at rest).
+SPEED_OFFSET = 1e-3
+#: Speed at which the step's linear part is taken, rpm (mid-range: the convection's rise with speed
+#: is the step's explicit part, and it stays below the conductances at rest at every speed of the
+#: profiles, so that 10-s steps stay stable).
+LINEARISATION_SPEED_RPM = 2000.0
 
 INPUTS = (
     ModelInput("motor_speed", "rpm", InputKind.SPEED, "rotor speed (the motor does not run backwards)"),
@@ -108,46 +123,64 @@ ROLES = {
 INTERFACE = MachineInterface(
     INPUTS, SENSORS, {"water": "T_water", "ambient": "T_ambient"}, RATED_CURRENT_A,
     ambient_input="T_ambient", coolant_input="T_water", roles=ROLES,
-    rated_inputs={"motor_speed": 3000.0, "i_d": -120.0, "i_q": 200.0, "T_water": 25.0})
+    rated_inputs={"motor_speed": 3000.0, "i_d": -120.0, "i_q": 200.0, "T_water": 25.0},
+    linearisation_inputs={"motor_speed": LINEARISATION_SPEED_RPM})
 
 #: The logger's column map (``columns.yaml`` beside this file): file column -> model input or
 #: sensor column, with its unit; auxiliary columns (torque, electrical power) serve unit checks.
 COLUMN_MAP = yaml.safe_load((Path(__file__).parent / "columns.yaml").read_text(encoding="utf-8"))
 
-#: The effects the plain model lacks, by name, with their parameters.
+#: The effects the plain model lacks, by name, with their parameters (``rotor_core_node``: the
+#: rotor's second node).
 EFFECT_PARAMETERS = {
     "speed_iron_loss": ("P_hyst_ref", "P_eddy_ref", "k_fe_current", "tooth_iron_share"),
     "air_gap_convection_speed": ("G_gap_speed",),
+    "air_gap_taylor_exponent": ("gap_speed_exponent",),
     "end_space_convection_speed": ("k_end_space_speed",),
     "ac_copper_loss": ("k_ac",),
     "magnet_eddy_loss": ("P_pm_ref", "k_pm_current"),
+    "magnet_loss_exponent": ("pm_speed_exponent",),
+    "rotor_core_node": ("C_rotor_core", "G_rotor_core"),
     "bearing_friction": ("P_friction_ref",),
 }
 
 
+#: A heat capacity stays within this factor of its estimate in a fit (masses of an unpublished
+#: geometry are known to about a factor of two; beyond that the fit trades nodes for time constants).
+CAPACITY_RANGE = 3.0
+
+
+def _capacity(name, value, why):
+    return Parameter(name, value, "J/K", "assumed", why, lower=value / CAPACITY_RANGE,
+                     upper=value * CAPACITY_RANGE)
+
+
 def _steel(name, kg, why):
-    return Parameter(name, kg * 460.0, "J/K", "assumed", f"{kg:g} kg x 460 J/(kg K) (steel, literature): {why}")
+    return _capacity(name, kg * 460.0, f"{kg:g} kg x 460 J/(kg K) (steel, literature): {why}")
 
 
 def default_parameters() -> ParameterSet:
     """Parameter set of the bench IPMSM with the provenance of every value."""
     return ParameterSet([
         # heat capacities, J/K
-        Parameter("C_winding_slot", 4.0 * 385.0 + 300.0, "J/K", "assumed",
+        _capacity("C_winding_slot", 4.0 * 385.0 + 300.0,
                   "4 kg of copper in the slots x 385 J/(kg K) + 0.25 kg resin and liners (150 mm stack, ~60 % "
                   "of the conductor length in the slots)"),
-        Parameter("C_end_winding", 2.6 * 385.0 + 200.0, "J/K", "assumed",
+        _capacity("C_end_winding", 2.6 * 385.0 + 200.0,
                   "2.6 kg of copper in both end windings x 385 J/(kg K) + potting"),
         _steel("C_tooth", 4.0, "teeth of a 220 mm stator, 150 mm stack"),
         _steel("C_yoke_inner", 5.0, "inner half of the back iron"),
-        Parameter("C_yoke_outer", 5.0 * 460.0 + 4.0 * 900.0, "J/K", "assumed",
+        _capacity("C_yoke_outer", 5.0 * 460.0 + 4.0 * 900.0,
                   "outer half of the back iron (5 kg steel) with the aluminium jacket wall (4 kg x 900 J/(kg K))"),
-        Parameter("C_endcap", 3.0 * 900.0, "J/K", "assumed", "two aluminium end caps, 1.5 kg each"),
-        Parameter("C_rotor", 14.0 * 460.0 + 1.5 * 440.0, "J/K", "assumed",
-                  "rotor lamination 14 kg x 460 J/(kg K) + 1.5 kg NdFeB x 440 J/(kg K)"),
-        Parameter("C_end_space_air", 500.0, "J/K", "assumed", "end-space air (~2 l) with the sheet-metal "
+        _capacity("C_endcap", 3.0 * 900.0, "two aluminium end caps, 1.5 kg each"),
+        _capacity("C_rotor", 4.0 * 460.0 + 1.5 * 440.0, "magnets and the lamination around their pockets: 1.5 kg "
+                  "NdFeB x 440 J/(kg K) + 4 kg steel (the rotor's outer ~15 mm); the whole rotor (14 kg "
+                  "lamination) when there is no core node"),
+        _capacity("C_rotor_core", 10.0 * 460.0 + 1.0 * 460.0, "rotor core inside the magnets (10 kg lamination) "
+                  "and the shaft's active length (1 kg), x 460 J/(kg K)"),
+        _capacity("C_end_space_air", 500.0, "end-space air (~2 l) with the sheet-metal "
                   "baffles and winding-head surface layer it exchanges heat with"),
-        Parameter("C_shaft_bearing", 4.0 * 460.0, "J/K", "assumed", "shaft ends and bearings, 4 kg of steel"),
+        _capacity("C_shaft_bearing", 4.0 * 460.0, "shaft ends and bearings, 4 kg of steel"),
         # conductances, W/K
         Parameter("G_slot_end", 6.0, "W/K", "assumed", "axial conduction in the copper: 400 W/(m K) x ~40 cm² "
                   "of copper over ~0.2 m from mid-stack to the end-winding centre, doubled for both ends"),
@@ -164,6 +197,9 @@ def default_parameters() -> ParameterSet:
         Parameter("G_gap_speed", 10.0, "W/K", "assumed", "rise of the air-gap conductance at n_ref (Taylor-"
                   "Couette flow, Nu growing about linearly with the rotational Reynolds number)",
                   lower_inclusive=True),
+        Parameter("gap_speed_exponent", 1.0, "1", "assumed", "exponent of that rise in speed: Nu ~ Ta^0.24-0.37 "
+                  "(Becker-Kaye, turbulent and vortex flow) is Re^0.5-0.75; 1 is the linear start",
+                  lower=0.2, upper=2.0),
         Parameter("G_end_winding_air", 3.0, "W/K", "assumed", "end-winding surface ~0.06 m² x h ~ 50 W/(m² K) "
                   "of end-space air"),
         Parameter("G_rotor_air", 1.5, "W/K", "assumed", "rotor end faces ~0.03 m² x h ~ 50 W/(m² K)"),
@@ -175,6 +211,9 @@ def default_parameters() -> ParameterSet:
         Parameter("G_frame_endcap", 8.0, "W/K", "assumed", "bolted aluminium joint frame-end cap"),
         Parameter("G_endcap_ambient", 1.5, "W/K", "assumed", "natural convection from ~0.15 m² of end caps"),
         Parameter("G_rotor_shaft", 15.0, "W/K", "assumed", "rotor hub to shaft, press fit"),
+        Parameter("G_rotor_core", 40.0, "W/K", "assumed", "radial conduction from the magnet layer to the core: "
+                  "lamination (25 W/(m K) in plane) over ~20 mm across ~0.05 m², halved by the magnet pockets' "
+                  "air barriers"),
         Parameter("G_bearing_endcap", 3.0, "W/K", "assumed", "bearing outer ring into the end-cap bores"),
         # losses
         Parameter("R_0", 0.0132, "ohm", "fitted", "phase resistance at 0 °C (cables included), estimated from "
@@ -197,6 +236,9 @@ def default_parameters() -> ParameterSet:
                   "(segmented NdFeB)", lower_inclusive=True),
         Parameter("k_pm_current", 1.0, "1", "assumed", "relative rise of the magnet loss at I_ref "
                   "(armature-field harmonics)", lower_inclusive=True),
+        Parameter("pm_speed_exponent", 2.0, "1", "assumed", "exponent of the magnet eddy loss in speed: 2 for "
+                  "resistance-limited eddy currents, towards 1.5 when skin effect limits them (literature "
+                  "range 1-2.5)", lower=0.5, upper=3.0),
         Parameter("P_friction_ref", 40.0, "W", "assumed", "bearing friction and windage at n_ref (two deep-"
                   "groove bearings, ~0.1 N m)", lower_inclusive=True),
     ])
@@ -208,6 +250,10 @@ def build_network(parameters: ParameterSet) -> Network:
     S = parameters.symbols()
     has = {effect: all(n in parameters for n in names) for effect, names in EFFECT_PARAMETERS.items()}
     speed = input_symbol("motor_speed") / N_REF_RPM  # n / n_ref
+
+    def speed_power(exponent):  # (n/n_ref)^b, 0 at standstill with a finite derivative in b
+        return (speed + SPEED_OFFSET) ** exponent - SPEED_OFFSET ** exponent
+
     current_squared = input_symbol("i_d") ** 2 + input_symbol("i_q") ** 2
     load = current_squared / RATED_CURRENT_A ** 2  # (i / I_ref)^2
     nodes = (
@@ -218,6 +264,7 @@ def build_network(parameters: ParameterSet) -> Network:
         Node("yoke_outer", "capacitive", S["C_yoke_outer"], "solid"),
         Node("endcap", "capacitive", S["C_endcap"], "solid"),
         Node("rotor", "capacitive", S["C_rotor"], "solid"),
+        *((Node("rotor_core", "capacitive", S["C_rotor_core"], "solid"),) if has["rotor_core_node"] else ()),
         Node("shaft_bearing", "capacitive", S["C_shaft_bearing"], "solid"),
         Node("end_space_air", "capacitive", S["C_end_space_air"], "air"),
         Node("water", "boundary", role="T_water"),
@@ -237,7 +284,10 @@ def build_network(parameters: ParameterSet) -> Network:
         Link("end_winding", "yoke_outer", 1 / S["G_end_winding_frame"], "end-winding potting to the frame"),
         Link("yoke_outer", "endcap", 1 / S["G_frame_endcap"], "frame to end cap"),
         Link("endcap", "ambient", 1 / S["G_endcap_ambient"], "end caps to the room"),
-        Link("rotor", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"),
+        *((Link("rotor", "rotor_core", 1 / S["G_rotor_core"], "magnet layer to the rotor core"),
+           Link("rotor_core", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"))
+          if has["rotor_core_node"] else
+          (Link("rotor", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"),)),
         Link("shaft_bearing", "endcap", 1 / S["G_bearing_endcap"], "bearings to the end caps"),
     )
     network = Network(nodes, links, ())
@@ -255,31 +305,47 @@ def build_network(parameters: ParameterSet) -> Network:
         sources += [HeatSource("tooth", S["tooth_iron_share"] * iron, "iron"),
                     HeatSource("yoke_inner", (1 - S["tooth_iron_share"]) * iron, "iron")]
     if has["magnet_eddy_loss"]:
-        sources.append(HeatSource("rotor", S["P_pm_ref"] * speed ** 2 * (1 + S["k_pm_current"] * load), "magnet"))
+        pm_speed = speed_power(S["pm_speed_exponent"]) if has["magnet_loss_exponent"] else speed ** 2
+        sources.append(HeatSource("rotor", S["P_pm_ref"] * pm_speed * (1 + S["k_pm_current"] * load), "magnet"))
     if has["bearing_friction"]:
         sources.append(HeatSource("shaft_bearing", S["P_friction_ref"] * speed, "friction"))
-    # convection rising with speed: the conductance G(n) - G(0) between two nodes, as the heat it
-    # carries (link resistances may depend on parameters only)
-    rises = []
+    # convection rising with speed: the conductance G(n) - G(0) between two nodes (W/K), as the heat
+    # it carries (link resistances may depend on parameters only)
+    rises = {}
     if has["air_gap_convection_speed"]:
-        rises.append(("tooth", "rotor", S["G_gap_speed"], "air-gap convection rise"))
+        gap_speed = speed_power(S["gap_speed_exponent"]) if has["air_gap_taylor_exponent"] else speed
+        rises[("tooth", "rotor")] = S["G_gap_speed"] * gap_speed
     if has["end_space_convection_speed"]:
-        rises += [(a, b, S["k_end_space_speed"] * S[g], "end-space convection rise")
-                  for a, b, g in (("end_winding", "end_space_air", "G_end_winding_air"),
-                                  ("rotor", "end_space_air", "G_rotor_air"),
-                                  ("end_space_air", "endcap", "G_air_endcap"))]
-    for a, b, conductance, label in rises:
-        flow = conductance * speed * (theta(a) - theta(b))
-        sources += [HeatSource(b, flow, label), HeatSource(a, -flow, label)]
+        for pair, g in ((("end_winding", "end_space_air"), "G_end_winding_air"),
+                        (("rotor", "end_space_air"), "G_rotor_air"), (("end_space_air", "endcap"), "G_air_endcap")):
+            rises[pair] = S["k_end_space_speed"] * S[g] * speed
+    for (a, b), rise in rises.items():
+        flow = rise * (theta(a) - theta(b))
+        sources += [HeatSource(b, flow, "convection rise with speed"), HeatSource(a, -flow, "convection rise with speed")]
     return network.with_heat_sources(tuple(sources))
+
+
+def parameters_without(*effects: str) -> ParameterSet:
+    """The default parameters without those of ``effects`` (names of :data:`EFFECT_PARAMETERS`), so
+    that :func:`build_network` leaves these effects out; without the rotor's core node the rotor
+    node carries the core's heat capacity too."""
+    unknown = [e for e in effects if e not in EFFECT_PARAMETERS]
+    if unknown:
+        raise ValueError(f"unknown effect {unknown[0]!r}: one of {', '.join(EFFECT_PARAMETERS)}")
+    dropped = {name for effect in effects for name in EFFECT_PARAMETERS[effect]}
+    base = default_parameters()
+    kept = [base[n] for n in base if n not in dropped]
+    if "C_rotor_core" in dropped:
+        whole = base["C_rotor"].value + base["C_rotor_core"].value
+        kept = [_capacity("C_rotor", whole, "whole rotor: " + base["C_rotor"].source + "; "
+                          + base["C_rotor_core"].source) if q.name == "C_rotor" else q for q in kept]
+    return ParameterSet(kept)
 
 
 def plain_parameters() -> ParameterSet:
     """The parameters of the plain model: those of :data:`EFFECT_PARAMETERS` left out, so that
     :func:`build_network` builds copper loss and constant convection only."""
-    effects = {name for names in EFFECT_PARAMETERS.values() for name in names}
-    base = default_parameters()
-    return ParameterSet([base[n] for n in base if n not in effects])
+    return parameters_without(*EFFECT_PARAMETERS)
 
 
 MACHINE = Machine(NAME, "nine-node LPTN of the water-cooled bench IPMSM (Liu et al. 2024 data set)",
