@@ -223,14 +223,16 @@ def test_effects_can_be_left_out_one_by_one(machine):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     full = build_model(str(MACHINE_FILE))
-    assert {"rotor", "rotor_core"} <= set(full.state_names)
-    one_rotor = module.parameters_without("rotor_core_node")
-    assert "C_rotor_core" not in one_rotor
-    whole = full.parameters["C_rotor"].value + full.parameters["C_rotor_core"].value
-    assert math.isclose(one_rotor["C_rotor"].value, whole)  # the rotor node carries the core's capacity
-    assert "rotor_core" not in build_model(str(MACHINE_FILE), parameters=one_rotor).state_names
+    linear_gap = module.parameters_without("air_gap_taylor_exponent")
+    assert "gap_speed_exponent" not in linear_gap and "G_gap_speed" in linear_gap
+    at_half_speed = {"motor_speed": 2000.0, "i_d": -100.0, "i_q": 150.0, "T_water": 25.0, "T_ambient": 23.0}
+    x = np.linspace(30.0, 60.0, full.n_states)
+    linear = build_model(str(MACHINE_FILE), parameters=linear_gap)
+    # with the exponent at its start value 1, the power law is the linear rise it replaces
+    assert np.allclose(full.rhs(x, full.input_vector(**at_half_speed)),
+                       linear.rhs(x, linear.input_vector(**at_half_speed)), rtol=1e-3, atol=1e-6)
     plain = build_model(f"{MACHINE_FILE}:MACHINE_PLAIN")
-    assert "rotor_core" not in plain.state_names and "gap_speed_exponent" not in plain.parameters
+    assert "gap_speed_exponent" not in plain.parameters and "P_pm_ref" not in plain.parameters
     with pytest.raises(ValueError, match="unknown effect 'windage'"):
         module.parameters_without("windage")
 
@@ -268,3 +270,22 @@ def test_the_full_model_steps_stably_at_top_speed_with_a_steep_end_space_convect
     top = steep.input_vector(motor_speed=4000.0, i_d=-150.0, i_q=250.0, T_water=25.0, T_ambient=23.0)
     A = np.asarray(ca.Function("A", [xs], [ca.jacobian(step(xs, top), xs)])(np.full(steep.n_states, 40.0)))
     assert np.max(np.abs(np.linalg.eigvals(A))) < 1.0
+
+
+def test_calibrate_names_a_negative_prior_weight(capsys):
+    code = main(["calibrate", "--model", str(MACHINE_FILE), str(SLICE), "--params", "G_jacket",
+                 "--prior-weight", "-1"])
+    assert code == 2
+    assert "--prior-weight = -1.0: a weight must be a number >= 0" in capsys.readouterr().err
+
+
+def test_a_prior_keeps_a_parameter_the_record_hardly_sees_near_its_estimate(model, slice_data):
+    record = record_from_measurements(model, slice_data, 60.0)
+    names = ["G_jacket", "G_rotor_air", "G_bearing_endcap"]
+    free = fit_records(model, [record], names, max_iter=30)
+    held = fit_records(model, [record], names, max_iter=30, prior_weight=1e4)
+    start = np.array([model.parameters[n].value for n in names])
+    assert np.all(np.abs(np.log(held.values / start)) <= np.abs(np.log(free.values / start)) + 1e-9)
+    assert held.rss >= free.rss * (1 - 1e-6)
+    with pytest.raises(InputError, match="record_weights"):
+        fit_records(model, [record], names, record_weights=[1.0, 2.0])

@@ -3,21 +3,17 @@ r"""A water-cooled interior permanent-magnet motor on a test bench, as a genther
 The motor of the public bench data set of Liu et al. (IEEE Trans. Power Electronics 2024, doi
 10.1109/TPEL.2024.3409388, MIT licence): a water-jacketed IPMSM up to about 4000 rpm, 160 N·m and
 65 kW electrical, logged at 1 Hz with 13 thermocouples. The network is the one a thermal engineer
-draws for such a machine (11 nodes, 10 of them with heat capacity)::
+draws for such a machine (9 nodes, 8 of them with heat capacity)::
 
                  water (jacket, boundary)
                    │
                yoke_outer ─────── endcap ── ambient (boundary)
-                   │                 │  └── shaft_bearing ── rotor_core
-               yoke_inner            │                           │
-               │       └── tooth ────┼────── (air gap) ────── rotor
-           winding_slot ──┘          │                           │
-               │                     │                           │
-           end_winding ──────── end_space_air ───────────────────┘
-
-The rotor is two nodes: ``rotor``, the magnets with the lamination around their pockets (its
-sensor, the heat of the magnet loss, the air-gap surface), and ``rotor_core``, the lamination
-inside them with the shaft's active length (the path to the shaft and bearings).
+                   │                 │  └── shaft_bearing ── rotor
+               yoke_inner            │                        │  (air gap)
+               │       └── tooth ────┼──────────────────────── ┤
+           winding_slot ──┘          │                        │
+               │                     │                        │
+           end_winding ──────── end_space_air ────────────────┘
 
 Sensors (the logger's columns): ``activewind_1/2`` and ``slotside`` in the slot winding,
 ``endwind_1/2`` on the end windings, ``slotopen`` at the tooth tip, ``slotbottom`` in the yoke
@@ -48,7 +44,7 @@ phase resistance is estimated from the bench's own electrical power at standstil
 (``genthermal calibrate`` on several profiles) carries the rest.
 
 ``MACHINE`` is the full model; ``MACHINE_PLAIN`` the plain one a first attempt would write (copper
-loss only, constant convection, one rotor node): the tutorial ``docs/tutorials/real_motor.md``
+loss only, constant convection): the tutorial ``docs/tutorials/real_motor.md``
 starts from it; :func:`parameters_without` leaves out any of the effects.
 The logger's column map is :data:`COLUMN_MAP`, read from ``columns.yaml`` beside this file.
 """
@@ -130,8 +126,7 @@ INTERFACE = MachineInterface(
 #: sensor column, with its unit; auxiliary columns (torque, electrical power) serve unit checks.
 COLUMN_MAP = yaml.safe_load((Path(__file__).parent / "columns.yaml").read_text(encoding="utf-8"))
 
-#: The effects the plain model lacks, by name, with their parameters (``rotor_core_node``: the
-#: rotor's second node).
+#: The effects the plain model lacks, by name, with their parameters.
 EFFECT_PARAMETERS = {
     "speed_iron_loss": ("P_hyst_ref", "P_eddy_ref", "k_fe_current", "tooth_iron_share"),
     "air_gap_convection_speed": ("G_gap_speed",),
@@ -140,7 +135,6 @@ EFFECT_PARAMETERS = {
     "ac_copper_loss": ("k_ac",),
     "magnet_eddy_loss": ("P_pm_ref", "k_pm_current"),
     "magnet_loss_exponent": ("pm_speed_exponent",),
-    "rotor_core_node": ("C_rotor_core", "G_rotor_core"),
     "bearing_friction": ("P_friction_ref",),
 }
 
@@ -173,11 +167,8 @@ def default_parameters() -> ParameterSet:
         _capacity("C_yoke_outer", 5.0 * 460.0 + 4.0 * 900.0,
                   "outer half of the back iron (5 kg steel) with the aluminium jacket wall (4 kg x 900 J/(kg K))"),
         _capacity("C_endcap", 3.0 * 900.0, "two aluminium end caps, 1.5 kg each"),
-        _capacity("C_rotor", 4.0 * 460.0 + 1.5 * 440.0, "magnets and the lamination around their pockets: 1.5 kg "
-                  "NdFeB x 440 J/(kg K) + 4 kg steel (the rotor's outer ~15 mm); the whole rotor (14 kg "
-                  "lamination) when there is no core node"),
-        _capacity("C_rotor_core", 10.0 * 460.0 + 1.0 * 460.0, "rotor core inside the magnets (10 kg lamination) "
-                  "and the shaft's active length (1 kg), x 460 J/(kg K)"),
+        _capacity("C_rotor", 14.0 * 460.0 + 1.5 * 440.0, "rotor lamination 14 kg x 460 J/(kg K) + 1.5 kg NdFeB x "
+                  "440 J/(kg K)"),
         _capacity("C_end_space_air", 500.0, "end-space air (~2 l) with the sheet-metal "
                   "baffles and winding-head surface layer it exchanges heat with"),
         _capacity("C_shaft_bearing", 4.0 * 460.0, "shaft ends and bearings, 4 kg of steel"),
@@ -211,9 +202,6 @@ def default_parameters() -> ParameterSet:
         Parameter("G_frame_endcap", 8.0, "W/K", "assumed", "bolted aluminium joint frame-end cap"),
         Parameter("G_endcap_ambient", 1.5, "W/K", "assumed", "natural convection from ~0.15 m² of end caps"),
         Parameter("G_rotor_shaft", 15.0, "W/K", "assumed", "rotor hub to shaft, press fit"),
-        Parameter("G_rotor_core", 40.0, "W/K", "assumed", "radial conduction from the magnet layer to the core: "
-                  "lamination (25 W/(m K) in plane) over ~20 mm across ~0.05 m², halved by the magnet pockets' "
-                  "air barriers"),
         Parameter("G_bearing_endcap", 3.0, "W/K", "assumed", "bearing outer ring into the end-cap bores"),
         # losses
         Parameter("R_0", 0.0132, "ohm", "fitted", "phase resistance at 0 °C (cables included), estimated from "
@@ -264,7 +252,6 @@ def build_network(parameters: ParameterSet) -> Network:
         Node("yoke_outer", "capacitive", S["C_yoke_outer"], "solid"),
         Node("endcap", "capacitive", S["C_endcap"], "solid"),
         Node("rotor", "capacitive", S["C_rotor"], "solid"),
-        *((Node("rotor_core", "capacitive", S["C_rotor_core"], "solid"),) if has["rotor_core_node"] else ()),
         Node("shaft_bearing", "capacitive", S["C_shaft_bearing"], "solid"),
         Node("end_space_air", "capacitive", S["C_end_space_air"], "air"),
         Node("water", "boundary", role="T_water"),
@@ -284,10 +271,7 @@ def build_network(parameters: ParameterSet) -> Network:
         Link("end_winding", "yoke_outer", 1 / S["G_end_winding_frame"], "end-winding potting to the frame"),
         Link("yoke_outer", "endcap", 1 / S["G_frame_endcap"], "frame to end cap"),
         Link("endcap", "ambient", 1 / S["G_endcap_ambient"], "end caps to the room"),
-        *((Link("rotor", "rotor_core", 1 / S["G_rotor_core"], "magnet layer to the rotor core"),
-           Link("rotor_core", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"))
-          if has["rotor_core_node"] else
-          (Link("rotor", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"),)),
+        Link("rotor", "shaft_bearing", 1 / S["G_rotor_shaft"], "rotor hub to shaft"),
         Link("shaft_bearing", "endcap", 1 / S["G_bearing_endcap"], "bearings to the end caps"),
     )
     network = Network(nodes, links, ())
@@ -327,19 +311,13 @@ def build_network(parameters: ParameterSet) -> Network:
 
 def parameters_without(*effects: str) -> ParameterSet:
     """The default parameters without those of ``effects`` (names of :data:`EFFECT_PARAMETERS`), so
-    that :func:`build_network` leaves these effects out; without the rotor's core node the rotor
-    node carries the core's heat capacity too."""
+    that :func:`build_network` leaves these effects out."""
     unknown = [e for e in effects if e not in EFFECT_PARAMETERS]
     if unknown:
         raise ValueError(f"unknown effect {unknown[0]!r}: one of {', '.join(EFFECT_PARAMETERS)}")
     dropped = {name for effect in effects for name in EFFECT_PARAMETERS[effect]}
     base = default_parameters()
-    kept = [base[n] for n in base if n not in dropped]
-    if "C_rotor_core" in dropped:
-        whole = base["C_rotor"].value + base["C_rotor_core"].value
-        kept = [_capacity("C_rotor", whole, "whole rotor: " + base["C_rotor"].source + "; "
-                          + base["C_rotor_core"].source) if q.name == "C_rotor" else q for q in kept]
-    return ParameterSet(kept)
+    return ParameterSet([base[n] for n in base if n not in dropped])
 
 
 def plain_parameters() -> ParameterSet:

@@ -29,6 +29,10 @@ def add_record_set_arguments(parser) -> None:
     parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
                         help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
                         "repeatable")
+    parser.add_argument("--prior-weight", metavar="W", type=float, default=0.0,
+                        help="calibrate over several records: weight of a prior pulling each fitted parameter "
+                        "towards its start value, K² per unit of ln(value/start)² (default 0: none); keeps the "
+                        "directions the records hardly see near the machine's estimate")
     parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
                         f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
 
@@ -179,10 +183,14 @@ def calibrate_record_set(model, names, args) -> int:
             raise InputError(f"--weight {name}", name, f"not a sensor of {model.name} ({', '.join(model.output_names)})")
         if not (np.isfinite(value) and value >= 0):
             raise InputError(f"--weight {name}", value, "a weight must be a number >= 0")
+    prior_weight = getattr(args, "prior_weight", 0.0)
+    if not (np.isfinite(prior_weight) and prior_weight >= 0):
+        raise InputError("--prior-weight", prior_weight, "a weight must be a number >= 0")
     records = load_record_set(args, model)
     before = score_records(model, records)
     with working("calibrate"):
-        fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names])
+        fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names],
+                          prior_weight=prior_weight)
     fisher = records_fisher(fit)
     after = score_records(fit.model, records)
     print(f"{model.name}: {len(names)} parameter(s) fitted to {len(records)} record(s) in {fit.fit_time_s:.0f} s "
