@@ -287,5 +287,3 @@ def test_a_prior_keeps_a_parameter_the_record_hardly_sees_near_its_estimate(mode
     start = np.array([model.parameters[n].value for n in names])
     assert np.all(np.abs(np.log(held.values / start)) <= np.abs(np.log(free.values / start)) + 1e-9)
     assert held.rss >= free.rss * (1 - 1e-6)
-    with pytest.raises(InputError, match="record_weights"):
-        fit_records(model, [record], names, record_weights=[1.0, 2.0])

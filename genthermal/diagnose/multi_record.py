@@ -213,8 +213,7 @@ def _scaled(model: ThermalModel, name: str, factor: float):
 
 
 def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[str], factor: float = 30.0,
-                prior_weight: float = 0.0, max_iter: int = 60, output_weights=None,
-                record_weights=None) -> RecordsFit:
+                prior_weight: float = 0.0, max_iter: int = 60, output_weights=None) -> RecordsFit:
     """Fit ``names`` to all ``records`` at once (least squares, IPOPT, exact derivatives).
 
     Parameters
@@ -233,8 +232,6 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
         IPOPT iterations.
     output_weights : sequence of float, optional
         Weight of each model output in the sum of squares (default 1 each).
-    record_weights : sequence of float, optional
-        Weight of each record's squared errors (default 1 each: a record counts by its length).
 
     Returns
     -------
@@ -248,14 +245,11 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
     started = time.perf_counter()
     n_y = len(model.output_names)
     weights = np.ones(n_y) if output_weights is None else np.asarray(output_weights, dtype=float)
-    per_record = np.ones(len(records)) if record_weights is None else np.asarray(record_weights, dtype=float)
-    if per_record.shape != (len(records),) or not np.all(np.isfinite(per_record) & (per_record > 0)):
-        raise InputError("record_weights", record_weights, f"give one positive weight per record ({len(records)})")
     scalings = [_scaled(model, n, factor) for n in names]
     z = ca.MX.sym("z", len(names))
     theta = ca.vertcat(*[value(z[i]) for i, (value, _, _) in enumerate(scalings)])
     residuals, n_valid, trajectories = [], 0, {}
-    for record, record_weight in zip(records, per_record):
+    for record in records:
         key = (record.dt_s, record.n_samples)
         if key not in trajectories:
             trajectories[key] = StateTrajectory(model, record.dt_s, record.n_samples, names)
@@ -263,7 +257,7 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
         n_valid += int(mask.sum())
         target = np.where(mask, record.outputs, 0.0)
         predicted = trajectories[key].function(theta, ca.DM(record.x0), ca.DM(record.inputs))
-        weight = ca.DM(mask * np.sqrt(weights * record_weight)[:, None])
+        weight = ca.DM(mask * np.sqrt(weights)[:, None])
         residuals.append(ca.vec(weight * (predicted - ca.DM(target))))
     log_scaled = [i for i, n in enumerate(names) if model.parameters[n].value > 0]
     if prior_weight > 0 and log_scaled:
