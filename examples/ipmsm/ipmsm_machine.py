@@ -34,7 +34,7 @@ Losses (each a small term the catalogue of effects names):
 
 Convection in the air gap rises with speed, :math:`G(n) = G_0 + G_n\,n/n_{ref}` (Taylor-Couette
 flow: the Nusselt number grows with the rotational Reynolds number, about linearly over this speed
-range; a fitted power law did worse on profiles not fitted), in the end space
+range), in the end space
 :math:`G(n) = G_0(1 + k\,n/n_{ref})`. The discrete step takes its linear part at 2000 rpm
 (``linearisation_inputs``), so that these rises stay stable at every speed.
 
