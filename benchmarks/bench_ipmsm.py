@@ -52,7 +52,7 @@ OUTPUT_WEIGHTS = {"T_winding": 2.0, "T_slot_bottom": 2.0, "T_outer_yoke": 2.0, "
 #: ln(theta/theta0)²): the directions the training profiles hardly see (the rotor's cooling at
 #: standstill, seen in few profiles) stay near the physical estimate. Chosen on 2-fold pilots on
 #: these 12 profiles (docs/results/ipmsm.md).
-PRIOR_WEIGHT = 100.0
+PRIOR_WEIGHT = 30.0
 
 
 def groups(model, y: np.ndarray) -> dict:
