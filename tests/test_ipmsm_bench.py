@@ -235,6 +235,9 @@ def test_effects_can_be_left_out_one_by_one(machine):
     assert "pm_speed_exponent" not in plain.parameters and "P_pm_ref" not in plain.parameters
     with pytest.raises(ValueError, match="unknown effect 'windage'"):
         module.parameters_without("windage")
+    capacity = full.parameters["C_shaft_bearing"]  # a fit may end on either bound of a capacity
+    for value in (capacity.lower, capacity.upper):
+        assert full.with_parameters(provenance="fitted", source="test", C_shaft_bearing=value)
 
 
 def test_speed_power_laws_vanish_at_rest_with_finite_derivatives(model):

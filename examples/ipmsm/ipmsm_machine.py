@@ -146,7 +146,7 @@ CAPACITY_RANGE = 3.0
 
 def _capacity(name, value, why):
     return Parameter(name, value, "J/K", "assumed", why, lower=value / CAPACITY_RANGE,
-                     upper=value * CAPACITY_RANGE)
+                     upper=value * CAPACITY_RANGE, lower_inclusive=True)
 
 
 def _steel(name, kg, why):
