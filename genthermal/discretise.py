@@ -279,8 +279,12 @@ def parametric_step(model: ThermalModel, x: ca.SX, u: ca.SX, p: ca.SX, dt_s: flo
 
 
 def _state_matrix(model: ThermalModel, p):
-    """:math:`L = \\partial f/\\partial x` at ``x = 0, u = 0`` for parameters ``p`` (DM or SX)."""
-    return model.functions["jac_x"](ca.DM.zeros(model.n_states), ca.DM.zeros(len(model.input_names)), p)
+    """:math:`L = \\partial f/\\partial x` at ``x = 0`` and the machine's linearisation inputs
+    (``spec.interface.linearisation_inputs``, others 0) for parameters ``p`` (DM or SX)."""
+    interface = getattr(model.spec, "interface", None)
+    named = getattr(interface, "linearisation_inputs", None) or {}
+    u = np.array([float(named.get(name, 0.0)) for name in model.input_names])
+    return model.functions["jac_x"](ca.DM.zeros(model.n_states), ca.DM(u), p)
 
 
 def step_expression(model: ThermalModel, x, u, w, p, dt_s: float, phis) -> ca.SX:

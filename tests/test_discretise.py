@@ -5,7 +5,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from genthermal.discretise import (PHI_NORM_HEADROOM, ModalDecay, parametric_step, phi_matrices,
+from genthermal.discretise import (PHI_NORM_HEADROOM, ModalDecay, discretise, parametric_step, phi_matrices,
                                    symbolic_phi_function)
 from genthermal.errors import InputError
 
@@ -87,3 +87,53 @@ def test_bad_step_length_is_named(plant_model, h):
 def test_oscillating_matrix_has_no_modal_decay():
     with pytest.raises(InputError, match="real, negative eigenvalues"):
         ModalDecay.of(np.array([[-0.1, 1.0], [-1.0, -0.1]]), "oscillator")
+
+
+def test_linearisation_inputs_keep_a_steep_speed_dependent_convection_stable():
+    """A conductance rising with speed is the explicit part of the step; taken from zero speed it
+    makes the step unstable at top speed (|eigenvalue| > 1), taken from mid-range it does not, and
+    is closer to the finely resolved solution at a short step (the same model)."""
+    from genthermal.machines.interface import InputKind, MachineInterface, ModelInput, Sensor
+    from genthermal.model import ModelSpec, ThermalModel
+    from genthermal.network import HeatSource, Link, Network, Node
+    from genthermal.losses import input_symbol
+    from genthermal.parameters import Parameter, ParameterSet
+
+    parameters = ParameterSet([Parameter("C_air", 100.0, "J/K", "assumed", "test"),
+                               Parameter("C_part", 5000.0, "J/K", "assumed", "test"),
+                               Parameter("G_rest", 10.0, "W/K", "assumed", "test"),
+                               Parameter("G_rise", 30.0, "W/K", "assumed", "test")])
+    S = parameters.symbols()
+    network = Network((Node("air", "capacitive", S["C_air"], "air"), Node("part", "capacitive", S["C_part"], "solid"),
+                       Node("water", "boundary", role="T_water")),
+                      (Link("air", "water", 1 / S["G_rest"], "rest"), Link("part", "air", 1 / S["G_rest"], "rest")), ())
+    theta = network.temperature_symbol
+    flow = S["G_rise"] * input_symbol("speed") / 4000.0 * (theta("air") - theta("part"))
+    network = network.with_heat_sources((HeatSource("air", -flow, "rise"), HeatSource("part", flow, "rise")))
+    inputs = (ModelInput("speed", "rpm", InputKind.SPEED, "speed"),
+              ModelInput("T_water", "degC", InputKind.TEMPERATURE, "water", 25.0))
+    sensors = (Sensor("T_part", "part", ("part",), 0.01, None, "part"),)
+
+    def model(linearisation):
+        interface = MachineInterface(inputs, sensors, {"water": "T_water"}, 1.0, ambient_input="T_water",
+                                     coolant_input="T_water", linearisation_inputs=linearisation)
+        return ThermalModel(network, parameters, ModelSpec(name="rise", interface=interface))
+
+    top = np.array([4000.0, 25.0])
+    x = np.array([60.0, 40.0])
+    radii = {}
+    for label, linearisation in (("zero", {}), ("mid", {"speed": 2000.0})):
+        step = discretise(model(linearisation), 20.0).step
+        xs = ca.SX.sym("x", 2)
+        A = np.asarray(ca.Function("A", [xs], [ca.jacobian(step(xs, top), xs)])(x))
+        radii[label] = float(np.max(np.abs(np.linalg.eigvals(A))))
+    assert radii["zero"] > 1.0 > radii["mid"]
+    fine, state = discretise(model({}), 0.01).step, x  # the same model, resolved finely
+    for _ in range(100):
+        state = np.asarray(fine(state, top)).ravel()
+    error = {label: np.max(np.abs(np.asarray(discretise(model(lin), 1.0).step(x, top)).ravel() - state))
+             for label, lin in (("zero", {}), ("mid", {"speed": 2000.0}))}
+    assert error["mid"] < min(error["zero"], 0.05)
+    with pytest.raises(InputError, match="linearisation_inputs"):
+        MachineInterface(inputs, sensors, {"water": "T_water"}, 1.0, ambient_input="T_water",
+                         coolant_input="T_water", linearisation_inputs={"rpm": 2000.0})

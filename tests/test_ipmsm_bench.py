@@ -214,3 +214,79 @@ def test_calibrate_names_a_weight_on_an_unknown_sensor(capsys):
                  "--weight", "T_magnet=4"])
     assert code == 2
     assert "--weight T_magnet = 'T_magnet': not a sensor of ipmsm_bench" in capsys.readouterr().err
+
+
+def test_effects_can_be_left_out_one_by_one(machine):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("ipmsm_machine_module", MACHINE_FILE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    full = build_model(str(MACHINE_FILE))
+    square_law = module.parameters_without("magnet_loss_exponent")
+    assert "pm_speed_exponent" not in square_law and "P_pm_ref" in square_law
+    at_half_speed = {"motor_speed": 2000.0, "i_d": -100.0, "i_q": 150.0, "T_water": 25.0, "T_ambient": 23.0}
+    x = np.linspace(30.0, 60.0, full.n_states)
+    square = build_model(str(MACHINE_FILE), parameters=square_law)
+    # with the exponent at its start value 2, the power law is the square law it replaces
+    assert np.allclose(full.rhs(x, full.input_vector(**at_half_speed)),
+                       square.rhs(x, square.input_vector(**at_half_speed)), rtol=1e-3, atol=1e-5)
+    plain = build_model(f"{MACHINE_FILE}:MACHINE_PLAIN")
+    assert "pm_speed_exponent" not in plain.parameters and "P_pm_ref" not in plain.parameters
+    with pytest.raises(ValueError, match="unknown effect 'windage'"):
+        module.parameters_without("windage")
+    capacity = full.parameters["C_shaft_bearing"]  # a fit may end on either bound of a capacity
+    for value in (capacity.lower, capacity.upper):
+        assert full.with_parameters(provenance="fitted", source="test", C_shaft_bearing=value)
+
+
+def test_speed_power_laws_vanish_at_rest_with_finite_derivatives(model):
+    """The magnet loss is an (n/n_ref)^c law: zero heat at standstill, and the fit's derivative
+    with respect to the exponent finite there (no log(0))."""
+    import casadi as ca
+
+    x, u, p = ca.SX.sym("x", model.n_states), ca.SX.sym("u", len(model.input_names)), ca.SX.sym("p", len(model.p0))
+    rhs = model.functions["rhs"](x, u, p)
+    exponents = [model.parameter_names.index("pm_speed_exponent")]
+    derivative = ca.Function("d", [x, u, p], [ca.jacobian(rhs, p[exponents])])
+    at_rest = model.input_vector(motor_speed=0.0, i_d=-100.0, i_q=150.0, T_water=25.0, T_ambient=23.0)
+    x0 = np.linspace(30.0, 60.0, model.n_states)
+    rotor = model.state_names.index("rotor")
+    rest = np.asarray(derivative(x0, at_rest, model.p0))
+    assert np.all(np.isfinite(rest)) and np.allclose(rest[rotor], 0.0, atol=1e-6)
+    half = np.asarray(derivative(x0, model.input_vector(motor_speed=2000.0, i_q=150.0, T_water=25.0,
+                                                        T_ambient=23.0), model.p0))
+    assert np.all(np.isfinite(half)) and abs(half[rotor, 0]) > 0
+
+
+def test_the_full_model_steps_stably_at_top_speed_with_a_steep_end_space_convection(model):
+    """Extreme fitted values (a light end-space air node, end-space convection rising 10-fold by
+    4000 rpm) once made 10-s steps diverge; the step's linear part at 2000 rpm keeps them stable."""
+    import casadi as ca
+
+    from genthermal.discretise import discretise
+
+    steep = model.with_parameters(provenance="fitted", source="test", C_end_space_air=170.0,
+                                  G_end_winding_air=90.0, k_end_space_speed=10.0)
+    step = discretise(steep, 10.0).step
+    xs = ca.SX.sym("x", steep.n_states)
+    top = steep.input_vector(motor_speed=4000.0, i_d=-150.0, i_q=250.0, T_water=25.0, T_ambient=23.0)
+    A = np.asarray(ca.Function("A", [xs], [ca.jacobian(step(xs, top), xs)])(np.full(steep.n_states, 40.0)))
+    assert np.max(np.abs(np.linalg.eigvals(A))) < 1.0
+
+
+def test_calibrate_names_a_negative_prior_weight(capsys):
+    code = main(["calibrate", "--model", str(MACHINE_FILE), str(SLICE), "--params", "G_jacket",
+                 "--prior-weight", "-1"])
+    assert code == 2
+    assert "--prior-weight = -1.0: a weight must be a number >= 0" in capsys.readouterr().err
+
+
+def test_a_prior_keeps_a_parameter_the_record_hardly_sees_near_its_estimate(model, slice_data):
+    record = record_from_measurements(model, slice_data, 60.0)
+    names = ["G_jacket", "G_rotor_air", "G_bearing_endcap"]
+    free = fit_records(model, [record], names, max_iter=30)
+    held = fit_records(model, [record], names, max_iter=30, prior_weight=1e4)
+    start = np.array([model.parameters[n].value for n in names])
+    assert np.all(np.abs(np.log(held.values / start)) <= np.abs(np.log(free.values / start)) + 1e-9)
+    assert held.rss >= free.rss * (1 - 1e-6)

@@ -56,6 +56,10 @@ def add_record_set_arguments(parser) -> None:
     parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
                         help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
                         "repeatable")
+    parser.add_argument("--prior-weight", metavar="W", type=float, default=0.0,
+                        help="calibrate over several records: weight of a prior pulling each fitted parameter "
+                        "towards its start value, K² per unit of ln(value/start)² (default 0: none); keeps the "
+                        "directions the records hardly see near the machine's estimate")
     parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
                         f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
 

@@ -18,6 +18,8 @@ from ._common import DEFAULT_FIT_STEP_S
 SPEED_BANDS_RPM = (100.0, 1000.0, 2000.0, 3000.0)
 #: Load-current bands, as a share of the machine's rated current (upper edges; the last is open).
 CURRENT_BANDS = (0.1, 0.4, 0.8)
+
+
 def _machine(model):
     from ..machines import resolve_machine
 
@@ -166,10 +168,14 @@ def calibrate_record_set(model, names, args) -> int:
             raise InputError(f"--weight {name}", name, f"not a sensor of {model.name} ({', '.join(model.output_names)})")
         if not (np.isfinite(value) and value >= 0):
             raise InputError(f"--weight {name}", value, "a weight must be a number >= 0")
+    prior_weight = getattr(args, "prior_weight", 0.0)
+    if not (np.isfinite(prior_weight) and prior_weight >= 0):
+        raise InputError("--prior-weight", prior_weight, "a weight must be a number >= 0")
     records = load_record_set(args, model)
     before = score_records(model, records)
     with working("calibrate"):
-        fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names])
+        fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names],
+                          prior_weight=prior_weight)
     fisher = records_fisher(fit)
     after = score_records(fit.model, records)
     print(f"{model.name}: {len(names)} parameter(s) fitted to {len(records)} record(s) in {fit.fit_time_s:.0f} s "

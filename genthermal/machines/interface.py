@@ -155,6 +155,11 @@ class MachineInterface:
     rated_inputs : dict
         Input name → value at the machine's rating point (inputs not named take their default):
         the load at which accuracy checks step the model.
+    linearisation_inputs : dict
+        Input name → value at which the discrete step takes its linear part (inputs not named: 0;
+        :mod:`genthermal.discretise`). A machine whose conductances rise steeply with an input
+        (convection with speed) names a mid-range value: the step treats the change from there
+        explicitly, which stays stable where a change from zero would not.
     outlet_sensor : Sensor or None
         The coolant leaving the machine (its node reported as an extra simulation column, its CSV
         column read when present); not a model output. None: not reported.
@@ -168,6 +173,7 @@ class MachineInterface:
     coolant_input: str
     roles: dict = dataclasses.field(default_factory=dict)
     rated_inputs: dict = dataclasses.field(default_factory=dict)
+    linearisation_inputs: dict = dataclasses.field(default_factory=dict)
     outlet_sensor: Sensor | None = None
 
     def __post_init__(self):
@@ -187,9 +193,10 @@ class MachineInterface:
             for name in self._as_tuple(self.roles.get(role, ())):
                 if name not in names:
                     raise InputError(f"interface.roles[{role.name}]", name, "not an input of the machine")
-        unknown = sorted(set(self.rated_inputs) - set(names))
-        if unknown:
-            raise InputError("interface.rated_inputs", unknown[0], f"not an input ({', '.join(names)})")
+        for field in ("rated_inputs", "linearisation_inputs"):
+            unknown = sorted(set(getattr(self, field)) - set(names))
+            if unknown:
+                raise InputError(f"interface.{field}", unknown[0], f"not an input ({', '.join(names)})")
         for sensor in self.sensors:
             if not (sensor.noise_variance_K2 > 0):
                 raise InputError(f"sensor {sensor.output}.noise_variance_K2", sensor.noise_variance_K2, "must be > 0 K²")
