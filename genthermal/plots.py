@@ -8,6 +8,10 @@ import pandas as pd
 from .machines.interface import InputKind
 from .outputs import replacing
 
+#: Resolution of every PNG genthermal writes, dots per inch.
+FIGURE_DPI = 110
+
+
 def finish_figure(fig, path=None, close: bool = False):
     """Lay out ``fig``, save it to ``path`` (PNG, folders created) when given, and return it.
 
@@ -17,7 +21,7 @@ def finish_figure(fig, path=None, close: bool = False):
     fig.tight_layout()
     if path is not None:
         with replacing(path) as temporary:
-            fig.savefig(temporary, dpi=110)
+            fig.savefig(temporary, dpi=FIGURE_DPI)
     if close:
         plt.close(fig)
     return fig

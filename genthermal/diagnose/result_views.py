@@ -123,12 +123,13 @@ def _panels(ax, n: int):
 def _finish(fig, path, ours: bool):
     """Lay out a figure we made; write it to ``path`` (PNG) whole or not at all; return it."""
     from ..outputs import replacing
+    from ..plots import FIGURE_DPI, finish_figure
 
     if ours:
-        fig.tight_layout()
+        return finish_figure(fig, path)
     if path is not None:
         with replacing(path) as temporary:
-            fig.savefig(temporary, dpi=110)
+            fig.savefig(temporary, dpi=FIGURE_DPI)
     return fig
 
 
