@@ -133,10 +133,20 @@ class Effect:
         """The switching parameters followed by the shape parameters."""
         return self.parameters + self.shape_parameters
 
+    def with_shapes_fitted(self) -> "Effect":
+        """This effect with its shape parameters fitted beside the switching ones (same name), each
+        bounded to its plausible range: a diagnosis then measures the shape (how far a blockage's
+        convection follows the flow) instead of assuming it. Unchanged when it has none."""
+        if not self.shape_parameters:
+            return self
+        shapes = tuple(dataclasses.replace(p, lower=p.plausible[0], upper=p.plausible[1]) if p.plausible else p
+                       for p in self.shape_parameters)
+        return dataclasses.replace(self, parameters=self.parameters + shapes, shape_parameters=())
+
     def implausible(self, values) -> str | None:
         """Why fitted ``values`` (parameter name -> value) are no finding for a real machine: the
         first parameter outside its plausible range, in plain language; None when all are in."""
-        for parameter in self.parameters:
+        for parameter in self.all_parameters:
             value = values.get(parameter.name)
             if value is not None and not parameter.is_plausible(float(value)):
                 low, high = parameter.plausible or (parameter.lower, parameter.upper)
@@ -323,8 +333,9 @@ for _effect in (
            (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.97)),), _flow_reduction,
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
            # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
-           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
-           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),),
+           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar); plausible 0..1:
+           # 0 when the internal convection is driven by the rotor, not by the through-flow
+           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8, (0.0, 1.0)),),
            needs=(Role.COOLANT_FLOW, Role.INTERNAL_CONVECTION)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",

@@ -490,7 +490,8 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly
         (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes :func:`choose_pair`.
     catalogue : mapping of str to Effect, optional
-        The effects searched (default: the registered catalogue of :mod:`genthermal.effects`).
+        The effects searched (default: :meth:`Catalogue.for_diagnosis`, the registered effects with
+        their shape parameters fitted).
     progress : callable, optional
         Called with one line of text as each stage of the search finishes.
     design_experiment : bool
@@ -508,7 +509,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     from .discovery import Discovery
     from .fitter import OnsetFitter
 
-    candidates = Catalogue.registered() if catalogue is None else Catalogue.of(catalogue)
+    candidates = Catalogue.for_diagnosis() if catalogue is None else Catalogue.of(catalogue)
     for name in effects or ():
         if name not in candidates:
             raise InputError("effects", name, f"not in the catalogue: {', '.join(candidates)}")

@@ -55,9 +55,9 @@ class Discovery:
     Parameters
     ----------
     candidates : Catalogue, mapping of str to Effect, or sequence of Effect or str, optional
-        The effects searched. Default: the registered catalogue
-        (:meth:`Catalogue.registered`, taken when the Discovery is built); each fit searches those
-        that apply to its model.
+        The effects searched. Default: the registered catalogue with shape parameters fitted
+        (:meth:`Catalogue.for_diagnosis`, taken when the Discovery is built); each fit searches
+        those that apply to its model.
     criterion : BIC, AIC or compatible, optional
         Information criterion (:mod:`genthermal.diagnose.criterion`); default BIC.
     fitter : OnsetFitter, optional
@@ -102,7 +102,7 @@ class Discovery:
         self.phases, self.outlet, self.sensor_faults = phases, outlet, bool(sensor_faults)
         if int(max_iterations) != max_iterations or max_iterations < 1:
             raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
-        self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
+        self.candidates = Catalogue.for_diagnosis() if candidates is None else Catalogue.of(candidates)
         self.criterion = BIC() if criterion is None else criterion
         for attribute in ("delta", "evidence_limit", "name"):
             if not hasattr(self.criterion, attribute):
