@@ -181,6 +181,39 @@ def test_the_diagnosis_fits_the_blockage_convection_exponent_within_its_plausibl
     assert Catalogue.for_diagnosis()["frame_cooling_change"] is CATALOGUE["frame_cooling_change"]
 
 
+def test_a_design_loss_fitted_to_begin_during_the_run_is_no_finding():
+    from genthermal.effects import FROM_START_TOLERANCE_S
+
+    stray, short = CATALOGUE["end_winding_stray_loss"], CATALOGUE["phase_short_circuit"]
+    assert stray.from_start and CATALOGUE["excitation_iron_loss"].from_start and not short.from_start
+    assert "does not begin while the machine runs" in stray.implausible({"R_stray": 0.26}, 3132.0)
+    assert stray.implausible({"R_stray": 0.26}, 0.5 * FROM_START_TOLERANCE_S) is None
+    assert short.implausible({"R_short": 0.6}, 3132.0) is None  # a fault begins during a run
+
+
+def test_a_second_effect_is_sought_only_when_the_first_leaves_the_floor_unexplained():
+    from genthermal.diagnose.compare import MeasuredSeries
+    from genthermal.diagnose.discovery import residual_verdict
+    from genthermal.machines import build_model
+
+    model = build_model()
+    n, dt = 1440, 10.0
+    time = np.arange(n) * dt
+    inputs = pd.DataFrame({name: np.full(n, 3.0 if name.startswith("I_") else 25.0)
+                           for name in model.spec.interface.input_names})
+    outputs = np.full((len(model.output_names), n), 40.0)
+    series = MeasuredSeries(time, dt, inputs.assign(time_s=time), outputs, "synthetic")
+    error = ErrorModel.from_residual(np.array([_ar1(0.95, 0.2, n, 7 + k) for k in range(len(model.output_names))]),
+                                     model.output_names, dt, "synthetic")
+    floor = error.floor_K
+    within = outputs + np.array([_ar1(0.95, 2.0 * floor, n, 20 + k) for k in range(len(model.output_names))])
+    beyond = outputs + 5.0 * floor * np.linspace(0.0, 2.0, n)
+    assert not residual_verdict(series, within, model, error)["unexplained"]
+    assert residual_verdict(series, beyond, model, error)["unexplained"]
+    # against the sensor noise alone the same 2-floor residual is unexplained
+    assert residual_verdict(series, within, model)["unexplained"]
+
+
 def _record(columns) -> MeasurementData:
     time = np.arange(0, 7200, 10.0)
     frame = pd.DataFrame({"time_s": time, **{c: np.full(time.size, 30.0) for c in columns}})

@@ -93,10 +93,12 @@ def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise:
 
 def implausible_reason(candidate) -> str | None:
     """Why a Candidate or JointCandidate's fitted values are no finding: the first effect fitted
-    outside its plausible range (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    outside its plausible range, or a design property fitted to begin during the record
+    (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    onsets = candidate.onsets_s if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.onset_s}
     for name, values in _explanations(candidate).items():
         effect = CATALOGUE.get(name)
-        reason = effect.implausible(values) if effect is not None else None
+        reason = effect.implausible(values, onsets.get(name)) if effect is not None else None
         if reason:
             return reason
     return None
@@ -388,7 +390,7 @@ def rival(iteration: "Iteration", floor: float | None = None):
     if chosen is None:
         return None
     pool = iteration.pairs if iteration.added_pair else iteration.ranked
-    others = [c for c in pool if c is not chosen and look_alike(chosen, c, floor)]
+    others = [c for c in pool if c is not chosen and implausible_reason(c) is None and look_alike(chosen, c, floor)]
     return min(others, key=lambda c: c.delta_bic) if others else None
 
 

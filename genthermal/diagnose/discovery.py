@@ -49,6 +49,22 @@ from .search import EffectSearch, FoundEffect, noise_std
 from .sensor_screen import SensorScreen, corrected_record
 
 
+def residual_verdict(series, predicted, viewed: ThermalModel, error_model=None) -> dict:
+    """The residual tests (:func:`~genthermal.diagnose.residual.residual_tests`) of ``predicted``
+    against the sensor noise of ``series``, or with an ``error_model`` against the discrepancy floor
+    (each sensor's own floor, the factors :data:`~genthermal.diagnose.error_model.UNEXPLAINED_OVER_FLOOR`
+    and :data:`~genthermal.diagnose.error_model.STRUCTURE_OVER_FLOOR`): the one rule for "is
+    something still missing", for the verdict and for whether a further effect is sought."""
+    noise = noise_std(series.outputs)
+    if error_model is None:
+        return residual_tests(series, predicted, noise, viewed.output_names, viewed.spec.interface,
+                              "the sensor noise", None, (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR))
+    return residual_tests(series, predicted, max(noise, error_model.floor_K), viewed.output_names,
+                          viewed.spec.interface, "the discrepancy floor",
+                          {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
+                          (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+
+
 class Discovery:
     """Find the effect(s) a model lacks to explain a record.
 
@@ -156,15 +172,20 @@ class Discovery:
         return view if view.changes_model else None
 
     @staticmethod
-    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel) -> bool:
+    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel, error_model=None) -> bool:
         """Fit pairs when the best single effect leaves more than noise: above
         :data:`~genthermal.diagnose.discover.NOISE_FLOOR_FACTOR` σ, and either called unexplained by
         the residual tests or above their structure level
         (:data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` σ: a weaker second effect can
         leave a residual too small to show clear structure; whether a pair is kept is decided by
-        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here)."""
+        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here). With an
+        ``error_model``, only when the best single effect leaves the residual unexplained against the
+        discrepancy floor (:func:`residual_verdict`): what the first effect leaves within the
+        calibrated model's error on other missions is no second effect's to explain."""
         if len(ranked) < 2 or ranked[0].rmse_after <= NOISE_FLOOR_FACTOR * search.noise:
             return False
+        if error_model is not None:
+            return residual_verdict(search.series, ranked[0].predicted, viewed, error_model)["unexplained"]
         return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
                 or residual_tests(search.series, ranked[0].predicted, search.noise, viewed.output_names,
                                   viewed.spec.interface)["unexplained"])
@@ -304,6 +325,14 @@ class Discovery:
             search = EffectSearch(model, series, found, memo, catalogue, criterion, view).fit_found()
             if error_model is not None:
                 search.noise = max(search.noise, error_model.floor_K)
+            if found and error_model is not None and not residual_verdict(
+                    series, search.predicted_before, viewed, error_model)["unexplained"]:
+                # the found effects explain the record to the floor: no further effect is fitted
+                self._report(f"round {len(iterations) + 1}: the residual after {', '.join(f.effect for f in found)} "
+                             "is within the discrepancy floor's tests: nothing left for another effect")
+                iterations.append(Iteration([], search.rmse_before, search.predicted_before, None,
+                                            explain(None, search)))
+                break
             ranked = self.fitter.singles(search)
             design = DesignSensorScale.of(search, phase_sensor(model).columns) if view and view.phases else None
             for candidate in ranked:
@@ -321,7 +350,7 @@ class Discovery:
                 continue
             iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                                   explain(best, search, runner_up))
-            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
+            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed, error_model):
                 iteration.pairs = self.fitter.joint(
                     search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
                 chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence, design)
@@ -349,14 +378,7 @@ class Discovery:
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)
-        level = noise if error_model is None else max(noise, error_model.floor_K)
-        residual = residual_tests(series, iterations[-1].predicted_after, level, viewed.output_names,
-                                  viewed.spec.interface,
-                                  "the sensor noise" if error_model is None else "the discrepancy floor",
-                                  None if error_model is None else
-                                  {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
-                                  (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR) if error_model is None else
-                                  (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+        residual = residual_verdict(series, iterations[-1].predicted_after, viewed, error_model)
         residual["noise_K"] = noise
         if error_model is not None:
             residual["floor_K"] = error_model.floor_K
