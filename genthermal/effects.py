@@ -343,7 +343,7 @@ for _effect in (
     Effect("coolant_flow_reduction",
            "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
            r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
-           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.97)),), _flow_reduction,
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.9)),), _flow_reduction,
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
            # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
            # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar); plausible 0..1:
