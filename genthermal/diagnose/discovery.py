@@ -201,8 +201,9 @@ class Discovery:
                          error_model=None) -> Diagnosis | None:
         """Two explanations fit the lumped winding about equally well: refit their effects with one
         winding node per phase sensor (a loss in one phase heats that phase, one in every phase
-        does not spread them). Returns that diagnosis when it has a verdict and no look-alike
-        left, else None."""
+        does not spread them). Returns that diagnosis when it has a verdict, no look-alike left and
+        a residual its tests call explained, else None: a refit that leaves the record unexplained
+        cannot tell apart two explanations that each explain it."""
         chosen = first.added_pair or first.added
         names = list(dict.fromkeys([*_explanations(chosen), *_explanations(other)]))
         self._report(f"look-alikes {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))}: "
@@ -215,7 +216,7 @@ class Discovery:
         resolved._error_model = error_model
         diagnosis = resolved.fit(model, measured, dt_s=dt_s)
         floor = None if error_model is None else error_model.floor_K
-        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0], floor) is not None:
+        if diagnosis.verdict == "none" or diagnosis.unexplained or rival(diagnosis.iterations[0], floor) is not None:
             return None
         diagnosis.iterations[0].explanation += (
             f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
