@@ -191,6 +191,20 @@ def test_a_design_loss_fitted_to_begin_during_the_run_is_no_finding():
     assert short.implausible({"R_short": 0.6}, 3132.0) is None  # a fault begins during a run
 
 
+def test_a_pair_whose_effects_begin_together_is_one_change_not_two_findings():
+    from types import SimpleNamespace
+
+    from genthermal.diagnose.discover import SAME_ONSET_S, one_change
+
+    def pair(first_s, second_s):
+        return SimpleNamespace(effects=("coolant_flow_reduction", "winding_insulation_degradation"),
+                               onsets_s={"coolant_flow_reduction": first_s, "winding_insulation_degradation": second_s})
+
+    assert one_change(pair(3600.0, 3780.0))  # stretch_a's blockage "and" an insulation change 3 min later
+    assert not one_change(pair(0.0, 3780.0))  # one present from the start: two findings
+    assert not one_change(pair(3600.0, 3600.0 + 2 * SAME_ONSET_S))
+
+
 def test_a_second_effect_is_sought_only_when_the_first_leaves_the_floor_unexplained():
     from genthermal.diagnose.compare import MeasuredSeries
     from genthermal.diagnose.discovery import residual_verdict

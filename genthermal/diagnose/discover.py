@@ -59,7 +59,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from ..effects import CATALOGUE, Effect
+from ..effects import CATALOGUE, FROM_START_TOLERANCE_S, Effect
 from ..errors import InputError
 from ..machines.interface import Role
 from ..model import ThermalModel
@@ -74,6 +74,8 @@ DELTA_BIC_LIMIT = -10.0
 MIN_RMSE_REDUCTION = 0.10
 NOISE_FLOOR_FACTOR = 1.2
 MIN_EXCESS_EXPLAINED = 0.5
+#: Two onsets of a pair this close (s), both during the record, are one change (:func:`one_change`).
+SAME_ONSET_S = 600.0
 #: Parameters calibrated on a healthy baseline by default: the losses and the convection the
 #: thesis does not give (``assumed`` in the machine) and the fitted winding conductivity.
 DEFAULT_BASELINE_PARAMETERS = ("R0", "P_iron", "h_end_air", "h_top_air", "k_cr")
@@ -118,11 +120,20 @@ def is_significant(candidate: Candidate, noise: float, evidence_limit: float = D
                                                candidate.delta_bic, design.noise, evidence_limit)
 
 
+def one_change(pair: JointCandidate) -> bool:
+    """True when both effects of ``pair`` begin during the record within :data:`SAME_ONSET_S` of each
+    other: two independent faults do not start in the same minutes, so such a pair stands in for one
+    change the catalogue lacks (the residual it leaves is then the open search's), not two findings."""
+    onsets = [pair.onsets_s[name] for name in pair.effects]
+    return min(onsets) > FROM_START_TOLERANCE_S and max(onsets) - min(onsets) <= SAME_ONSET_S
+
+
 def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,
                 evidence_limit: float = DELTA_BIC_LIMIT, design: DesignSensorScale | None = None) -> JointCandidate | None:
     """The best-ranked pair that passes the four tests against the model without effects, against
     each of its two effects alone and against the best single effect (each effect must earn its
-    place, and the pair must beat the best answer with one effect); None if no pair does.
+    place, and the pair must beat the best answer with one effect); None if no pair does. Pairs
+    fitted outside their plausible range or of :func:`one_change` are passed over.
 
     With ``design`` (phase sensors fitted one by one), each comparison passes when it passes on
     every sensor or on the design sensors, the phase sensors averaged
@@ -142,7 +153,7 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
                                                    design.rmse(pair.predicted), delta, design.noise, evidence_limit)
 
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
-        if implausible_reason(pair) is not None:
+        if implausible_reason(pair) is not None or one_change(pair):
             continue
         rivals = [None] + [by_name[e] for e in pair.effects] + [best_single]
         if all(beats(pair, rival) for rival in rivals):
