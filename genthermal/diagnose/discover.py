@@ -124,8 +124,14 @@ def one_change(pair: JointCandidate) -> bool:
     """True when both effects of ``pair`` begin during the record within :data:`SAME_ONSET_S` of each
     other: two independent faults do not start in the same minutes, so such a pair stands in for one
     change the catalogue lacks (the residual it leaves is then the open search's), not two findings."""
-    onsets = [pair.onsets_s[name] for name in pair.effects]
-    return min(onsets) > FROM_START_TOLERANCE_S and max(onsets) - min(onsets) <= SAME_ONSET_S
+    first, second = (pair.onsets_s[name] for name in pair.effects)
+    return same_change(first, second)
+
+
+def same_change(first_s: float, second_s: float) -> bool:
+    """Two onsets (s into the record) that are one change: both during the record (after
+    :data:`~genthermal.effects.FROM_START_TOLERANCE_S`) and within :data:`SAME_ONSET_S`."""
+    return min(first_s, second_s) > FROM_START_TOLERANCE_S and abs(first_s - second_s) <= SAME_ONSET_S
 
 
 def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,

@@ -35,7 +35,8 @@ from .catalogue import Catalogue
 from .criterion import BIC
 from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
-                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, series_for)
+                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, same_change,
+                       series_for)
 from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, check_baseline_length,
                           check_same_sensors, widened_calibration)
 from .experiment import separating_experiment
@@ -340,7 +341,9 @@ class Discovery:
                 candidate.significant = is_significant(candidate, search.noise, evidence, design)
             self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
-            plausible = [c for c in ranked if implausible_reason(c) is None]
+            # a further effect beginning with a found one is that change's misfit, not a second finding
+            plausible = [c for c in ranked if implausible_reason(c) is None
+                         and not any(same_change(c.onset_s, f.onset_s) for f in found)]
             best = plausible[0] if plausible and plausible[0].significant else None
             runner_up = ranked[1] if len(ranked) > 1 else None
             if screen is not None and not screen.model_round_done and screen.against_model(search, ranked,

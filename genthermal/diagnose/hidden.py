@@ -18,7 +18,8 @@ Random cases draw, from a seeded generator:
   :math:`\theta = u\,\theta_{typ}`, :math:`u \sim U(0.6, 1.4)`, clipped to the parameter's bounds;
 * the onset uniformly in 15-60 % of the mission; the two effects that undo a simplification of
   the linear design model (``copper_resistance_temperature``, ``quadratic_copper_loss``) describe
-  the machine, not a fault, and are present from the start.
+  the machine, not a fault, and are present from the start, as are the effects that are design
+  properties (:attr:`~genthermal.effects.Effect.from_start`: a stray loss, the field's iron loss).
 
 The plant is the nonlinear simulation model; effects it cannot take (the two above need the linear
 design model's parameters) are injected into the linear design model instead.
@@ -131,6 +132,8 @@ def random_injection(effect: str, duration_s: float, rng: np.random.Generator,
         value = typical ** u if p.neutral == 1.0 else p.neutral + u * (typical - p.neutral)
         values[p.name] = float(np.clip(value, p.lower, p.upper))
     onset = 0.0 if effect in MODEL_SIMPLIFICATIONS else float(rng.uniform(*ONSET_RANGE) * duration_s)
+    if (get_effect(effect) if catalogue is None else catalogue[effect]).from_start:
+        onset = 0.0  # a design property (drawn all the same, so the later draws stay as they were)
     return Injection(effect, values, onset)
 
 
