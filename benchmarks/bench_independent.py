@@ -17,7 +17,8 @@ the record's truth file:
   (of the claimed effect when the true one is its flagged look-alike);
 * ``rmse_over_floor``: the RMSE after the found effects over the discrepancy floor of the error
   model (``residual.floor_K`` of the JSON);
-* ``wall_s``: wall time of the command (the machine may be shared: see ``load_avg``).
+* ``wall_s``: wall time of the command (the machine may be shared: see ``load_avg``); ``cpu_s``:
+  its CPU time (user + system, with its worker processes), which the load does not change.
 
 ``--faults`` adds ``healthy_mission_B`` with each sensor fault of :data:`INJECTED_FAULTS` injected
 (right: that sensor blamed, no machine effect). ``--plants K`` adds K healthy records of genthermal's own nonlinear model with its convection,
@@ -37,6 +38,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -162,6 +164,32 @@ def diagnose_command(data: Path, out: Path, workers: int) -> tuple:
     return command, dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
 
 
+def timed_run(command, env, timeout_s: float) -> tuple:
+    """Run ``command``; (return code or None on timeout, stderr text, wall s, CPU s of the process
+    and its children: user + system, from ``os.wait4``, so side-by-side records are told apart)."""
+    with tempfile.TemporaryFile("w+") as stderr:
+        start = time.perf_counter()
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr, text=True, env=env)
+        timer = threading.Timer(timeout_s, process.kill)
+        timer.start()
+        try:
+            _, status, usage = os.wait4(process.pid, 0)
+        finally:
+            timer.cancel()
+        wall = time.perf_counter() - start
+        process.returncode = os.waitstatus_to_exitcode(status)
+        stderr.seek(0)
+        text = stderr.read()
+    code = None if wall >= timeout_s and process.returncode < 0 else process.returncode
+    return code, text, wall, usage.ru_utime + usage.ru_stime
+
+
+def _failed(name: str, category: str, code, text: str, wall: float, cpu: float) -> dict:
+    error = "timeout" if code is None else (text.strip().splitlines() or ["no output"])[-1]
+    return {"record": name, "category": category, "verdict": "wrong", "wall_s": round(wall, 1),
+            "cpu_s": round(cpu, 1), "error": error}
+
+
 def run_record(name: str, workers: int, timeout_s: float) -> dict:
     """Run the CLI on one record in a fresh process; its JSON scored (``error`` when it failed)."""
     data = RECORDS / "data" / f"{name}.csv"
@@ -169,21 +197,14 @@ def run_record(name: str, workers: int, timeout_s: float) -> dict:
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "diagnosis.json"
         command, env = diagnose_command(data, out, workers)
-        start = time.perf_counter()
-        try:
-            process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
-        except subprocess.TimeoutExpired:
-            return {"record": name, "category": truth["category"], "verdict": "wrong", "error": "timeout",
-                    "wall_s": timeout_s}
-        wall = time.perf_counter() - start
-        if process.returncode != 0 or not out.exists():
-            return {"record": name, "category": truth["category"], "verdict": "wrong", "wall_s": wall,
-                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        code, text, wall, cpu = timed_run(command, env, timeout_s)
+        if code != 0 or not out.exists():
+            return _failed(name, truth["category"], code, text, wall, cpu)
         document = json.loads(out.read_text())
         if KEEP is not None:
             (KEEP / f"{name}.json").write_text(out.read_text())
     result = score(name, truth, document)
-    result["wall_s"] = round(wall, 1)
+    result["wall_s"], result["cpu_s"] = round(wall, 1), round(cpu, 1)
     result["duration_h"] = truth["summary"]["duration_s"] / 3600.0
     result["load_avg"] = round(os.getloadavg()[0], 2)
     return result
@@ -233,17 +254,14 @@ def run_plant(index: int, workers: int, timeout_s: float) -> dict:
         command = [sys.executable, "-m", "genthermal.cli", "diagnose", str(data), "--baseline", str(baseline),
                    "--iterate", "--json", str(out), "--workers", str(workers)]
         env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-        start = time.perf_counter()
-        process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
-        wall = time.perf_counter() - start
+        code, text, wall, cpu = timed_run(command, env, timeout_s)
         name = f"plant_{index}_healthy"
-        if process.returncode != 0 or not out.exists():
-            return {"record": name, "category": "plant", "verdict": "wrong", "wall_s": wall,
-                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        if code != 0 or not out.exists():
+            return _failed(name, "plant", code, text, wall, cpu)
         document = json.loads(out.read_text())
     truth = {"category": "plant", "effects": []}
     result = score(name, truth, document)
-    result.update(wall_s=round(wall, 1), duration_h=document["samples"] * document["dt_s"] / 3600.0,
+    result.update(wall_s=round(wall, 1), cpu_s=round(cpu, 1), duration_h=document["samples"] * document["dt_s"] / 3600.0,
                   plant_factors=factors, load_avg=round(os.getloadavg()[0], 2))
     return result
 
@@ -269,12 +287,9 @@ def run_fault(index: int, workers: int, timeout_s: float) -> dict:
         inject_sensor_faults(pd.read_csv(RECORDS / "data" / "healthy_mission_B.csv"), [fault]).to_csv(data, index=False)
         out = Path(folder) / "diagnosis.json"
         command, env = diagnose_command(data, out, workers)
-        start = time.perf_counter()
-        process = subprocess.run(command, capture_output=True, text=True, timeout=timeout_s, env=env)
-        wall = time.perf_counter() - start
-        if process.returncode != 0 or not out.exists():
-            return {"record": name, "category": "sensor_fault", "verdict": "wrong", "wall_s": wall,
-                    "error": (process.stderr.strip().splitlines() or ["no output"])[-1]}
+        code, text, wall, cpu = timed_run(command, env, timeout_s)
+        if code != 0 or not out.exists():
+            return _failed(name, "sensor_fault", code, text, wall, cpu)
         document = json.loads(out.read_text())
     claims = claims_of(document)
     blamed = claims["sensors"]
@@ -286,7 +301,7 @@ def run_fault(index: int, workers: int, timeout_s: float) -> dict:
             "claimed_machine": claims["machine"], "claimed_sensors": blamed,
             "false_claims": claims["machine"] + others, "n_false_claims": len(claims["machine"]) + len(others),
             "rmse_after_K": document.get("rmse_final"), "floor_K": document.get("residual", {}).get("floor_K"),
-            "wall_s": round(wall, 1), "duration_h": document["samples"] * document["dt_s"] / 3600.0,
+            "wall_s": round(wall, 1), "cpu_s": round(cpu, 1), "duration_h": document["samples"] * document["dt_s"] / 3600.0,
             "load_avg": round(os.getloadavg()[0], 2)}
 
 
@@ -297,6 +312,7 @@ def summary(results: list) -> dict:
     onset = [v for r in results for v in r.get("onset_error_min", {}).values()]
     ratios = [r["rmse_over_floor"] for r in results if r.get("rmse_over_floor") is not None]
     per_hour = [r["wall_s"] / r["duration_h"] * 4 for r in results if "duration_h" in r]
+    cpu_per_hour = [r["cpu_s"] / r["duration_h"] * 4 for r in results if "duration_h" in r and "cpu_s" in r]
     return {"summary": True, "records": len(results), **verdicts,
             "claims_on_healthy_and_load_only": sum(r.get("n_false_claims", 1) for r in no_claim),
             "healthy_and_load_only_records": len(no_claim),
@@ -305,6 +321,7 @@ def summary(results: list) -> dict:
             "onsets_within_10_min": sum(v <= 10 for v in onset), "onsets_scored": len(onset),
             "rmse_over_floor_max": max(ratios) if ratios else None,
             "wall_s_per_4h_max": max(per_hour) if per_hour else None,
+            "cpu_s_per_4h_max": max(cpu_per_hour) if cpu_per_hour else None,
             "wall_s_total": round(sum(r.get("wall_s", 0) for r in results), 1)}
 
 

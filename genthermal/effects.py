@@ -91,6 +91,10 @@ class Effect:
     needs : tuple of Role
         Machine roles the transform reads (``roles[Role.IRON]`` ...): the effect applies to every
         machine that has them and to no other.
+    from_start : bool
+        The effect is a property of the machine's design (a stray load loss, the field's iron loss):
+        it is there from the first ampere and does not start while the machine runs. A diagnosis
+        claims no such effect with an onset later than :data:`FROM_START_TOLERANCE_S` into a record.
     """
 
     name: str
@@ -102,6 +106,7 @@ class Effect:
     requires: Callable | None = None
     shape_parameters: tuple[EffectParameter, ...] = ()
     needs: tuple[Role, ...] = ()
+    from_start: bool = False
 
     def __post_init__(self):
         bad = [role for role in self.needs if not isinstance(role, Role)]
@@ -114,15 +119,29 @@ class Effect:
         """The switching parameters followed by the shape parameters."""
         return self.parameters + self.shape_parameters
 
-    def implausible(self, values) -> str | None:
-        """Why fitted ``values`` (parameter name -> value) are no finding for a real machine: the
-        first parameter outside its plausible range, in plain language; None when all are in."""
-        for parameter in self.parameters:
+    def with_shapes_fitted(self) -> "Effect":
+        """This effect with its shape parameters fitted beside the switching ones (same name), each
+        bounded to its plausible range: a diagnosis then measures the shape (how far a blockage's
+        convection follows the flow) instead of assuming it. Unchanged when it has none."""
+        if not self.shape_parameters:
+            return self
+        shapes = tuple(dataclasses.replace(p, lower=p.plausible[0], upper=p.plausible[1]) if p.plausible else p
+                       for p in self.shape_parameters)
+        return dataclasses.replace(self, parameters=self.parameters + shapes, shape_parameters=())
+
+    def implausible(self, values, onset_s: float | None = None) -> str | None:
+        """Why fitted ``values`` (parameter name -> value) from ``onset_s`` (s into the record) are
+        no finding for a real machine: the first parameter outside its plausible range, or an onset
+        during the run of a :attr:`from_start` effect, in plain language; None when all is plausible."""
+        for parameter in self.all_parameters:
             value = values.get(parameter.name)
             if value is not None and not parameter.is_plausible(float(value)):
                 low, high = parameter.plausible or (parameter.lower, parameter.upper)
                 return (f"{self.name}: {parameter.name} = {float(value):.4g} {parameter.unit} lies outside its "
                         f"plausible range [{low:g}, {high:g}]")
+        if self.from_start and onset_s is not None and onset_s > FROM_START_TOLERANCE_S:
+            return (f"{self.name} from {onset_s / 3600:.2f} h: a property of the design is there from the start, "
+                    "it does not begin while the machine runs")
         return None
 
     def unavailable_reason(self, model) -> str | None:
@@ -137,6 +156,10 @@ class Effect:
             return f"the machine has no {', '.join(missing)} role"
         return self.requires(model) if self.requires else None
 
+
+#: How late into a record a :attr:`Effect.from_start` effect may still be fitted to begin, s: the
+#: initial state is fitted, so the first minutes carry little information on an onset.
+FROM_START_TOLERANCE_S = 600.0
 
 CATALOGUE: dict[str, Effect] = {}
 
@@ -301,11 +324,12 @@ for _effect in (
     Effect("coolant_flow_reduction",
            "fan mass flow reduced by a factor (blockage); internal convection falls as flow^n",
            r"\dot m \to k_{flow}\,\dot m,\quad h_{int} \to h_{int}\,k_{flow}^{\,n_{flow}}",
-           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.97)),), _flow_reduction,
+           (EffectParameter("k_flow", 1.0, "1", 0.05, 2.0, 0.5, (0.1, 0.9)),), _flow_reduction,
            "all temperatures and the outlet air run hot after an onset, at every load: less coolant flow",
            # n: k_flow = 1 is neutral for any n; default 0.8 from the Dittus-Boelter correlation
-           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar)
-           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8),),
+           # Nu = 0.023 Re^0.8 Pr^0.4 for turbulent forced convection (0.5 laminar); plausible 0..1:
+           # 0 when the internal convection is driven by the rotor, not by the through-flow
+           shape_parameters=(EffectParameter("n_flow", 0.8, "1", 0.0, 1.5, 0.8, (0.0, 1.0)),),
            needs=(Role.COOLANT_FLOW, Role.INTERNAL_CONVECTION)),
     Effect("phase_short_circuit", "shorted turns: extra loss R_short I_u^2 in the slot winding",
            r"q_{sw} \mathrel{+}= R_{short} I_u^2",
@@ -316,7 +340,7 @@ for _effect in (
            r"q_{iron} \mathrel{+}= k_{exc} I_{exc}^2",
            (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0, (0.0, 100.0)),), _excitation_iron,
            "iron error follows I_exc^2 more than I^2: iron loss depends on excitation",
-           needs=(Role.IRON, Role.EXCITATION_CURRENT)),
+           needs=(Role.IRON, Role.EXCITATION_CURRENT), from_start=True),
     Effect("winding_insulation_degradation", "winding-to-core conductance multiplied by a factor",
            r"G_{w,core} \to k_{ins}\,G_{w,core}",
            (EffectParameter("k_ins", 1.0, "1", 0.05, 10.0, 0.5, (0.2, 0.97)),), _scale_links(Role.WINDING_INSULATION),
@@ -326,7 +350,7 @@ for _effect in (
            r"q_{ew} \mathrel{+}= R_{stray} \sum_p I_p^2",
            (EffectParameter("R_stray", 0.0, "ohm", 0.0, 5.0, 0.2, (0.0, 1.5)),), _end_winding_stray,
            "winding error proportional to I^2 from the start, iron barely affected: an extra end-winding loss",
-           needs=(Role.END_WINDINGS, Role.LOAD_CURRENTS)),
+           needs=(Role.END_WINDINGS, Role.LOAD_CURRENTS), from_start=True),
     Effect("frame_cooling_change", "frame-to-ambient conductance multiplied by a factor",
            r"G_{f,amb} \to k_{frame}\,G_{f,amb}",
            (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0, (0.5, 5.0)),), _scale_links(Role.FRAME_TO_AMBIENT),

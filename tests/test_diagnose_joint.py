@@ -197,11 +197,12 @@ def test_bad_inputs_name_the_field(call, field, plant_model):
 
 
 def test_look_alike_diagnosis_designs_a_test_that_separates_them(plant_model, discovery, tmp_path):
-    """A shorted turn under balanced load looks like end-winding stray loss; the designed test
+    """A shorted turn present from the start under balanced load looks like end-winding stray loss
+    (one that begins during the run cannot be a stray loss, a design property); the designed test
     (≤ 30 min, within the ratings) separates the two explanations by ≥ 5 noise σ even with their
     parameters refitted, is a scenario file the rig can run, and run on the plant it names the
     shorted turn."""
-    case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)],
+    case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 0.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=12, plant=plant_model)
     # the three phase sensors of this record read one plant node: trusted as phase sensors they would
     # be evidence against a shorted turn (see tests/test_phase_winding.py), so the winding is kept lumped

@@ -63,8 +63,9 @@ def test_a_model_without_a_slot_winding_is_refused_by_name(plant_model):
 
 def test_shorted_turn_under_nearly_balanced_load_is_told_from_end_winding_stray_loss(plant_model):
     """With one node per winding the phase sensors show the shorted phase running hot; the lumped
-    model sees the same I^2 heating as an end-winding loss and cannot tell them apart."""
-    case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 3000.0)],
+    model sees the same I^2 heating as an end-winding loss and cannot tell them apart (a short
+    present from the start: one that begins during the run is no stray loss, a design property)."""
+    case = make_hidden_effect_case([Injection("phase_short_circuit", {"R_short": 0.3}, 0.0)],
                                    mission="thesis_fig_7_7", dt_s=DT_S, seed=12, plant=plant_model,
                                    phase_resolved=True, unbalance=0.05)
     assert phases_differ(case.data, DT_S, PHASE_SENSORS)
@@ -73,7 +74,7 @@ def test_shorted_turn_under_nearly_balanced_load_is_told_from_end_winding_stray_
     assert resolved_fit.output_names == [*PHASE_SENSORS, "T_iron", "T_outlet"]
     winner, other = resolved_fit.ranking
     assert resolved_fit.verdict == "phase_short_circuit"
-    assert abs(resolved_fit.found[0].onset_s - 3000.0) <= 600.0
+    assert resolved_fit.found[0].onset_s <= 600.0
     assert winner.values["R_short"] == pytest.approx(0.3, rel=0.1)
     assert other.rmse_after >= 1.05 * winner.rmse_after and other.delta_bic - winner.delta_bic > 100
     lumped_fit = look_alikes.with_settings(phases="lumped").fit(plant_model, case.data)

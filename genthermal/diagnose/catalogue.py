@@ -79,6 +79,12 @@ class Catalogue(Mapping[str, Effect]):
     def __repr__(self) -> str:
         return f"Catalogue({', '.join(self._entries)})"
 
+    @classmethod
+    def for_diagnosis(cls) -> "Catalogue":
+        """The registered effects with their shape parameters fitted
+        (:meth:`~genthermal.effects.Effect.with_shapes_fitted`): the default of a diagnosis."""
+        return cls(effect.with_shapes_fitted() for effect in CATALOGUE.values())
+
     def extended(self, *effects: Effect) -> "Catalogue":
         """A new catalogue with ``effects`` appended (this one is unchanged)."""
         return Catalogue([*self._entries.values(), *effects])

@@ -15,7 +15,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from ..effects import CATALOGUE, Effect
+from ..effects import CATALOGUE, FROM_START_TOLERANCE_S, Effect
 from ..errors import InputError
 from ..machines.interface import Role
 from ..model import ThermalModel
@@ -30,6 +30,8 @@ DELTA_BIC_LIMIT = -10.0
 MIN_RMSE_REDUCTION = 0.10
 NOISE_FLOOR_FACTOR = 1.2
 MIN_EXCESS_EXPLAINED = 0.5
+#: Two onsets of a pair this close (s), both during the record, are one change (:func:`one_change`).
+SAME_ONSET_S = 600.0
 #: Parameters calibrated on a healthy baseline by default: the losses and the convection the
 #: thesis does not give (``assumed`` in the machine) and the fitted winding conductivity.
 DEFAULT_BASELINE_PARAMETERS = ("R0", "P_iron", "h_end_air", "h_top_air", "k_cr")
@@ -49,10 +51,12 @@ def passes_tests(rmse_before: float, rmse_after: float, delta_bic: float, noise:
 
 def implausible_reason(candidate) -> str | None:
     """Why a Candidate or JointCandidate's fitted values are no finding: the first effect fitted
-    outside its plausible range (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    outside its plausible range, or a design property fitted to begin during the record
+    (:meth:`genthermal.effects.Effect.implausible`), or None."""
+    onsets = candidate.onsets_s if isinstance(candidate, JointCandidate) else {candidate.effect: candidate.onset_s}
     for name, values in _explanations(candidate).items():
         effect = CATALOGUE.get(name)
-        reason = effect.implausible(values) if effect is not None else None
+        reason = effect.implausible(values, onsets.get(name)) if effect is not None else None
         if reason:
             return reason
     return None
@@ -72,11 +76,26 @@ def is_significant(candidate: Candidate, noise: float, evidence_limit: float = D
                                                candidate.delta_bic, design.noise, evidence_limit)
 
 
+def one_change(pair: JointCandidate) -> bool:
+    """True when both effects of ``pair`` begin during the record within :data:`SAME_ONSET_S` of each
+    other: two independent faults do not start in the same minutes, so such a pair stands in for one
+    change the catalogue lacks (the residual it leaves is then the open search's), not two findings."""
+    first, second = (pair.onsets_s[name] for name in pair.effects)
+    return same_change(first, second)
+
+
+def same_change(first_s: float, second_s: float) -> bool:
+    """Two onsets (s into the record) that are one change: both during the record (after
+    :data:`~genthermal.effects.FROM_START_TOLERANCE_S`) and within :data:`SAME_ONSET_S`."""
+    return min(first_s, second_s) > FROM_START_TOLERANCE_S and abs(first_s - second_s) <= SAME_ONSET_S
+
+
 def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,
                 evidence_limit: float = DELTA_BIC_LIMIT, design: DesignSensorScale | None = None) -> JointCandidate | None:
     """The best-ranked pair that passes the four tests against the model without effects, against
     each of its two effects alone and against the best single effect (each effect must earn its
-    place, and the pair must beat the best answer with one effect); None if no pair does.
+    place, and the pair must beat the best answer with one effect); None if no pair does. Pairs
+    fitted outside their plausible range or of :func:`one_change` are passed over.
 
     With ``design`` (phase sensors fitted one by one), each comparison passes when it passes on
     every sensor or on the design sensors, the phase sensors averaged
@@ -96,7 +115,7 @@ def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], n
                                                    design.rmse(pair.predicted), delta, design.noise, evidence_limit)
 
     for pair in sorted(pairs, key=lambda p: p.delta_bic):
-        if implausible_reason(pair) is not None:
+        if implausible_reason(pair) is not None or one_change(pair):
             continue
         rivals = [None] + [by_name[e] for e in pair.effects] + [best_single]
         if all(beats(pair, rival) for rival in rivals):
@@ -376,7 +395,7 @@ def rival(iteration: "Iteration", floor: float | None = None):
     if chosen is None:
         return None
     pool = iteration.pairs if iteration.added_pair else iteration.ranked
-    others = [c for c in pool if c is not chosen and look_alike(chosen, c, floor)]
+    others = [c for c in pool if c is not chosen and implausible_reason(c) is None and look_alike(chosen, c, floor)]
     return min(others, key=lambda c: c.delta_bic) if others else None
 
 
@@ -478,7 +497,8 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
         :mod:`~genthermal.diagnose.residual`, fit pairs of effects jointly
         (:mod:`genthermal.diagnose.joint`) and prefer a pair that passes :func:`choose_pair`.
     catalogue : mapping of str to Effect, optional
-        The effects searched (default: the registered catalogue of :mod:`genthermal.effects`).
+        The effects searched (default: :meth:`Catalogue.for_diagnosis`, the registered effects with
+        their shape parameters fitted).
     progress : callable, optional
         Called with one line of text as each stage of the search finishes.
     design_experiment : bool
@@ -496,7 +516,7 @@ def diagnose(model: ThermalModel, data, baseline=None, baseline_parameters: Sequ
     from .discovery import Discovery
     from .fitter import OnsetFitter
 
-    candidates = Catalogue.registered() if catalogue is None else Catalogue.of(catalogue)
+    candidates = Catalogue.for_diagnosis() if catalogue is None else Catalogue.of(catalogue)
     for name in effects or ():
         if name not in candidates:
             raise InputError("effects", name, f"not in the catalogue: {', '.join(candidates)}")

@@ -22,7 +22,8 @@ from .catalogue import Catalogue
 from .criterion import BIC
 from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
-                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, series_for)
+                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, same_change,
+                       series_for)
 from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, check_baseline_length,
                           check_same_sensors, widened_calibration)
 from .experiment import separating_experiment
@@ -36,15 +37,31 @@ from .search import EffectSearch, FoundEffect, noise_std
 from .sensor_screen import SensorScreen, corrected_record
 
 
+def residual_verdict(series, predicted, viewed: ThermalModel, error_model=None) -> dict:
+    """The residual tests (:func:`~genthermal.diagnose.residual.residual_tests`) of ``predicted``
+    against the sensor noise of ``series``, or with an ``error_model`` against the discrepancy floor
+    (each sensor's own floor, the factors :data:`~genthermal.diagnose.error_model.UNEXPLAINED_OVER_FLOOR`
+    and :data:`~genthermal.diagnose.error_model.STRUCTURE_OVER_FLOOR`): the one rule for "is
+    something still missing", for the verdict and for whether a further effect is sought."""
+    noise = noise_std(series.outputs)
+    if error_model is None:
+        return residual_tests(series, predicted, noise, viewed.output_names, viewed.spec.interface,
+                              "the sensor noise", None, (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR))
+    return residual_tests(series, predicted, max(noise, error_model.floor_K), viewed.output_names,
+                          viewed.spec.interface, "the discrepancy floor",
+                          {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
+                          (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+
+
 class Discovery:
     """Find the effect(s) a model lacks to explain a record.
 
     Parameters
     ----------
     candidates : Catalogue, mapping of str to Effect, or sequence of Effect or str, optional
-        The effects searched. Default: the registered catalogue
-        (:meth:`Catalogue.registered`, taken when the Discovery is built); each fit searches those
-        that apply to its model.
+        The effects searched. Default: the registered catalogue with shape parameters fitted
+        (:meth:`Catalogue.for_diagnosis`, taken when the Discovery is built); each fit searches
+        those that apply to its model.
     criterion : BIC, AIC or compatible, optional
         Information criterion (:mod:`genthermal.diagnose.criterion`); default BIC.
     fitter : OnsetFitter, optional
@@ -89,7 +106,7 @@ class Discovery:
         self.phases, self.outlet, self.sensor_faults = phases, outlet, bool(sensor_faults)
         if int(max_iterations) != max_iterations or max_iterations < 1:
             raise InputError("max_iterations", max_iterations, "must be an integer >= 1")
-        self.candidates = Catalogue.registered() if candidates is None else Catalogue.of(candidates)
+        self.candidates = Catalogue.for_diagnosis() if candidates is None else Catalogue.of(candidates)
         self.criterion = BIC() if criterion is None else criterion
         for attribute in ("delta", "evidence_limit", "name"):
             if not hasattr(self.criterion, attribute):
@@ -143,15 +160,20 @@ class Discovery:
         return view if view.changes_model else None
 
     @staticmethod
-    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel) -> bool:
+    def _worth_pairs(ranked, search: EffectSearch, viewed: ThermalModel, error_model=None) -> bool:
         """Fit pairs when the best single effect leaves more than noise: above
         :data:`~genthermal.diagnose.discover.NOISE_FLOOR_FACTOR` σ, and either called unexplained by
         the residual tests or above their structure level
         (:data:`~genthermal.diagnose.residual.STRUCTURE_LEVEL_FACTOR` σ: a weaker second effect can
         leave a residual too small to show clear structure; whether a pair is kept is decided by
-        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here)."""
+        :func:`~genthermal.diagnose.discover.choose_pair`'s tests, not here). With an
+        ``error_model``, only when the best single effect leaves the residual unexplained against the
+        discrepancy floor (:func:`residual_verdict`): what the first effect leaves within the
+        calibrated model's error on other missions is no second effect's to explain."""
         if len(ranked) < 2 or ranked[0].rmse_after <= NOISE_FLOOR_FACTOR * search.noise:
             return False
+        if error_model is not None:
+            return residual_verdict(search.series, ranked[0].predicted, viewed, error_model)["unexplained"]
         return (ranked[0].rmse_after > STRUCTURE_LEVEL_FACTOR * search.noise
                 or residual_tests(search.series, ranked[0].predicted, search.noise, viewed.output_names,
                                   viewed.spec.interface)["unexplained"])
@@ -167,8 +189,9 @@ class Discovery:
                          error_model=None) -> Diagnosis | None:
         """Two explanations fit the lumped winding about equally well: refit their effects with one
         winding node per phase sensor (a loss in one phase heats that phase, one in every phase
-        does not spread them). Returns that diagnosis when it has a verdict and no look-alike
-        left, else None."""
+        does not spread them). Returns that diagnosis when it has a verdict, no look-alike left and
+        a residual its tests call explained, else None: a refit that leaves the record unexplained
+        cannot tell apart two explanations that each explain it."""
         chosen = first.added_pair or first.added
         names = list(dict.fromkeys([*_explanations(chosen), *_explanations(other)]))
         self._report(f"look-alikes {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))}: "
@@ -181,7 +204,7 @@ class Discovery:
         resolved._error_model = error_model
         diagnosis = resolved.fit(model, measured, dt_s=dt_s)
         floor = None if error_model is None else error_model.floor_K
-        if diagnosis.verdict == "none" or rival(diagnosis.iterations[0], floor) is not None:
+        if diagnosis.verdict == "none" or diagnosis.unexplained or rival(diagnosis.iterations[0], floor) is not None:
             return None
         diagnosis.iterations[0].explanation += (
             f" On the lumped winding {' + '.join(_explanations(chosen))} and {' + '.join(_explanations(other))} "
@@ -291,13 +314,23 @@ class Discovery:
             search = EffectSearch(model, series, found, memo, catalogue, criterion, view).fit_found()
             if error_model is not None:
                 search.noise = max(search.noise, error_model.floor_K)
+            if found and error_model is not None and not residual_verdict(
+                    series, search.predicted_before, viewed, error_model)["unexplained"]:
+                # the found effects explain the record to the floor: no further effect is fitted
+                self._report(f"round {len(iterations) + 1}: the residual after {', '.join(f.effect for f in found)} "
+                             "is within the discrepancy floor's tests: nothing left for another effect")
+                iterations.append(Iteration([], search.rmse_before, search.predicted_before, None,
+                                            explain(None, search)))
+                break
             ranked = self.fitter.singles(search)
             design = DesignSensorScale.of(search, phase_sensor(model).columns) if view and view.phases else None
             for candidate in ranked:
                 candidate.significant = is_significant(candidate, search.noise, evidence, design)
             self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
-            plausible = [c for c in ranked if implausible_reason(c) is None]
+            # a further effect beginning with a found one is that change's misfit, not a second finding
+            plausible = [c for c in ranked if implausible_reason(c) is None
+                         and not any(same_change(c.onset_s, f.onset_s) for f in found)]
             best = plausible[0] if plausible and plausible[0].significant else None
             runner_up = ranked[1] if len(ranked) > 1 else None
             if screen is not None and not screen.model_round_done and screen.against_model(search, ranked,
@@ -308,7 +341,7 @@ class Discovery:
                 continue
             iteration = Iteration(ranked, search.rmse_before, search.predicted_before, best,
                                   explain(best, search, runner_up))
-            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed):
+            if self.fitter.pairs and not found and self._worth_pairs(ranked, search, viewed, error_model):
                 iteration.pairs = self.fitter.joint(
                     search, ranked, lambda done, total, label: self._report(f"pair {done}/{total} fitted: {label}"))
                 chosen = choose_pair(iteration.pairs, ranked, search.noise, evidence, design)
@@ -336,14 +369,7 @@ class Discovery:
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)
-        level = noise if error_model is None else max(noise, error_model.floor_K)
-        residual = residual_tests(series, iterations[-1].predicted_after, level, viewed.output_names,
-                                  viewed.spec.interface,
-                                  "the sensor noise" if error_model is None else "the discrepancy floor",
-                                  None if error_model is None else
-                                  {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
-                                  (LEVEL_FACTOR, STRUCTURE_LEVEL_FACTOR) if error_model is None else
-                                  (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+        residual = residual_verdict(series, iterations[-1].predicted_after, viewed, error_model)
         residual["noise_K"] = noise
         if error_model is not None:
             residual["floor_K"] = error_model.floor_K

@@ -1,8 +1,8 @@
 """Test data with a hidden physical effect: a known answer for the discovery loop.
 
 :func:`make_hidden_effect_case` injects a catalogue effect into a mission run of the plant from an
-onset and reads the run through the rig's noisy sensors (:func:`genthermal.synth.synthesize`); a
-seeded draw gives random cases (:class:`HiddenEffectCase`, :class:`Injection`). The ``unbalance``
+onset (design properties from the start) and reads the run through the rig's noisy sensors
+(:func:`genthermal.synth.synthesize`); a seeded draw gives random cases (:class:`HiddenEffectCase`, :class:`Injection`). The ``unbalance``
 option adds a single-phase load that tells phase-local losses from balanced ones. Method:
 ``docs/guide/methods.md``.
 """
@@ -108,6 +108,8 @@ def random_injection(effect: str, duration_s: float, rng: np.random.Generator,
         value = typical ** u if p.neutral == 1.0 else p.neutral + u * (typical - p.neutral)
         values[p.name] = float(np.clip(value, p.lower, p.upper))
     onset = 0.0 if effect in MODEL_SIMPLIFICATIONS else float(rng.uniform(*ONSET_RANGE) * duration_s)
+    if (get_effect(effect) if catalogue is None else catalogue[effect]).from_start:
+        onset = 0.0  # a design property (drawn all the same, so the later draws stay as they were)
     return Injection(effect, values, onset)
 
 

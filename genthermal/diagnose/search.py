@@ -16,7 +16,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..effects import CATALOGUE, Effect, apply_effect
+from ..effects import CATALOGUE, FROM_START_TOLERANCE_S, Effect, apply_effect
 from ..errors import InputError
 from ..model import ThermalModel
 from .compare import MeasuredSeries, initial_coefficients
@@ -486,7 +486,9 @@ class EffectSearch:
                    for s, p in zip(coarse.problem.scalings, effect.parameters)]
         factor = int(round(self.coarse.dt_s / self.series.dt_s))
         onsets = [o // factor for o in self._found_onsets] + [0]
-        onset, z, _ = coarse.search_onset(onsets, len(onsets) - 1, z_start, self.x0_coefficients)
+        latest = self._latest_onset(effect, self.coarse)
+        onset, z, _ = coarse.search_onset(onsets, len(onsets) - 1, z_start, self.x0_coefficients,
+                                          *((0, latest) if latest is not None else ()))
         full = self._full[effect_name] = self._structure(effect_name, self.series) if factor > 1 else coarse
         onset *= factor
         theta = full.problem.theta(z)
@@ -497,6 +499,14 @@ class EffectSearch:
         candidate = self._candidate(effect_name, values, onset, rss, predicted, dict(self.found_values))
         candidate.onset_responses = self._onset_responses(coarse, effect, z, onsets)
         return candidate
+
+    @staticmethod
+    def _latest_onset(effect: Effect, series: MeasuredSeries) -> int | None:
+        """Latest onset index on ``series`` a :attr:`~genthermal.effects.Effect.from_start` effect
+        may take (:data:`~genthermal.effects.FROM_START_TOLERANCE_S`), None for the others."""
+        if not effect.from_start:
+            return None
+        return min(int(FROM_START_TOLERANCE_S // series.dt_s), series.time_s.size - 1)
 
     def _onset_responses(self, coarse: _Structure, effect: Effect, z, onsets) -> OnsetResponses:
         """What ``effect`` alone changes in the outputs from each onset of the coarse grid, at its
@@ -525,8 +535,10 @@ class EffectSearch:
         z = [s.decision(candidate.values[p.name]) for s, p in zip(full.problem.scalings, effect.parameters)]
         onset = candidate.onset_index
         if factor > 1:  # golden section on the full series, values refitted at each onset
+            latest = self._latest_onset(effect, self.series)
+            high = min(onset + factor, self.series.time_s.size - 1, *(() if latest is None else (latest,)))
             onset, z, _ = full.search_onset([*self._found_onsets, onset], len(self.found), z, self.x0_coefficients,
-                                            max(onset - factor, 0), min(onset + factor, self.series.time_s.size - 1))
+                                            min(max(onset - factor, 0), high), high)
         theta = full.problem.theta(z)
         names = self._found_names + [p.name for p in effect.parameters]
         groups = [(list(f.values), {n: n for n in f.values}) for f in self.found]
