@@ -47,7 +47,7 @@ EKF_BIAS_STD_GRID_K = (0.02, 0.1, 0.3)
 #: Weights of the sensors in the sum of squares: the scored groups' sensors count more (the other
 #: five sensors still shape the network), the slot winding most. Chosen on 2-fold pilots on these
 #: 12 profiles (docs/results/ipmsm.md).
-OUTPUT_WEIGHTS = {"T_winding": 4.0, "T_slot_bottom": 2.0, "T_outer_yoke": 2.0, "T_rotor": 4.0}
+OUTPUT_WEIGHTS = {"T_winding": 6.0, "T_slot_bottom": 2.0, "T_outer_yoke": 2.0, "T_rotor": 4.0}
 #: The rotor side of the network: the rotor's and the end space's paths and losses, which only the
 #: rotor sensor (and weakly the bearing) sees, and its cooling at standstill only in the few profiles
 #: that end hot at rest.
