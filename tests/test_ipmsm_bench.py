@@ -290,3 +290,26 @@ def test_a_prior_keeps_a_parameter_the_record_hardly_sees_near_its_estimate(mode
     start = np.array([model.parameters[n].value for n in names])
     assert np.all(np.abs(np.log(held.values / start)) <= np.abs(np.log(free.values / start)) + 1e-9)
     assert held.rss >= free.rss * (1 - 1e-6)
+
+
+def test_a_prior_by_parameter_holds_only_the_parameters_it_names(model, slice_data):
+    record = record_from_measurements(model, slice_data, 60.0)
+    names = ["G_jacket", "G_rotor_air", "G_bearing_endcap"]
+    free = fit_records(model, [record], names, max_iter=30)
+    held = fit_records(model, [record], names, max_iter=30, prior_weight={"G_rotor_air": 1e6})
+    start = {n: model.parameters[n].value for n in names}
+    moved_free = abs(math.log(free.values[1] / start["G_rotor_air"]))
+    assert moved_free > 1e-3  # the record moves it when nothing holds it
+    assert abs(math.log(held.values[1] / start["G_rotor_air"])) < 0.1 * moved_free
+    assert held.rss >= free.rss * (1 - 1e-6)
+    everything = fit_records(model, [record], names, max_iter=30, prior_weight=1e6)
+    assert abs(math.log(everything.values[0] / start["G_jacket"])) < abs(math.log(held.values[0] / start["G_jacket"]))
+
+
+@pytest.mark.parametrize("prior, field", [({"G_not_a_path": 1.0}, "prior_weight = 'G_not_a_path'"),
+                                          ({"G_jacket": -2.0}, "prior_weight[G_jacket] = -2.0"),
+                                          ({"G_jacket": "heavy"}, "prior_weight[G_jacket] = 'heavy'")])
+def test_a_prior_by_parameter_names_a_bad_entry(model, slice_data, prior, field):
+    record = record_from_measurements(model, slice_data, 60.0)
+    with pytest.raises(InputError, match=field.replace("[", r"\[").replace("]", r"\]")):
+        fit_records(model, [record], ["G_jacket", "G_rotor_air"], max_iter=5, prior_weight=prior)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -205,8 +205,30 @@ def _scaled(model: ThermalModel, name: str, factor: float):
         (upper - start) / scale if math.isfinite(upper) else 1e3
 
 
+def _prior_weights(prior_weight, names: Sequence[str]) -> np.ndarray:
+    """The prior's weight of each of ``names`` from a number (all alike) or a mapping by name."""
+    if isinstance(prior_weight, Mapping):
+        unknown = sorted(set(prior_weight) - set(names))
+        if unknown:
+            raise InputError("prior_weight", unknown[0], "names no fitted parameter")
+        given = prior_weight
+    else:
+        given = {name: prior_weight for name in names}
+    weights = []
+    for name in names:
+        weight = given.get(name, 0.0)
+        try:
+            weight = float(weight)
+        except (TypeError, ValueError):
+            raise InputError(f"prior_weight[{name}]", weight, "a weight must be a number >= 0") from None
+        if not (math.isfinite(weight) and weight >= 0):
+            raise InputError(f"prior_weight[{name}]", weight, "a weight must be a number >= 0")
+        weights.append(weight)
+    return np.array(weights)
+
+
 def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[str], factor: float = 30.0,
-                prior_weight: float = 0.0, max_iter: int = 60, output_weights=None) -> RecordsFit:
+                prior_weight=0.0, max_iter: int = 60, output_weights=None) -> RecordsFit:
     """Fit ``names`` to all ``records`` at once (least squares, IPOPT, exact derivatives).
 
     Parameters
@@ -218,9 +240,10 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
         Parameters to fit.
     factor : float
         A positive parameter stays within this factor of its start value.
-    prior_weight : float
+    prior_weight : float or mapping of str to float
         Weight (K² per unit of ln(theta/theta0)²) of a prior pulling each log-scaled parameter to
-        its start: regularises parameters the data hardly see. 0: none.
+        its start: regularises parameters the data hardly see. 0: none. A mapping gives each
+        parameter its own weight (fitted parameters it does not name have none).
     max_iter : int
         IPOPT iterations.
     output_weights : sequence of float, optional
@@ -252,9 +275,10 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
         predicted = trajectories[key].function(theta, ca.DM(record.x0), ca.DM(record.inputs))
         weight = ca.DM(mask * np.sqrt(weights)[:, None])
         residuals.append(ca.vec(weight * (predicted - ca.DM(target))))
-    log_scaled = [i for i, n in enumerate(names) if model.parameters[n].value > 0]
-    if prior_weight > 0 and log_scaled:
-        residuals.append(math.sqrt(prior_weight) * z[log_scaled])
+    prior = _prior_weights(prior_weight, names)
+    log_scaled = [i for i, n in enumerate(names) if model.parameters[n].value > 0 and prior[i] > 0]
+    if log_scaled:
+        residuals.append(ca.DM(np.sqrt(prior[log_scaled])) * z[log_scaled])
     residual = ca.vertcat(*residuals)
     jac = ca.jacobian(residual, z)
     lam_f = ca.MX.sym("lam_f")
@@ -274,7 +298,7 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
         values[i] = min(max(values[i], parameter.lower), parameter.upper)
     jac_theta = ca.Function("jac_theta", [z], [ca.jacobian(residual, z), residual])
     J_z, r = (np.asarray(m) for m in jac_theta(z_opt))
-    data_rows = slice(0, r.size - (len(log_scaled) if prior_weight > 0 and log_scaled else 0))
+    data_rows = slice(0, r.size - len(log_scaled))
     dtheta_dz = np.array([values[i] if model.parameters[n].value > 0 else
                           (scalings[i][0](1.0) - scalings[i][0](0.0)) for i, n in enumerate(names)])
     jacobian = J_z[data_rows] / dtheta_dz
