@@ -133,7 +133,8 @@ def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
         results = [None] * len(items)
         busiest_before, per_worker = WORKER_CPU.busiest_s, {}
         WORKER_CPU.maps += 1
-        with multiprocessing.get_context("fork").Pool(min(int(workers), len(items))) as pool:
+        pool = multiprocessing.get_context("fork").Pool(min(int(workers), len(items)))
+        try:
             for done, (index, result, pid, cpu_s) in enumerate(pool.imap_unordered(_run, range(len(items))),
                                                                 start=1):
                 results[index] = result
@@ -141,6 +142,14 @@ def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
                 WORKER_CPU.total_s += cpu_s
                 WORKER_CPU.busiest_s = busiest_before + max(per_worker.values())
                 report(done, len(items), items[index])
+        except BaseException:
+            pool.terminate()
+            raise
+        # Every result is in: the workers end on the pool's own sentinels. Terminating them instead
+        # (the pool's context manager) sends SIGTERM; a worker that did not act on it left the
+        # parent waiting in join for ever (a fast-tier run hung in a diagnose test).
+        pool.close()
+        pool.join()
         return results
     finally:
         _TASK = None
