@@ -8,18 +8,10 @@ returns something that is not a plant is an :class:`~genthermal.errors.InputErro
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-import traceback
 from pathlib import Path
 
 from ..errors import InputError
-
-
-def _where(error: BaseException, path: Path) -> str:
-    """``line N`` of ``path`` where ``error`` was raised, or an empty string."""
-    lines = [frame.lineno for frame in traceback.extract_tb(error.__traceback__) if Path(frame.filename) == path]
-    return f" (line {lines[-1]})" if lines else ""
+from ..user_files import run_user_file, where_raised
 
 
 def load_python_plant(path, option: str = "--plant"):
@@ -33,18 +25,7 @@ def load_python_plant(path, option: str = "--plant"):
         with ``sensor_names``, ``reset`` and ``step``).
     """
     path = Path(path).resolve()
-    if not path.is_file():
-        raise InputError(option, str(path), "no such Python file")
-    name = f"genthermal_user_plant_{abs(hash(str(path)))}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    try:
-        spec.loader.exec_module(module)
-    except Exception as error:  # noqa: BLE001 - whatever the user's file raises is named, never a traceback
-        sys.modules.pop(name, None)
-        raise InputError(option, str(path), f"importing the plant file raised {type(error).__name__}: {error}"
-                         f"{_where(error, path)}") from None
+    module = run_user_file(path, option, "plant")
     make = getattr(module, "make_plant", None)
     if not callable(make):
         raise InputError(option, str(path), "the plant file defines no make_plant() returning the plant")
@@ -52,7 +33,7 @@ def load_python_plant(path, option: str = "--plant"):
         plant = make()
     except Exception as error:  # noqa: BLE001
         raise InputError(option, str(path), f"make_plant() raised {type(error).__name__}: {error}"
-                         f"{_where(error, path)}") from None
+                         f"{where_raised(error, path)}") from None
     lacking = [a for a in ("sensor_names", "reset", "step") if not hasattr(plant, a)]
     if lacking:
         raise InputError(option, str(path), f"make_plant() returned a {type(plant).__name__} without {lacking}: "

@@ -9,12 +9,11 @@ registered below, each with the field of the manager's settings that holds its o
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-import sys
 from pathlib import Path
 from typing import Callable
 
 from ...errors import InputError
+from ...user_files import run_user_file
 from .engineer import engineer_plan
 from .heuristic import heuristic_plan
 from .milp import milp_plan
@@ -107,20 +106,13 @@ def load_planner_file(path, option: str = "--scheduler") -> str:
     path = Path(path).resolve()
     if _LOADED_FILES.get(str(path)) in _PLANNERS:
         return _LOADED_FILES[str(path)]
-    if not path.is_file():
-        raise InputError(option, str(path), "no such Python file")
     before = set(_PLANNERS)
-    name = f"genthermal_user_planner_{abs(hash(str(path)))}"
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
     try:
-        spec.loader.exec_module(module)
-    except Exception as error:  # noqa: BLE001 - whatever the user's file raises is named, never a traceback
-        sys.modules.pop(name, None)
+        run_user_file(path, option, "planner")
+    except InputError:
         for added in set(_PLANNERS) - before:
             _PLANNERS.pop(added)
-        raise InputError(option, str(path), f"running the planner file raised {type(error).__name__}: {error}") from None
+        raise
     added = [n for n in _PLANNERS if n not in before]
     if len(added) != 1:
         for extra in added:
