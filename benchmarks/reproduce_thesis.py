@@ -41,7 +41,7 @@ from genthermal.measurements import dataframe_to_measurements
 from genthermal.mission import load_mission
 from genthermal.model_file import load_model
 from genthermal.schedule.flight.closed_loop import fly
-from genthermal.schedule.flight.manager_settings import ManagerSettings, infeasible_response, planning_margin_K
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 from genthermal.simulate import simulate
@@ -196,11 +196,12 @@ def flight_outcome(scenario, scheduler: str = "heuristic", current_limit_percent
                         "rest_min": float(np.sum(dt[here & result.resting]) / 60.0),
                         "rest_before_min": float(np.sum(dt[before]) / 60.0)})
     summary = flight_summary(result)
+    flown = settings.with_scenario(system.manager_say)  # the settings the flight flew with
     best_effort = [plan for plan in result.plans if plan.get("best_effort")]
     return {"actions": actions, "peak_C": float(result.temperatures_C[:, 0].max()),
             "peak_gen1_C": float(result.temperatures_C[0, 0].max()),
-            "scheduler": scheduler, "margin_K": planning_margin_K(system, settings),
-            "planner_model": settings.planner_model, "when_infeasible": infeasible_response(system, settings),
+            "scheduler": scheduler, "margin_K": flown.margin_K,
+            "planner_model": settings.planner_model, "when_infeasible": flown.when_infeasible,
             "best_effort_from_min": best_effort[0]["time_s"] / 60.0 if best_effort else None,
             "best_effort_planned_peak_C": max((plan["planned_peak_C"] for plan in best_effort), default=None),
             "peak_gen2_C": float(result.temperatures_C[1:, 0].max()),

@@ -119,8 +119,8 @@ def test_plan_on_the_nonlinear_model_keeps_its_own_prediction_within_the_limit(n
 def test_the_heuristic_plans_per_k_condition_on_the_nonlinear_model():
     system = PowerSystem.from_mission(load_mission("chapter7_blockage_large"))
     nonlinear = ManagerSettings(planner_model="nonlinear")
-    assert len(flight_segments(system, nonlinear, "heuristic")) == len(system.mission.actions)
-    assert len(flight_segments(system, nonlinear, "optimal")) > len(system.mission.actions)  # control intervals
+    assert len(flight_segments(system.mission, nonlinear, "heuristic")) == len(system.mission.actions)
+    assert len(flight_segments(system.mission, nonlinear, "optimal")) > len(system.mission.actions)  # control intervals
 
 
 def test_closed_loop_flight_on_a_plant_off_from_the_model_holds_thetamax(tmp_path):

@@ -83,7 +83,7 @@ def test_the_rise_falls_when_load_is_displaced_off_the_blocked_generator():
     assert system.inlet_C(0, t, displaced)[0] - 20.0 == pytest.approx((full - 20.0) * 9.0 / 16.0)
     assert system.inlet_C(1, t, displaced)[0] == 20.0  # the healthy generator's inlet does not rise
     # the inlet the manager reads in the closed loop is that one
-    read = true_inputs(system, ("T_inlet",), t, displaced)["T_inlet"]
+    read = true_inputs(system.frame(), ("T_inlet",), t, displaced)["T_inlet"]
     assert read[0, 0] == pytest.approx(system.inlet_C(0, t, displaced)[0])
     assert "0.5 of it following the load" in _system(0.5).describe()
 
@@ -101,9 +101,9 @@ def test_the_closed_loops_plant_flies_the_load_following_inlet():
         segments = mission_segments(system.mission)
         schedule = Schedule(np.array([[displaced_A], [-displaced_A]]), np.zeros(1))
         timeline = build_timeline(segments, schedule, system.rest_current_A, 30.0)
-        plant = ModelPlant(system)
+        plant = ModelPlant(system.true_plants())
         plant.reset(plant_setup(system, 30.0))
-        readings = plant.step(0.0, 30.0, plant_inputs(system, timeline, 0.0))
+        readings = plant.step(0.0, 30.0, plant_inputs(system.frame(), timeline, 0.0))
         return readings.values[0, 0, -1]
 
     assert end_winding(1.0, 0.0) == end_winding(0.0, 0.0)

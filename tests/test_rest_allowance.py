@@ -28,7 +28,7 @@ def _flight_problem(system, rest_budget_s, rest_taken_s, max_rest_s=3600.0):
     segments = mission_segments(system.mission)
     generators = [system.design_generator(g, ()) for g in range(system.n_generators)]
     x0 = np.full((system.n_generators, system.nominal_model.n_states), 40.0)
-    return planning_problem(system, ManagerSettings(max_rest_s=max_rest_s), segments, x0, 0.0, generators,
+    return planning_problem(system.frame(), ManagerSettings(max_rest_s=max_rest_s), segments, x0, 0.0, generators,
                             rest_budget_s, rest_taken_s)
 
 

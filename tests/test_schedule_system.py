@@ -63,17 +63,17 @@ def test_a_scenario_margin_is_what_the_manager_plans_to_unless_the_option_overri
     import argparse
 
     from genthermal.commands.plan import add_schedule_arguments, settings_from_args
-    from genthermal.schedule.flight.manager_settings import DEFAULT_MARGIN_K, ManagerSettings, planning_margin_K
+    from genthermal.schedule.flight.manager_settings import DEFAULT_MARGIN_K, ManagerSettings
 
-    assert planning_margin_K(system_from(generators={"margin_K": 0}), ManagerSettings()) == 0.0
-    assert planning_margin_K(system_from(), ManagerSettings()) == DEFAULT_MARGIN_K
+    assert ManagerSettings().with_scenario(system_from(generators={"margin_K": 0}).manager_say).margin_K == 0.0
+    assert ManagerSettings().with_scenario(system_from().manager_say).margin_K == DEFAULT_MARGIN_K
     parser = argparse.ArgumentParser()
     add_schedule_arguments(parser)
     system, settings = settings_from_args(parser.parse_args(["chapter7_inlet_3C", "--scheduler", "heuristic"]))
-    assert planning_margin_K(system, settings) == 0.0
+    assert settings.with_scenario(system.manager_say).margin_K == 0.0
     system, settings = settings_from_args(parser.parse_args(["chapter7_inlet_3C", "--scheduler", "heuristic",
                                                              "--margin", "1.5"]))
-    assert planning_margin_K(system, settings) == 1.5
+    assert settings.with_scenario(system.manager_say).margin_K == 1.5
 
 
 def test_effect_fault_and_named_generators():
@@ -105,17 +105,17 @@ def test_a_scenario_filter_is_the_one_flown_unless_the_option_overrides_it():
 
     from genthermal.commands.fly import register
     from genthermal.commands.plan import settings_from_args
-    from genthermal.schedule.flight.manager_settings import ManagerSettings, flight_filter
+    from genthermal.schedule.flight.manager_settings import ManagerSettings
 
-    assert flight_filter(system_from(generators={"filter": "kf"}), ManagerSettings()) == "kf"
-    assert flight_filter(system_from(), ManagerSettings()) == ManagerSettings().filter == "ekf"
+    assert ManagerSettings().with_scenario(system_from(generators={"filter": "kf"}).manager_say).filter == "kf"
+    assert ManagerSettings().with_scenario(system_from().manager_say).filter == ManagerSettings().filter == "ekf"
     parser = argparse.ArgumentParser()
     register(parser.add_subparsers())
     system, settings = settings_from_args(parser.parse_args(["fly", "chapter7_inlet_3C", "--scheduler", "heuristic"]))
-    assert flight_filter(system, settings) == "kf" and not settings.tell_fault
+    assert settings.with_scenario(system.manager_say).filter == "kf" and not settings.tell_fault
     system, settings = settings_from_args(parser.parse_args(["fly", "chapter7_inlet_3C", "--scheduler", "heuristic",
                                                              "--filter", "ekf", "--tell-fault"]))
-    assert flight_filter(system, settings) == "ekf" and settings.tell_fault
+    assert settings.with_scenario(system.manager_say).filter == "ekf" and settings.tell_fault
 
 
 def test_the_nonlinear_planner_refuses_a_scenario_that_flies_the_linear_filter():

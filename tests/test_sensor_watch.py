@@ -284,10 +284,11 @@ def test_a_steady_ambient_reading_is_never_claimed_for_a_step(tmp_path):
     """The step test looks at one unit's reading against the others': with no step, nothing."""
     from genthermal.schedule.monitoring.input_watch import InputWatch, InputWatchSettings
     from genthermal.schedule.monitoring.sensor_watch import SensorWatch, SensorWatchSettings
-    from genthermal.schedule.monitoring.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.monitor import DetectionSettings, detector_node_roles
 
     system = _system(tmp_path, [])
-    watch = InputWatch(SensorWatch(system, SensorWatchSettings(), DetectionSettings()), InputWatchSettings(),
+    watch = InputWatch(SensorWatch(system.frame(), detector_node_roles(system.planning_model), SensorWatchSettings(),
+                                   DetectionSettings()), InputWatchSettings(),
                        ("T_inlet", "T_ambient"), 2)
     assert watch.shared_air_input == "T_ambient"
 
@@ -412,10 +413,12 @@ def test_a_sensor_claimed_noisier_is_kept_not_masked(tmp_path):
     filter, the record and the fault test, and the claim does not explain the alarm away (masked,
     the blocked unit of the robustness grid's case 45 flew to 139 °C unobserved)."""
     from genthermal.diagnose.sensor_faults import SensorFault, SensorHypothesis
-    from genthermal.schedule.monitoring.monitor import DetectionSettings
+    from genthermal.schedule.monitoring.monitor import DetectionSettings, detector_node_roles
     from genthermal.schedule.monitoring.sensor_watch import NOISE_KEPT, SensorWatch, SensorWatchSettings
 
-    watch = SensorWatch(_system(tmp_path, []), SensorWatchSettings(), DetectionSettings())
+    system = _system(tmp_path, [])
+    watch = SensorWatch(system.frame(), detector_node_roles(system.planning_model), SensorWatchSettings(),
+                        DetectionSettings())
 
     class Monitor:
         def mask(self, *args):

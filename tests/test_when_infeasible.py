@@ -15,7 +15,7 @@ from genthermal.commands.plan import add_schedule_arguments, settings_from_args
 from genthermal.errors import InputError
 from genthermal.mission import load_mission
 from genthermal.schedule.flight.closed_loop import fly
-from genthermal.schedule.flight.manager_settings import ManagerSettings, infeasible_response
+from genthermal.schedule.flight.manager_settings import ManagerSettings
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 
@@ -59,15 +59,18 @@ def test_best_effort_displaces_and_rests_instead_of_shedding(tmp_path):
 def test_shed_is_the_default_and_the_scenario_or_the_option_choose(tmp_path):
     assert ManagerSettings().when_infeasible == "shed"
     shed_system = _system(tmp_path, HOT_AT_REST)
-    assert shed_system.when_infeasible is None and infeasible_response(shed_system, ManagerSettings()) == "shed"
+    assert shed_system.when_infeasible is None
+    assert ManagerSettings().with_scenario(shed_system.manager_say).when_infeasible == "shed"
     system = _system(tmp_path, BEST_EFFORT)
-    assert infeasible_response(system, ManagerSettings(when_infeasible="shed")) == "best_effort"  # scenario first
+    scenario_first = ManagerSettings(when_infeasible="shed").with_scenario(system.manager_say)
+    assert scenario_first.when_infeasible == "best_effort"
     parser = argparse.ArgumentParser()
     add_schedule_arguments(parser)
     system, settings = settings_from_args(parser.parse_args(["chapter7_blockage_large"]))
-    assert infeasible_response(system, settings) == "best_effort"  # the chapter-7 scenarios fly the thesis's way
+    # the chapter-7 scenarios fly the thesis's way
+    assert settings.with_scenario(system.manager_say).when_infeasible == "best_effort"
     system, settings = settings_from_args(parser.parse_args(["chapter7_blockage_large", "--when-infeasible", "shed"]))
-    assert system.when_infeasible is None and infeasible_response(system, settings) == "shed"
+    assert system.when_infeasible is None and settings.with_scenario(system.manager_say).when_infeasible == "shed"
 
 
 def test_bad_when_infeasible_names_the_field(tmp_path, capsys):

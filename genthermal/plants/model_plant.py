@@ -15,31 +15,31 @@ class ModelPlant:
 
     Parameters
     ----------
-    system : PowerSystem
-        Its :meth:`~genthermal.schedule.power_system.PowerSystem.plant_model` (``--plant`` model, or
-        the planning model with ``plant_mismatch``) and :meth:`plant_switches` (the faults' effects
-        from their onsets).
+    plants : TruePlants
+        A power system's true plants (:meth:`PowerSystem.true_plants
+        <genthermal.schedule.power_system.PowerSystem.true_plants>`: the ``--plant`` model, or the
+        planning model with ``plant_mismatch``, and the faults' effects from their onsets).
     """
 
-    def __init__(self, system):
-        self.system = system
-        self.sensor_names = tuple(system.plant_model(0).output_names)
+    def __init__(self, plants):
+        self.plants = plants
+        self.sensor_names = tuple(plants.model(0).output_names)
         self._states = None
 
     def reset(self, setup: PlantSetup) -> None:
         """Every node of every generator at ``setup.initial_C``."""
-        model = self.system.plant_model(0)
+        model = self.plants.model(0)
         self._states = np.full((len(setup.generator_names), model.n_states), float(setup.initial_C))
 
     def step(self, t_s: float, dt_s: float, inputs: dict) -> Readings:
         """Simulate every generator over the inputs (the faults that start within switch in)."""
-        system = self.system
+        plants = self.plants
         n = next(iter(inputs.values())).shape[1]
         time_s = t_s + dt_s * np.arange(n + 1)
-        values = np.empty((system.n_generators, len(self.sensor_names), n))
-        for g in range(system.n_generators):
-            model = system.plant_model(g, system.faults_known_at(t_s))
-            _, switches = system.plant_switches(g)
+        values = np.empty((plants.n_generators, len(self.sensor_names), n))
+        for g in range(plants.n_generators):
+            model = plants.model(g, plants.faults_known_at(t_s))
+            _, switches = plants.switches(g)
             later = [(onset, m) for onset, m in switches if t_s < onset < t_s + n * dt_s]
             # the frame's last row repeats the final input, so the frame also yields the state at the end
             frame = pd.DataFrame({"time_s": time_s, **{name: np.append(inputs[name][g], inputs[name][g, -1])

@@ -25,6 +25,7 @@ from ..model_file import PARAMETER_SETS, load_model
 from ..exciter import DEFAULT_POWER_FACTOR, exciter_line
 from ..mission import Mission
 from .planning.shed import INFEASIBLE_RESPONSES
+from .system_frame import SystemFrame, TruePlants
 
 #: Minimum power mode: the continuous level of condition 1 (loading and preparation), % of rated.
 DEFAULT_REST_PERCENT = LOAD_CONDITIONS[0].continuous_percent
@@ -53,6 +54,8 @@ def _infeasible_response(value, field: str = "generators.when_infeasible") -> st
     return value
 
 
+#: The keys of a scenario's ``generators:`` that set one of the manager's settings of the same name.
+MANAGER_KEYS = ("margin_K", "filter", "when_infeasible")
 _GENERATOR_KEYS = ("count", "names", "rest_percent", "limit_C", "current_limit_percent", "margin_K",
                    "filter", "plant_mismatch", "machine", "when_infeasible")
 _INLET_KEYS = ("inlet_rise_C", "inlet_rise_tau_min", "inlet_load_share")
@@ -472,6 +475,27 @@ class PowerSystem:
                    plant_mismatch=factors, machine=machine,
                    margin_K=_number(config, "margin_K", "generators", 0.0, 50.0, "K") if "margin_K" in config else None,
                    filter=_filter_name(config), when_infeasible=_infeasible_response(config.get("when_infeasible")))
+
+    # --- what the flight's parts receive ---------------------------------------------------
+    @property
+    def manager_say(self) -> dict:
+        """The scenario's say over the manager's settings: the keys of :data:`MANAGER_KEYS` it gives
+        → their values (:meth:`ManagerSettings.with_scenario
+        <genthermal.schedule.flight.manager_settings.ManagerSettings.with_scenario>`)."""
+        say = {key: getattr(self, key) for key in MANAGER_KEYS if getattr(self, key) is not None}
+        return {**say, "margin_K": float(say["margin_K"])} if "margin_K" in say else say
+
+    def frame(self) -> SystemFrame:
+        """This system without its models and faults (:class:`~genthermal.schedule.system_frame.SystemFrame`)."""
+        model = self.planning_model
+        return SystemFrame(tuple(self.generator_names), self.limit_C, self.rated_current_A, self.rest_current_A,
+                           self.current_limit_A, self.mission.T_ambient_C, self.mission.power_factor,
+                           tuple(model.input_names), tuple(model.output_names), model.spec.interface.generator,
+                           self.inlet_C)
+
+    def true_plants(self) -> TruePlants:
+        """Its true plants (:class:`~genthermal.schedule.system_frame.TruePlants`)."""
+        return TruePlants(self.n_generators, self.plant_model, self.faults_known_at, self.plant_switches)
 
     # --- quantities -------------------------------------------------------------------------
     @property

@@ -18,12 +18,13 @@ from ...plants.protocol import PlantFault, PlantSetup, check_sensors, checked_re
 from .flight_result import FlightRecorder, FlightResult, FlightTimeout
 from ..planning.flown import FlownPlanning
 from ..monitoring.input_watch import InputWatch
-from .manager_settings import ManagerSettings, flight_filter, infeasible_response, planning_margin_K
+from .manager_settings import ManagerSettings
 from ..monitoring.monitor import FaultMonitor
 from ..state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
 from ..planning.plan import Schedule, build_timeline, generator_inputs, predict, remaining_after
 from ..power_system import PowerSystem
+from ..system_frame import SystemFrame
 from ..monitoring.record_grid import check_fit_step
 from .replanning import first_rest_max_s, flight_segments, plan_with, planning_problem
 from .sensor_injection import SensorFaultInjector, parse_sensor_faults
@@ -61,18 +62,16 @@ class TrustedHeatFlows:
         return planning_generator(estimator.generator, estimator.filter, state)
 
 
-def plant_inputs(system: PowerSystem, timeline, t0: float) -> dict:
+def plant_inputs(frame: SystemFrame, timeline, t0: float) -> dict:
     """The machine's inputs over ``timeline`` from ``t0`` (s), as a plant is given them: input name →
     (n_gen, n) (phase currents A RMS, the exciter current following the load, the coolant inlet with
-    the faults' rises and the ambient, °C)."""
-    role = system.planning_model.spec.interface.generator
+    the faults' rises and the ambient, °C); ``frame``: :meth:`PowerSystem.frame`."""
     # the currents a load-following inlet rise reads, the final one repeated for the frame's last row
     currents = np.hstack([timeline.currents_A, timeline.currents_A[:, -1:]])
-    frames = [generator_inputs(timeline, g, t0, lambda t, g=g: system.inlet_C(g, t, currents),
-                               system.mission.T_ambient_C, system.mission.power_factor, system.rated_current_A, role)
-              for g in range(system.n_generators)]
-    return {name: np.array([frame[name].to_numpy()[:-1] for frame in frames])
-            for name in system.planning_model.input_names}
+    frames = [generator_inputs(timeline, g, t0, lambda t, g=g: frame.inlet_C(g, t, currents),
+                               frame.T_ambient_C, frame.power_factor, frame.rated_current_A, frame.role)
+              for g in range(frame.n_generators)]
+    return {name: np.array([inputs[name].to_numpy()[:-1] for inputs in frames]) for name in frame.input_names}
 
 
 def plant_setup(system: PowerSystem, dt_s: float) -> PlantSetup:
@@ -83,25 +82,25 @@ def plant_setup(system: PowerSystem, dt_s: float) -> PlantSetup:
                       tuple(system.planning_model.output_names), dt_s, system.mission.T_ambient_C, faults)
 
 
-def true_inputs(system: PowerSystem, input_names, times, currents_A=None) -> dict:
+def true_inputs(frame: SystemFrame, input_names, times, currents_A=None) -> dict:
     """The true values of the measured inputs ``input_names`` (coolant inlet, ambient) of every
-    generator at ``times`` (s): input name → (n_gen, n) °C. ``currents_A`` (n_gen, n): the phase
-    currents flown at ``times``, A, which an inlet rise that follows the load reads
-    (:meth:`PowerSystem.inlet_C`; None: the undisplaced load)."""
-    generator = system.planning_model.spec.interface.generator
+    generator at ``times`` (s): input name → (n_gen, n) °C. ``frame``: :meth:`PowerSystem.frame`;
+    ``currents_A`` (n_gen, n): the phase currents flown at ``times``, A, which an inlet rise that
+    follows the load reads (:meth:`PowerSystem.inlet_C`; None: the undisplaced load)."""
+    generator = frame.role
     times = np.asarray(times, dtype=float)
-    values = {generator.coolant_input: np.array([system.inlet_C(g, times, currents_A)
-                                                 for g in range(system.n_generators)]),
-              generator.ambient_input: np.full((system.n_generators, times.size), system.mission.T_ambient_C)}
+    values = {generator.coolant_input: np.array([frame.inlet_C(g, times, currents_A)
+                                                 for g in range(frame.n_generators)]),
+              generator.ambient_input: np.full((frame.n_generators, times.size), frame.T_ambient_C)}
     return {name: values[name] for name in input_names if name in values}
 
 
-def _filter_inputs(system: PowerSystem, inputs_C: dict, times, currents_A=None) -> tuple:
+def _filter_inputs(frame: SystemFrame, inputs_C: dict, times, currents_A=None) -> tuple:
     """Per generator, the inlet (n,) and ambient (n,) temperatures its filter is driven with, °C: the
     readings in ``inputs_C`` (:func:`true_inputs` keys), the true values for an input not read
     (with the phase currents ``currents_A`` flown at ``times``)."""
-    generator = system.planning_model.spec.interface.generator
-    true = true_inputs(system, (generator.coolant_input, generator.ambient_input), times, currents_A)
+    generator = frame.role
+    true = true_inputs(frame, (generator.coolant_input, generator.ambient_input), times, currents_A)
     inlet = inputs_C.get(generator.coolant_input, true[generator.coolant_input])
     ambient = inputs_C.get(generator.ambient_input, true[generator.ambient_input])
     return inlet, ambient
@@ -140,49 +139,47 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         When the plant's sensors are not the machine's, or it raises at its reset.
     """
     started = time.process_time()
-    dt = settings.dt_s
-    cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
-    rng = np.random.default_rng(settings.seed)
+    roles = settings.roles(scheduler, system.mission.duration_s, system.manager_say)
+    loop, planner, filter_name = roles.loop, roles.planner, roles.estimator.filter
+    frame = system.frame()
+    n_gen, dt = frame.n_generators, loop.dt_s
+    cycle_steps = max(int(round(loop.cycle_s / dt)), 1)
+    rng = np.random.default_rng(loop.seed)
     noise_sd = np.sqrt(np.asarray(system.planning_model.spec.interface.noise_variances_K2))
-    segments = flight_segments(system, settings, scheduler)
-    schedule = Schedule.nominal(system.n_generators, len(segments))
-    cold = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
+    segments = flight_segments(system.mission, planner, scheduler)
+    schedule = Schedule.nominal(n_gen, len(segments))
+    cold = np.full((n_gen, system.nominal_model.n_states), frame.T_ambient_C)
     filter_cache: dict = {}
-    settings.check_scheduler(scheduler)
-    if settings.nonlinear and flight_filter(system, settings) != "ekf":
-        raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
-                         "filter's model and covariance: fly this scenario with --filter ekf")
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
-                                 filter_cache, flight_filter(system, settings)) for g in range(system.n_generators)]
+                                 filter_cache, filter_name) for g in range(n_gen)]
     # the fault detector reads an extended Kalman filter's disturbance states: with the linear
     # filter in the loop it gets parallel extended Kalman filters of its own
     detector_cache: dict = {}
-    detectors = estimators if flight_filter(system, settings) == "ekf" or settings.tell_fault else [
+    detectors = estimators if filter_name == "ekf" or loop.tell_fault else [
         StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
-                       detector_cache, "ekf") for g in range(system.n_generators)]
-    monitor = FaultMonitor(system, settings.detection, dt)
+                       detector_cache, "ekf") for g in range(n_gen)]
+    monitor = FaultMonitor(system, roles.monitor.detection, dt)
     from ...diagnose.input_sensors import input_sensors
 
     input_names = input_sensors(system.planning_model.spec.interface)
-    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), system.generator_names,
-                                        system.planning_model.output_names, input_names)
-    injector = SensorFaultInjector(sensor_faults, noise_sd, settings.seed)
-    check_fit_step("sensor_watch.identify_dt_s", settings.sensor_watch.identify_dt_s, dt)
-    watch = SensorWatch(system, settings.sensor_watch, settings.detection, sensor_faults)
-    inputs_watch = InputWatch(watch, settings.input_watch, input_names, system.n_generators,
-                              planning_margin_K(system, settings))
+    sensor_faults = parse_sensor_faults(system.mission.extras.get("sensor_faults"), frame.generator_names,
+                                        frame.output_names, input_names)
+    injector = SensorFaultInjector(sensor_faults, noise_sd, loop.seed)
+    check_fit_step("sensor_watch.identify_dt_s", roles.monitor.sensor_watch.identify_dt_s, dt)
+    watch = SensorWatch(frame, monitor.node_roles, roles.monitor.sensor_watch, roles.monitor.detection,
+                        sensor_faults)
+    inputs_watch = InputWatch(watch, roles.monitor.input_watch, input_names, n_gen, roles.monitor.margin_K)
 
     def read_inputs(times, currents_A):
         """The inputs as the manager reads them at ``times`` (s), the generators carrying ``currents_A``
         (n_gen, n) A: injected faults, claimed ones substituted."""
-        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(system, input_names, times,
+        return inputs_watch.substitute(times, injector.apply_inputs(times, true_inputs(frame, input_names, times,
                                                                                        currents_A)))
-    trusted = TrustedHeatFlows(system.n_generators)
-    recorder = FlightRecorder(system)
-    budget = settings.rest_budget_for(system.mission.duration_s)
-    own_shed = settings.sheds_on_flown_model(scheduler, flight_filter(system, settings))  # optimal_shed
-    plant = ModelPlant(system) if plant is None else plant
-    sensors = tuple(system.planning_model.output_names)
+    trusted = TrustedHeatFlows(n_gen)
+    recorder = FlightRecorder(frame)
+    budget = loop.rest_budget_s
+    plant = ModelPlant(system.true_plants()) if plant is None else plant
+    sensors = frame.output_names
     check_sensors(plant, "--plant", type(plant).__name__, sensors)
     try:
         plant.reset(plant_setup(system, dt))
@@ -195,8 +192,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     measured, inputs_read, t, rested_s, resting_s, cycles = None, None, 0.0, 0.0, 0.0, 0
     carried_A = None  # (n_gen, 1) the currents of the last step flown: the inlet read when planning
     while segments:
-        if settings.cpu_limit_s is not None and time.process_time() - started > settings.cpu_limit_s:
-            raise FlightTimeout(t, cycles, time.process_time() - started, settings.cpu_limit_s)
+        if loop.cpu_limit_s is not None and time.process_time() - started > loop.cpu_limit_s:
+            raise FlightTimeout(t, cycles, time.process_time() - started, loop.cpu_limit_s)
         cycles += 1
         if measured is not None:
             before = [(e.z.copy(), None if e.P is None else e.P.copy()) for e in estimators]
@@ -204,16 +201,16 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 estimator.update(measured[g])
                 if detectors is not estimators:
                     detectors[g].update(measured[g])
-            if not settings.tell_fault:
+            if not loop.tell_fault:
                 # sensor faults first: never seen as heat
                 watch.cycle(t, estimators, measured, before, monitor, detectors)
                 inputs_watch.cycle(t, inputs_read, estimators, monitor)
                 believed, model = list(monitor.beliefs), monitor.model
                 monitor.cycle(t, estimators, detectors)
                 watch.review(t, believed, estimators, monitor, model)  # a new belief may be a sensor's doing
-        beliefs = told_beliefs(system, t) if settings.tell_fault else monitor.beliefs
+        beliefs = told_beliefs(system, t) if loop.tell_fault else monitor.beliefs
         for g, estimator in enumerate(estimators):
-            if settings.tell_fault:
+            if loop.tell_fault:
                 estimator.use(system.design_generator_for(beliefs[g]),
                               lambda g=g: believed_model(system.planning_model, beliefs[g]))
             else:
@@ -221,27 +218,26 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                 if detectors is not estimators:
                     detectors[g].use(monitor.design_generator(g), lambda g=g: monitor.flown_model(g))
         flown = FlownPlanning([e.filter for e in estimators], [e.z for e in estimators], [e.P for e in estimators],
-                              settings.confidence_sigmas) if settings.nonlinear or own_shed else None
-        trusts = [watch.trusts_heat_flows(g, t) for g in range(system.n_generators)]
+                              planner.confidence_sigmas) if planner.nonlinear or planner.own_shed else None
+        trusts = [watch.trusts_heat_flows(g, t) for g in range(n_gen)]
         # a sensor the watch does not trust may be what the innovation shows: no rise from it
-        rise = np.array([unexplained_rise(e.innovation, e.innovation_std) if trusts[g] else np.zeros(2)
+        rise = np.array([unexplained_rise(e.innovation, e.innovation_std) if trusts[g] else np.zeros(len(sensors))
                          for g, e in enumerate(estimators)])
-        problem = planning_problem(system, settings, segments, [e.x for e in estimators], t,
-                           [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
-                           np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s,
-                           flown if settings.nonlinear else None,
-                           inputs_watch.for_plan(read_inputs(np.array([t]), carried_A)), rise)
+        problem = planning_problem(frame, planner, segments, [e.x for e in estimators], t,
+                                   [trusted.planning_generator(g, e, trusts[g]) for g, e in enumerate(estimators)],
+                                   np.floor((budget - rested_s) / dt + 1e-9) * dt, resting_s,
+                                   flown if planner.nonlinear else None,
+                                   inputs_watch.for_plan(read_inputs(np.array([t]), carried_A)), rise)
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
-        if settings.replan and (shedding or predict(problem, schedule).peak()[0]
-                                > problem.limit_C + settings.replan_tolerance_K):
-            result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                               previous=schedule, switched_off=schedule.switched_off,
-                               when_infeasible=infeasible_response(system, settings), shedding=shedding,
-                               flown_shed=flown if own_shed else None)
+        if loop.replan and (shedding or predict(problem, schedule).peak()[0]
+                            > problem.limit_C + loop.replan_tolerance_K):
+            result = plan_with(scheduler, problem, planner, frame.generator_names, frame.limit_C,
+                               previous=schedule, switched_off=schedule.switched_off, shedding=shedding,
+                               flown_shed=flown if planner.own_shed else None)
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
-        timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
+        timeline = build_timeline(segments, schedule, frame.rest_current_A, dt)
         n = min(cycle_steps, timeline.n_steps, replay_steps_left(plant, t, dt))
         if n <= 0:  # a replayed log ends the flight at its last row
             break
@@ -250,22 +246,22 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         sample_times = t + dt * np.arange(1, n + 1)
         try:
             try:
-                readings = plant.step(t, dt, plant_inputs(system, applied, t))
+                readings = plant.step(t, dt, plant_inputs(frame, applied, t))
             except PlantFault:
                 raise
             except Exception as error:  # noqa: BLE001 - a plant's failure is recorded, the flight so far kept
                 raise PlantFault("raised", f"the plant raised: {type(error).__name__}: {error}") from None
-            outputs = checked_readings(readings, sensors, system.n_generators, sample_times)
+            outputs = checked_readings(readings, sensors, n_gen, sample_times)
             flown_A = checked_currents(readings, applied.currents_A)
         except PlantFault as fault:
             plant_fault = {"time_s": float(t), "cycle": cycles, "kind": fault.kind, "message": str(fault),
                            "plant": type(plant).__name__, "held": "minimum power mode",
-                           "rest_current_A": float(system.rest_current_A)}
+                           "rest_current_A": float(frame.rest_current_A)}
             recorder.warnings.append(f"plant fault at {t:g} s: {fault}; the flight stops there, the manager "
-                                     f"holding the minimum power mode ({system.rest_current_A:.2f} A)")
+                                     f"holding the minimum power mode ({frame.rest_current_A:.2f} A)")
             break
         inputs_read = read_inputs(step_times, flown_A)
-        inlets, ambients = _filter_inputs(system, inputs_watch.for_filter(step_times, inputs_read), step_times,
+        inlets, ambients = _filter_inputs(frame, inputs_watch.for_filter(step_times, inputs_read), step_times,
                                           flown_A)
         for g, estimator in enumerate(estimators):
             estimator.predict(flown_A[g], inlets[g], ambients[g])
@@ -282,8 +278,8 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         resting_s = resting_s + n * dt if running.size == 0 else float(n - 1 - running[-1]) * dt
         segments, schedule = remaining_after(segments, schedule, timeline, n)
         t += n * dt
-    result = recorder.result(scheduler, True, monitor=monitor, settings=settings, cycles=cycles,
-                             rest_budget_s=budget)
+    result = FlightResult(system, scheduler, True, **recorder.record(), monitor=monitor, settings=settings,
+                          cycles=cycles, rest_budget_s=budget)
     result.sensor_watch = watch
     result.plant_fault = plant_fault
     if getattr(plant, "replays_log", False):

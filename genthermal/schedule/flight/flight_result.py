@@ -8,6 +8,7 @@ import numpy as np
 
 from ..planning.plan import PlanResult
 from ..power_system import PowerSystem
+from ..system_frame import SystemFrame
 
 
 class FlightTimeout(RuntimeError):
@@ -153,14 +154,20 @@ class FlightResult:
 
 
 class FlightRecorder:
-    """Collects the steps flown, from a cold machine (every node at the ambient temperature)."""
+    """Collects the steps flown, from a cold machine (every node at the ambient temperature).
 
-    def __init__(self, system: PowerSystem):
-        self.system, self.time = system, [0.0]
-        self.temperatures = [np.full((system.n_generators, 2), system.mission.T_ambient_C)]
+    Parameters
+    ----------
+    frame : SystemFrame
+        The power system's names, rest current and ambient (:meth:`PowerSystem.frame`).
+    """
+
+    def __init__(self, frame: SystemFrame):
+        self.frame, self.time = frame, [0.0]
+        self.temperatures = [np.full((frame.n_generators, len(frame.output_names)), frame.T_ambient_C)]
         self.currents, self.nominal, self.resting, self.action, self.commanded = [], [], [], [], []
         self.plans, self.warnings, self.shed_events = [], [], []
-        self.switched_off = np.zeros(system.n_generators, dtype=bool)
+        self.switched_off = np.zeros(frame.n_generators, dtype=bool)
 
     def plan(self, t_s: float, result: PlanResult, believed=None) -> None:
         """Record a (re-)plan made at ``t_s`` with the ``believed`` effects per generator."""
@@ -168,21 +175,21 @@ class FlightRecorder:
                   "feasible": result.feasible, "peak_C": result.peak_C, **result.details}
         if believed is not None:
             record["believed"] = {name: [{"effect": e, "parameters": dict(v)} for e, v in effects]
-                                  for name, effects in zip(self.system.generator_names, believed)}
+                                  for name, effects in zip(self.frame.generator_names, believed)}
         self.plans.append(record)
         self.warnings += result.warnings
         newly = result.schedule.switched_off & ~self.switched_off
         starts = result.method == "shed" and (not self.plans[:-1] or self.plans[-2]["method"] != "shed")
         if starts or newly.any():
             self.shed_events.append({"time_s": float(t_s), "shedding": list(result.details.get("shedding", [])),
-                                     "switched_off": [self.system.generator_names[g] for g in np.flatnonzero(newly)],
+                                     "switched_off": [self.frame.generator_names[g] for g in np.flatnonzero(newly)],
                                      "lowest_reachable_peak_C": result.details.get("lowest_peak_C"),
                                      "lowest_peak_action": result.details.get("lowest_peak_action"),
                                      "response": result.details.get("response", "")})
         self.switched_off |= result.schedule.switched_off
 
     def add(self, segments, timeline, n: int, outputs, t0: float, carried_A=None) -> None:
-        """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, 2, n) after each;
+        """Record ``n`` steps of ``timeline`` and the ``outputs`` (n_gen, n_sensors, n) after each;
         ``carried_A`` (n_gen, n): the currents the plant carried when not the commanded ones, A."""
         dt = timeline.dt_s
         self.time += list(t0 + dt * np.arange(1, n + 1))
@@ -191,21 +198,19 @@ class FlightRecorder:
         self.currents.append(timeline.currents_A[:, :n] if carried_A is None else np.asarray(carried_A))
         self.resting.append(timeline.resting[:n])
         self.action.append(np.array([segments[k].action_index for k in timeline.segment[:n]]))
-        nominal = [self.system.rest_current_A if timeline.resting[i] else
+        nominal = [self.frame.rest_current_A if timeline.resting[i] else
                    float(segments[timeline.segment[i]].current_at(timeline.offset_s[i])) for i in range(n)]
         self.nominal.append(np.array(nominal))
 
-    def result(self, scheduler, closed_loop, table=None, monitor=None, settings=None, cycles=0,
-               rest_budget_s=np.inf) -> FlightResult:
-        """The :class:`FlightResult`."""
-        n_gen = self.system.n_generators
+    def record(self) -> dict:
+        """What was flown, as the :class:`FlightResult` fields of the same names: ``time_s``,
+        ``temperatures_C``, ``currents_A``, ``nominal_A``, ``resting``, ``action_index``, ``plans``,
+        ``warnings``, ``shed_events`` (the caller adds the system, the scheduler and the settings)."""
         nothing = not self.currents  # a plant that failed in the first cycle
-        return FlightResult(self.system, scheduler, closed_loop, np.array(self.time),
-                            np.moveaxis(np.array(self.temperatures), 0, 2),
-                            np.zeros((n_gen, 0)) if nothing else np.hstack(self.currents),
-                            np.zeros(0) if nothing else np.concatenate(self.nominal),
-                            np.zeros(0, dtype=bool) if nothing else np.concatenate(self.resting),
-                            np.zeros(0, dtype=int) if nothing else np.concatenate(self.action),
-                            self.plans, self.warnings, table,
-                            monitor, settings, cycles, rest_budget_s, self.shed_events)
+        return dict(time_s=np.array(self.time), temperatures_C=np.moveaxis(np.array(self.temperatures), 0, 2),
+                    currents_A=np.zeros((self.frame.n_generators, 0)) if nothing else np.hstack(self.currents),
+                    nominal_A=np.zeros(0) if nothing else np.concatenate(self.nominal),
+                    resting=np.zeros(0, dtype=bool) if nothing else np.concatenate(self.resting),
+                    action_index=np.zeros(0, dtype=int) if nothing else np.concatenate(self.action),
+                    plans=self.plans, warnings=self.warnings, shed_events=self.shed_events)
 

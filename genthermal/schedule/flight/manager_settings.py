@@ -1,8 +1,10 @@
-"""Settings of the load management system (thesis 7.2) and the scenario's say over them."""
+"""Settings of the load management system (thesis 7.2), the scenario's say over them and their split
+into the settings of each role (:mod:`~genthermal.schedule.flight.role_settings`)."""
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -16,9 +18,9 @@ from ..monitoring.monitor import DetectionSettings
 from ..planning.optimal import OptimalSettings
 from ..planning.plan import DEFAULT_MARGIN_K
 from ..planning.registry import BUILT_IN_PLANNERS, planner
-from ..power_system import PowerSystem
 from ..monitoring.sensor_watch import SensorWatchSettings
 from ..planning.shed import INFEASIBLE_RESPONSES
+from .role_settings import EstimatorSettings, LoopSettings, ManagerRoles, MonitorSettings, PlannerSettings
 
 #: The schedulers genthermal ships (others may be registered: :mod:`genthermal.schedule.planning.registry`).
 SCHEDULERS = BUILT_IN_PLANNERS
@@ -55,7 +57,7 @@ class ManagerSettings:
     margin_K : float
         Back-off margin: the schedulers plan to :math:`\\theta_{max}` − margin, K. A scenario that
         gives ``generators.margin_K`` (``PowerSystem.margin_K``) flies with that instead
-        (:func:`planning_margin_K`).
+        (:meth:`with_scenario`).
     rise_backoff : float
         :math:`\\kappa` of the robust constraint on temperature rises within one cycle (see
         :class:`~genthermal.schedule.planning.plan.PlanningProblem`).
@@ -115,7 +117,7 @@ class ManagerSettings:
         peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
         own plan with all load served, breaching θmax as predicted (the thesis heuristic). A
         scenario that gives ``generators.when_infeasible`` flies with that instead
-        (:func:`infeasible_response`).
+        (:meth:`with_scenario`).
     """
 
     cycle_s: float = 300.0
@@ -177,7 +179,7 @@ class ManagerSettings:
     def sheds_on_flown_model(self, scheduler: str, filter_flown: str) -> bool:
         """True when ``scheduler`` plans its own shed plan on the flown model (``own_shed``): the
         optimal scheduler on the design model with the extended Kalman filter. ``filter_flown`` is the
-        filter the flight runs (:func:`flight_filter`: a scenario's ``generators.filter`` overrides
+        filter the flight runs (:meth:`with_scenario`: a scenario's ``generators.filter`` overrides
         ``filter``; with the thesis's linear filter there is no flown model to plan on)."""
         return self.own_shed and scheduler == "optimal" and not self.nonlinear and filter_flown == "ekf"
 
@@ -187,24 +189,45 @@ class ManagerSettings:
             return float(self.rest_budget_s)
         return DEFAULT_REST_BUDGET_FRACTION * float(mission_duration_s)
 
+    def with_scenario(self, say: Mapping) -> "ManagerSettings":
+        """These settings with the scenario's say over them (``say``: a scenario's ``generators:``
+        key → value, :attr:`PowerSystem.manager_say <genthermal.schedule.power_system.PowerSystem.manager_say>`):
+        the scenario's ``margin_K``, ``filter`` and ``when_infeasible`` replace the manager's own.
+
+        Raises
+        ------
+        InputError
+            Naming ``generators.<key>`` for a key that is not a field of these settings, and
+            ``generators.filter`` when the nonlinear planner would fly the thesis's linear filter.
+        """
+        fields = {field.name for field in dataclasses.fields(self)}
+        for key, value in say.items():
+            if key not in fields:
+                raise InputError(f"generators.{key}", value, f"is not a setting of the manager: one of "
+                                 f"{', '.join(sorted(fields))}")
+        if self.nonlinear and say.get("filter", self.filter) != "ekf":
+            raise InputError("generators.filter", say["filter"], "the nonlinear planner plans on the extended Kalman "
+                             "filter's model and covariance: fly this scenario with --filter ekf")
+        return dataclasses.replace(self, **say) if say else self
+
+    def roles(self, scheduler: str, mission_duration_s: float, say: Mapping | None = None) -> ManagerRoles:
+        """The settings of each role of a flight of ``scheduler`` over a mission of
+        ``mission_duration_s`` (s), with the scenario's ``say`` (:meth:`with_scenario`).
+
+        Raises
+        ------
+        InputError
+            As :meth:`check_scheduler` and :meth:`with_scenario`.
+        """
+        self.check_scheduler(scheduler)
+        own = self.with_scenario(say or {})
+        return ManagerRoles(
+            LoopSettings(own.cycle_s, own.dt_s, own.seed, own.rest_budget_for(mission_duration_s), own.cpu_limit_s,
+                         own.replan, own.replan_tolerance_K, own.tell_fault),
+            EstimatorSettings(own.filter, own.dt_s),
+            MonitorSettings(own.detection, own.sensor_watch, own.input_watch, own.margin_K),
+            PlannerSettings(own.cycle_s, own.dt_s, own.margin_K, own.rise_backoff, own.max_rest_s, own.planner_model,
+                            own.confidence_sigmas, own.sheds_on_flown_model(scheduler, own.filter),
+                            own.when_infeasible, own.heuristic, own.engineer, own.optimal, own.milp))
 
 
-def flight_filter(system: PowerSystem, settings: ManagerSettings) -> str:
-    """The filter a flight runs: the scenario's (``generators.filter``, e.g. the thesis's linear
-    filter in the thesis-reproduction scenarios) when it names one, else ``settings.filter``."""
-    return settings.filter if system.filter is None else system.filter
-
-
-def planning_margin_K(system: PowerSystem, settings: ManagerSettings) -> float:
-    """The back-off margin a flight plans with, K: the scenario's (``generators.margin_K``, e.g. 0 in
-    the thesis-reproduction scenarios, whose heuristic checks θmax itself) when it gives one, else
-    ``settings.margin_K``."""
-    return settings.margin_K if system.margin_K is None else float(system.margin_K)
-
-
-def infeasible_response(system: PowerSystem, settings: ManagerSettings) -> str:
-    """What a flight does when even the lowest reachable peak is above θmax, one of
-    :data:`INFEASIBLE_RESPONSES`: the scenario's (``generators.when_infeasible``, e.g.
-    ``best_effort`` in the thesis-reproduction scenarios, whose heuristic has no load shedding)
-    when it gives one, else ``settings.when_infeasible``."""
-    return settings.when_infeasible if system.when_infeasible is None else system.when_infeasible

@@ -9,12 +9,13 @@ import numpy as np
 from ...estimation.ekf import ExtendedKalmanFilter
 from .flight_result import FlightRecorder, FlightResult
 from ..planning.flown import FlownPlanning
-from .manager_settings import ManagerSettings, infeasible_response
+from .manager_settings import ManagerSettings
 from ..state_estimator import believed_model
 from ..planning.optimal import lowest_reachable_peak
 from ..planning.plan import Schedule, build_timeline, predict, remaining_after, within_limit
 from ..power_system import PowerSystem
 from .replanning import flight_segments, plan_with, planning_problem
+from .role_settings import PlannerSettings
 
 
 #: Plans made again with the held inlet raised to what the forecast read, when a load-following inlet
@@ -95,8 +96,8 @@ def forecast_inlet_C(system: PowerSystem, timeline, t0_s: float) -> np.ndarray:
                      for g in range(system.n_generators)])
 
 
-def judge_forecast(recorder: FlightRecorder, t_plan: float, problem, forecast_C: np.ndarray, settings: ManagerSettings,
-                   names) -> None:
+def judge_forecast(recorder: FlightRecorder, t_plan: float, problem, forecast_C: np.ndarray,
+                   settings: PlannerSettings, names) -> None:
     """The verdict on the plan's own forecast ``forecast_C`` (n_gen, 2, n) from ``t_plan`` (every fault at
     its onset): above the planning limit by more than the tolerance every plan is judged with, the plan is
     recorded infeasible (a record added when the nominal schedule was kept) with the lowest reachable peak
@@ -151,20 +152,23 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         The design-model (or flown-model) temperatures and currents of the plan, with its
         ``schedule_table``.
     """
-    settings.check_scheduler(scheduler)
-    dt = settings.dt_s
-    segments = flight_segments(system, settings, scheduler)
+    # no filter flies the open-loop plan: the scenario's filter is not its say
+    say = {key: value for key, value in system.manager_say.items() if key != "filter"}
+    roles = settings.roles(scheduler, system.mission.duration_s, say)
+    loop, planner, frame = roles.loop, roles.planner, system.frame()
+    dt = loop.dt_s
+    segments = flight_segments(system.mission, planner, scheduler)
     schedule = Schedule.nominal(system.n_generators, len(segments))
     x = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
-    flown_run = FlownOpenLoop(system, dt) if settings.nonlinear else None
+    flown_run = FlownOpenLoop(system, dt) if planner.nonlinear else None
     if flown_run is not None:
         x = np.hstack([x, np.zeros((system.n_generators, len(flown_run.filter(0, 0.0).disturbance_names)))])
-    budget = settings.rest_budget_for(system.mission.duration_s)
+    budget = loop.rest_budget_s
     onset = min((f.onset_s for f in system.faults), default=0.0)
-    t_plan = float(np.ceil(onset / settings.cycle_s - 1e-9) * settings.cycle_s)
+    t_plan = float(np.ceil(onset / loop.cycle_s - 1e-9) * loop.cycle_s)
     timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
     n_before = min(int(round(t_plan / dt)), timeline.n_steps)
-    recorder = FlightRecorder(system)
+    recorder = FlightRecorder(frame)
 
     def run(x, timeline, t0, n, faults_at):
         if flown_run is None:
@@ -181,18 +185,17 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         if flown_run is not None:
             end = system.mission.duration_s
             filters = [flown_run.filter(g, end) for g in range(system.n_generators)]
-            flown = FlownPlanning(filters, x, [f.P0 for f in filters], settings.confidence_sigmas)
+            flown = FlownPlanning(filters, x, [f.P0 for f in filters], planner.confidence_sigmas)
         nodes = x[:, :system.nominal_model.n_states]
         coolant = system.planning_model.spec.interface.generator.coolant_input
         inlet = highest_inlet_C(system, t_plan, system.mission.duration_s + budget, dt)
         nominal, planned = schedule, None
         for _ in range(MAX_INLET_REPLANS + 1):
-            problem = planning_problem(system, settings, segments, nodes, t_plan, generators,
+            problem = planning_problem(frame, planner, segments, nodes, t_plan, generators,
                                        np.floor(budget / dt + 1e-9) * dt, flown=flown, inputs_C={coolant: inlet[:, None]})
             schedule, planned = nominal, None
-            if predict(problem, schedule).peak()[0] > problem.limit_C + settings.replan_tolerance_K:
-                planned = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
-                                    when_infeasible=infeasible_response(system, settings))
+            if predict(problem, schedule).peak()[0] > problem.limit_C + loop.replan_tolerance_K:
+                planned = plan_with(scheduler, problem, planner, system.generator_names, system.limit_C)
                 schedule = planned.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s)
             timeline = build_timeline(segments, schedule, system.rest_current_A, dt)
             outputs, x_end = run(x, timeline, t_plan, timeline.n_steps, system.faults_known_at)
@@ -204,6 +207,6 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
             recorder.plan(t_plan, planned)
         table = schedule.table(segments, system.generator_names)
         recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
-        judge_forecast(recorder, t_plan, problem, outputs, settings, system.generator_names)
-    return recorder.result(scheduler, False, table, rest_budget_s=budget)
+        judge_forecast(recorder, t_plan, problem, outputs, planner, system.generator_names)
+    return FlightResult(system, scheduler, False, **recorder.record(), schedule_table=table, rest_budget_s=budget)
 

@@ -13,19 +13,19 @@ import numpy as np
 
 from ...errors import InputError
 from ..planning.flown import FlownPlanning
-from .manager_settings import ManagerSettings, planning_margin_K
 from ..planning.optimal import lowest_reachable_peak
 from ..planning.optimal_nlp import flown_optimal_plan
 from ..planning.optimal_shed import chosen_shed_plan, on_flown_model
 from ..planning.plan import (FEASIBLE_TOLERANCE_K, LIMIT_TOLERANCE_K, PlanningProblem, PlanResult, evaluate, mission_segments,
                    rest_available_s, split_segments)
-from ..power_system import PowerSystem
+from ..system_frame import SystemFrame
 from ..planning.registry import planner
 from ..planning.price import PRICE_TOLERANCE_MIN, not_served_Ah, schedule_cost_min
 from ..planning.shed import INFEASIBLE_RESPONSES, NOT_SERVED_TOLERANCE_A, priced_shed_plan
+from .role_settings import PlannerSettings
 
 
-def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSettings, names, limit_C: float,
+def plan_with(scheduler: str, problem: PlanningProblem, settings: PlannerSettings, names, limit_C: float,
               previous=None, switched_off=None, when_infeasible: str | None = None,
               shedding: bool = False, flown_shed: FlownPlanning | None = None) -> PlanResult:
     """Run ``scheduler`` on ``problem``; when infeasible, plan within the lowest reachable peak or shed.
@@ -38,7 +38,10 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
     problem : PlanningProblem
         Its ``limit_C`` is the planning limit (θmax minus the margin); its ``rest_budget_s`` bounds
         the total rest of the plan (rests beyond it are cut, earliest kept).
-    settings : ManagerSettings
+    settings : PlannerSettings
+        The planner's settings (:meth:`ManagerSettings.roles
+        <genthermal.schedule.flight.manager_settings.ManagerSettings.roles>`; a ManagerSettings, whose
+        fields of the same names these are, also serves).
     names : sequence of str
         Generator names, for the messages.
     limit_C : float
@@ -175,7 +178,7 @@ def _best_effort(problem: PlanningProblem, result: PlanResult, names, limit_C: f
     return result
 
 
-def _flown_shed(problem: PlanningProblem, settings: ManagerSettings, previous, names, limit_C: float,
+def _flown_shed(problem: PlanningProblem, settings: PlannerSettings, previous, names, limit_C: float,
                 where: str) -> PlanResult | None:
     """The optimal scheduler on the flown model with load allowed to go unserved
     (:func:`~genthermal.schedule.planning.optimal_nlp.flown_optimal_plan`, ``shed``); None when even that
@@ -204,7 +207,7 @@ def _shedding_names(schedule, names) -> list:
             if np.any((displaced > NOT_SERVED_TOLERANCE_A) & short)]
 
 
-def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, shared: PlanResult,
+def _own_or_shared_shed(problem: PlanningProblem, settings: PlannerSettings, shared: PlanResult,
                         flown: FlownPlanning, names, limit_C: float, where: str,
                         within_margin: bool = False, previous=None) -> PlanResult:
     """The optimal scheduler's shed plan: its own on the flown model ``flown`` (rest, displacement
@@ -238,7 +241,7 @@ def _own_or_shared_shed(problem: PlanningProblem, settings: ManagerSettings, sha
     return chosen
 
 
-def on_design_model(problem: PlanningProblem, settings: ManagerSettings, limit_C: float) -> PlanningProblem:
+def on_design_model(problem: PlanningProblem, settings: PlannerSettings, limit_C: float) -> PlanningProblem:
     """``problem`` as the affine planner poses it: on the design models (with the filters'
     disturbance heat flows), within θmax ``limit_C`` minus ``settings.margin_K``, with the rise
     back-off; ``problem`` itself when it already is.
@@ -309,41 +312,43 @@ def _shed(problem: PlanningProblem, already: np.ndarray, off: np.ndarray, names,
     return result
 
 
-def planning_problem(system: PowerSystem, settings: ManagerSettings, segments, x0, t_s: float, generators,
+def planning_problem(frame: SystemFrame, settings: PlannerSettings, segments, x0, t_s: float, generators,
              rest_budget_s: float, rest_taken_s: float = 0.0, flown: FlownPlanning | None = None,
              inputs_C: dict | None = None, unexplained_rise_K=None) -> PlanningProblem:
     """The planning problem at ``t_s`` with ``rest_budget_s`` (s) of rest left to the flight and
     ``rest_taken_s`` (s) of rest already flown right before the first segment; with ``flown`` (the
     nonlinear planner) the limit is θmax itself and the back-off that of the filters' covariance.
+    ``frame``: the power system's limits and currents (:meth:`PowerSystem.frame`); ``settings``: the
+    planner's (its ``margin_K`` the scenario's when it gives one).
     ``inputs_C`` (input name → (n_gen, 1) readings at ``t_s``, °C): the measured inlet of each
     generator and the median measured ambient, held over the plan (default the mission's);
     ``unexplained_rise_K`` (n_generators, n_outputs), K: the last cycle's rise the filters did not
     explain (``PlanningProblem.unexplained_rise_K``)."""
-    generator = system.planning_model.spec.interface.generator
+    generator = frame.role
     inputs_C = inputs_C or {}
     inlet = np.array([float(inputs_C[generator.coolant_input][g, 0]) if generator.coolant_input in inputs_C
-                      else float(system.inlet_C(g, t_s)) for g in range(system.n_generators)])
+                      else float(frame.inlet_C(g, t_s)) for g in range(frame.n_generators)])
     ambient = float(np.median(inputs_C[generator.ambient_input][:, 0])) if generator.ambient_input in inputs_C \
-        else system.mission.T_ambient_C
+        else frame.T_ambient_C
     budget = max(float(rest_budget_s), 0.0)
     # the longest rest before one action, the rest under way included: the budget left has that
     # rest taken off already, so bounding by the budget alone and then subtracting the rest under
     # way counted it twice (blockage_large, engineer: 30 min rested before landing with 30 of the
     # 60-min budget left, no more rest allowed; the manager shed gen1's load instead)
     longest_rest = min(settings.max_rest_s, budget + float(rest_taken_s))
-    limit, rise_backoff = (system.limit_C, 0.0) if flown is not None else \
-        (system.limit_C - planning_margin_K(system, settings), settings.rise_backoff)
+    limit, rise_backoff = (frame.limit_C, 0.0) if flown is not None else \
+        (frame.limit_C - settings.margin_K, settings.rise_backoff)
     return PlanningProblem(tuple(segments), generators, np.asarray(x0, dtype=float), inlet,
-                           ambient, system.rest_current_A, system.current_limit_A,
+                           ambient, frame.rest_current_A, frame.current_limit_A,
                            limit, longest_rest, settings.dt_s,
                            rise_backoff, settings.cycle_s, budget, float(rest_taken_s), flown,
                            None if unexplained_rise_K is None else np.asarray(unexplained_rise_K, dtype=float))
 
 
-def flight_segments(system: PowerSystem, settings: ManagerSettings, scheduler: str) -> tuple:
-    """The mission's segments; for the nonlinear planner cut into control intervals of one cycle,
-    except for the thesis heuristic, which decides per K-condition (eq. 7.2) on either model."""
-    segments = mission_segments(system.mission)
+def flight_segments(mission, settings: PlannerSettings, scheduler: str) -> tuple:
+    """The segments of ``mission`` (a :class:`~genthermal.mission.Mission`); for the nonlinear
+    planner cut into control intervals of one cycle, except for the thesis heuristic, which decides
+    per K-condition (eq. 7.2) on either model."""
+    segments = mission_segments(mission)
     split = settings.nonlinear and scheduler != "heuristic"
     return split_segments(segments, settings.cycle_s, settings.dt_s) if split else segments
-

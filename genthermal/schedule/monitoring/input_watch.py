@@ -113,7 +113,7 @@ class InputWatch:
         self._own_fits: dict[tuple[int, str], float] = {}
         #: Per generator, (time s, state names, disturbance states) after each cycle's update.
         self._flows: list[list] = [[] for _ in range(n_generators)]
-        generator = watch.system.planning_model.spec.interface.generator
+        generator = watch.frame.role
         #: The input every unit reads the same air of (the ambient: the mission has one).
         self.shared_air_input = generator.ambient_input
         #: The coolant-inlet input, whose warmer reading is held while unconfirmed.
@@ -357,7 +357,7 @@ class InputWatch:
         """Generator ``g``'s record checked for a fault of input ``name`` (module docstring,
         "Checking"): the hypothesis (onset since the mission start) or None."""
         from ...diagnose.calibrate import calibrate
-        from ...diagnose.discover import series_for
+        from ...diagnose.compare import measured_series
         from ...diagnose.sensor_faults import SensorHypothesis
         from ...simulate import simulate
 
@@ -370,7 +370,9 @@ class InputWatch:
         shared = np.median([monitor.fit_record(h, dt_s)[name].to_numpy(float) for h in sources], axis=0)
         substituted = record.copy()
         substituted[name] = shared
-        own, other = series_for(model, record, dt_s), series_for(model, substituted, dt_s)
+        sensors, interface = model.output_names, model.spec.interface  # the record's grid needs no more
+        own = measured_series(record, dt_s, sensors, interface)
+        other = measured_series(substituted, dt_s, sensors, interface)
         elapsed = own.time_s - own.time_s[0]
         error = own.inputs[name].to_numpy(float) - other.inputs[name].to_numpy(float)
         since = np.flatnonzero(np.abs(error) > self.settings.disagreement_K)

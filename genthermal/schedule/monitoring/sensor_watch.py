@@ -12,7 +12,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...sensor_faults import SensorFault
-from .monitor import Cusum, detector_node_roles
+from .monitor import Cusum
 from ..state_estimator import believed_model
 from .raw_evidence import RawEvidenceSettings, unsupported
 from .sensor_patterns import UnconfirmedExcess, frozen_since, opposite_flows
@@ -131,7 +131,12 @@ class SensorWatch:
 
     Parameters
     ----------
-    system : PowerSystem
+    frame : SystemFrame
+        The power system's sensors, generators and generator role (:meth:`PowerSystem.frame
+        <genthermal.schedule.power_system.PowerSystem.frame>`).
+    node_roles : sequence of str
+        Per sensor, its node's role, ``winding`` or ``iron`` (the fault monitor's
+        :func:`~genthermal.schedule.monitoring.monitor.detector_node_roles`).
     settings : SensorWatchSettings
     detection : DetectionSettings
         The fault monitor's settings (candidate heating faults of the check).
@@ -149,12 +154,11 @@ class SensorWatch:
         ``solve_s``.
     """
 
-    def __init__(self, system, settings: SensorWatchSettings, detection, injected=()):
-        self.system, self.settings, self.detection = system, settings, detection
+    def __init__(self, frame, node_roles, settings: SensorWatchSettings, detection, injected=()):
+        self.frame, self.settings, self.detection = frame, settings, detection
         self.injected = tuple(injected)
-        interface = system.planning_model.spec.interface
-        self.outputs = tuple(interface.output_names)
-        n = system.n_generators
+        self.outputs = tuple(frame.output_names)
+        n = frame.n_generators
         self.tests = [[Cusum(settings.drift, settings.threshold, two_sided=True) for _ in self.outputs]
                       for _ in range(n)]
         self.corrections: dict[tuple[int, int], SensorFault] = {}
@@ -174,14 +178,13 @@ class SensorWatch:
         self.deferred: dict[int, tuple] = {}
         self.deferrals: list[dict] = []
         self._last_check = [-math.inf] * n
-        roles = detector_node_roles(system.planning_model)
         #: Warmer coolant-inlet readings the plan held back while unconfirmed (the input watch's
         #: :class:`~genthermal.schedule.monitoring.unconfirmed_inlet.UnconfirmedInlet` events).
         self.inlet_holds: list[dict] = []
         #: The fault test's :math:`r_{gj}` (n_gen, n_nodes) of the last cycle looked at (after its
         #: claims): the input watch confirms a warmer inlet reading on a unit that heats.
         self.last_statistics = np.full((n, len(self.outputs)), np.nan)
-        self.unconfirmed = UnconfirmedExcess([getattr(settings, f"unconfirmed_{role}") for role in roles],
+        self.unconfirmed = UnconfirmedExcess([getattr(settings, f"unconfirmed_{role}") for role in node_roles],
                                              settings.max_unconfirmed_s, n)
 
     def correct(self, sample_times_s, sensed, only=None, for_filter: bool = False) -> np.ndarray:
