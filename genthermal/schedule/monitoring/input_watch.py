@@ -90,7 +90,7 @@ class InputWatch:
         The measured temperature inputs (inlet, ambient).
     n_generators : int
     margin_K : float, optional
-        The flight's planning margin, K (:func:`~genthermal.schedule.flight.manager_settings.planning_margin_K`;
+        The flight's planning margin, K (:attr:`~genthermal.schedule.flight.role_settings.MonitorSettings.margin_K`;
         default :data:`~genthermal.schedule.planning.plan.DEFAULT_MARGIN_K`): scales the inlet
         hold (:attr:`InputWatchSettings.unconfirmed_rise_K`).
 
