@@ -158,7 +158,7 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     detectors = estimators if filter_name == "ekf" or loop.tell_fault else [
         StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
                        detector_cache, "ekf") for g in range(n_gen)]
-    monitor = FaultMonitor(system, roles.monitor.detection, dt)
+    monitor = FaultMonitor(frame, system.planning_model, system.design_generator_for, roles.monitor.detection, dt)
     from ...diagnose.input_sensors import input_sensors
 
     input_names = input_sensors(system.planning_model.spec.interface)

@@ -169,7 +169,16 @@ class FaultMonitor:
 
     Parameters
     ----------
-    system : PowerSystem
+    system_frame : SystemFrame
+        The power system's generators, currents, inputs and the mission's inlet
+        (:meth:`PowerSystem.frame <genthermal.schedule.power_system.PowerSystem.frame>`).
+    planning_model : ThermalModel
+        The model the manager plans on: the belief of a healthy unit and the start of every
+        recalibration.
+    design_generator_for : callable
+        ``design_generator_for(effects, base=None)``: the design model of a belief
+        (:meth:`PowerSystem.design_generator_for
+        <genthermal.schedule.power_system.PowerSystem.design_generator_for>`, which caches them).
     settings : DetectionSettings
     dt_s : float
         Step of the record, s.
@@ -189,20 +198,22 @@ class FaultMonitor:
         ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
     """
 
-    def __init__(self, system, settings: DetectionSettings, dt_s: float):
+    def __init__(self, system_frame, planning_model, design_generator_for, settings: DetectionSettings,
+                 dt_s: float):
         check_fit_step("detection.identify_dt_s", settings.identify_dt_s, dt_s)
-        self.system, self.settings, self.dt_s = system, settings, dt_s
-        n = system.n_generators
-        self.node_roles = detector_node_roles(system.planning_model)
+        self.system_frame, self.settings, self.dt_s = system_frame, settings, dt_s
+        self.planning_model, self._design_generator_for = planning_model, design_generator_for
+        n = system_frame.n_generators
+        self.node_roles = detector_node_roles(planning_model)
         self.detector = DisturbanceDetector(n, settings.detector, self.node_roles)
         self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
-        self.model, self.beliefs = system.planning_model, [()] * n
+        self.model, self.beliefs = planning_model, [()] * n
         self.alarms, self.identifications, self.calibrations = [], [], []
         #: ``(generator, node index)`` out of the fault test after a sensor of the generator was
         #: masked by the sensor watch (:meth:`mask`, :meth:`DisturbanceDetector.statistics`).
         self.masked: set = set()
         self.innovation_test = None if settings.innovation is None or n < 2 else InnovationCusum(
-            n, dt_s, system.mission.T_ambient_C, system.design_generator_for(()), settings.innovation)
+            n, dt_s, system_frame.T_ambient_C, design_generator_for(()), settings.innovation)
         self._time, self._currents, self._measured, self._inputs = [], [], [], []
 
     def record(self, t0: float, currents_A, measured_C, inputs_C=None) -> None:
@@ -214,10 +225,10 @@ class FaultMonitor:
         self._measured.append(measured_C)
         self._inputs.append({name: np.array(v, dtype=float, copy=True) for name, v in (inputs_C or {}).items()})
         if self.innovation_test is not None:
-            coolant = self.system.planning_model.spec.interface.generator.coolant_input
-            for g in range(self.system.n_generators):
+            coolant = self.system_frame.role.coolant_input
+            for g in range(self.system_frame.n_generators):
                 inlet = (self._inputs[-1][coolant][g] if coolant in self._inputs[-1]
-                         else self.system.inlet_C(g, self._time[-1], currents_A))
+                         else self.system_frame.inlet_C(g, self._time[-1], currents_A))
                 self.innovation_test.predict(g, currents_A[g], inlet)
 
     def replace_input(self, g: int, name: str, from_s: float, replacement) -> None:
@@ -245,13 +256,11 @@ class FaultMonitor:
         currents = np.concatenate(self._currents, axis=1)
         current = currents[g]
         measured = np.concatenate(self._measured, axis=2)[g]
-        interface = self.system.planning_model.spec.interface
-        excitation = interface.generator.exciter_law(current, self.system.mission.power_factor,
-                                                     self.system.rated_current_A)
+        interface, system = self.planning_model.spec.interface, self.system_frame
+        excitation = interface.generator.exciter_law(current, system.power_factor, system.rated_current_A)
         generator = interface.generator
-        inlet = self._recorded_input(g, generator.coolant_input, self.system.inlet_C(g, time_s - self.dt_s, currents))
-        ambient = self._recorded_input(g, generator.ambient_input,
-                                       np.full(time_s.shape, self.system.mission.T_ambient_C))
+        inlet = self._recorded_input(g, generator.coolant_input, system.inlet_C(g, time_s - self.dt_s, currents))
+        ambient = self._recorded_input(g, generator.ambient_input, np.full(time_s.shape, system.T_ambient_C))
         return record_frame(interface, time_s, current, excitation, inlet, ambient, measured)
 
     def fit_record(self, g: int, dt_s: float | None = None) -> pd.DataFrame:
@@ -260,7 +269,7 @@ class FaultMonitor:
         for (currents as root mean square): what recalibration, identification and the sensor
         watch's record checks fit (:func:`~genthermal.schedule.monitoring.record_grid.on_fit_grid`, module
         docstring)."""
-        interface = self.system.planning_model.spec.interface
+        interface = self.planning_model.spec.interface
         generator = interface.generator
         return on_fit_grid(self.frame(g), self.settings.identify_dt_s if dt_s is None else dt_s,
                            [*generator.phase_inputs, generator.excitation_input],
@@ -275,7 +284,7 @@ class FaultMonitor:
 
     def design_generator(self, g: int):
         """Design model of generator ``g`` as the manager believes it."""
-        return self.system.design_generator_for(self.beliefs[g], base=self.model)
+        return self._design_generator_for(self.beliefs[g], base=self.model)
 
     def flown_model(self, g: int):
         """Nonlinear model of generator ``g`` as the manager believes it (what
@@ -321,7 +330,7 @@ class FaultMonitor:
         test = self.innovation_test
         if test is None or not self._measured:
             return []
-        n = self.system.n_generators
+        n = self.system_frame.n_generators
         for g in range(n):
             test.use(g, self.design_generator(g))
         measured = self._measured[-1][:, :, -1]
@@ -337,7 +346,7 @@ class FaultMonitor:
         not touched (NaN before two cycles are recorded)."""
         if len(self._time) < 2:
             return np.full(self.detector.sums.shape, np.nan)
-        load_factors = np.mean(self._currents[-1] ** 2, axis=1) / self.system.rated_current_A ** 2
+        load_factors = np.mean(self._currents[-1] ** 2, axis=1) / self.system_frame.rated_current_A ** 2
 
         def extra(g, load_factor):
             e = detection_estimators[g]
@@ -356,8 +365,8 @@ class FaultMonitor:
         if not candidates:
             return
         g = min(candidates, key=lambda h: z[h])
-        names = [n for n in self.settings.calibrate_parameters if n in self.system.planning_model.parameters]
-        result = calibrate(self.system.planning_model, self.fit_record(g), names, self.settings.identify_dt_s)
+        names = [n for n in self.settings.calibrate_parameters if n in self.planning_model.parameters]
+        result = calibrate(self.planning_model, self.fit_record(g), names, self.settings.identify_dt_s)
         self.model = result.model
         self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
                                   "parameters": dict(zip(result.names, result.values))})
