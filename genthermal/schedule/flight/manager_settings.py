@@ -224,7 +224,7 @@ class ManagerSettings:
         return ManagerRoles(
             LoopSettings(own.cycle_s, own.dt_s, own.seed, own.rest_budget_for(mission_duration_s), own.cpu_limit_s,
                          own.replan, own.replan_tolerance_K, own.tell_fault),
-            EstimatorSettings(own.filter, own.dt_s),
+            EstimatorSettings(own.filter),
             MonitorSettings(own.detection, own.sensor_watch, own.input_watch, own.margin_K),
             PlannerSettings(own.cycle_s, own.dt_s, own.margin_K, own.rise_backoff, own.max_rest_s, own.planner_model,
                             own.confidence_sigmas, own.sheds_on_flown_model(scheduler, own.filter),

@@ -52,11 +52,10 @@ class LoopSettings:
 
 @dataclasses.dataclass(frozen=True)
 class EstimatorSettings:
-    """The filter in the loop: ``filter`` (``ekf`` or ``kf``, the scenario's when it names one) at
-    the step ``dt_s`` (s)."""
+    """The filter in the loop: ``filter``, ``ekf`` or ``kf`` (the scenario's when it names one); it
+    steps with the loop's ``dt_s``."""
 
     filter: str
-    dt_s: float
 
 
 @dataclasses.dataclass(frozen=True)
