@@ -229,5 +229,3 @@ class ManagerSettings:
             PlannerSettings(own.cycle_s, own.dt_s, own.margin_K, own.rise_backoff, own.max_rest_s, own.planner_model,
                             own.confidence_sigmas, own.sheds_on_flown_model(scheduler, own.filter),
                             own.when_infeasible, own.heuristic, own.engineer, own.optimal, own.milp))
-
-
