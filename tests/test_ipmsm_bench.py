@@ -193,6 +193,25 @@ def test_ekf_from_stator_sensors_tracks_the_winding_better_than_open_loop(model,
         NodeObserver(model, record.dt_s, ("T_magnet",))
 
 
+def test_ekf_offset_step_per_sensor(model, slice_data):
+    record = record_from_measurements(model, slice_data, 30.0)
+    winding = model.output_names.index("T_winding")
+    sensors = ("T_end_winding", "T_slot_bottom", "T_outer_yoke")
+
+    def winding_rmse(bias, default=0.02):
+        _, outputs = NodeObserver(model, record.dt_s, sensors, bias_std_K=bias, default_bias_std_K=default).run(record)
+        return float(np.sqrt(np.mean((outputs[winding] - record.outputs[winding]) ** 2)))
+
+    loose = winding_rmse(0.3)
+    assert winding_rmse({}, default=0.3) == loose  # a mapping naming no sensor: every sensor takes the default
+    # the end winding's offset held: its reading, next to the slot winding, corrects the winding estimate
+    assert winding_rmse({"T_end_winding": 0.0}, default=0.3) < 0.7 * loose
+    with pytest.raises(InputError, match=r"bias_std_K = 'T_rotor': not a sensor the filter reads"):
+        NodeObserver(model, record.dt_s, sensors, bias_std_K={"T_rotor": 0.1})
+    with pytest.raises(InputError, match=r"bias_std_K\[T_end_winding\] = -0.1: give a finite step"):
+        NodeObserver(model, record.dt_s, sensors, bias_std_K={"T_end_winding": -0.1})
+
+
 def test_compare_command_on_the_shipped_slice(capsys):
     code = main(["compare", "--model", f"{MACHINE_FILE}:MACHINE_PLAIN", str(SLICE), "--fit-step", "60"])
     out = capsys.readouterr().out

@@ -12,7 +12,7 @@ each horizon open loop from the filtered state (the inputs known ahead, as a loa
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -42,15 +42,18 @@ class NodeObserver:
     measurement_std_K : float, optional
         Standard deviation of a sensor reading against its node, K: the sensor's noise (default,
         from the machine) or more, when the model's node and the sensor's spot differ.
-    bias_std_K : float or None
+    bias_std_K : float, mapping of str to float, or None
         Random-walk step, K per filter step, of an offset state per measured sensor (the reading
         is node + offset): a persistent model error at a sensor is absorbed by its offset instead
-        of being pushed into the hidden nodes. None: no offsets.
+        of being pushed into the hidden nodes. A mapping gives a measured sensor its own step
+        (a sensor it does not name takes ``default_bias_std_K``). None: no offsets.
+    default_bias_std_K : float
+        Step, K per filter step, of the sensors a ``bias_std_K`` mapping does not name.
     """
 
     def __init__(self, model: ThermalModel, dt_s: float, measured: Sequence[str], process_std_K: float = 0.2,
                  initial_std_K: float = 3.0, hidden_share: float = 0.01,
-                 measurement_std_K: float | None = None, bias_std_K: float | None = 0.02):
+                 measurement_std_K: float | None = None, bias_std_K=0.02, default_bias_std_K: float = 0.02):
         unknown = [m for m in measured if m not in model.output_names]
         if unknown:
             raise InputError("measured", unknown[0], f"not a sensor of {model.name} ({', '.join(model.output_names)})")
@@ -75,11 +78,27 @@ class NodeObserver:
         measured_nodes = {model.spec.interface.sensors[i].node for i in rows}
         self.Q = np.diag([(process_std_K if n in measured_nodes else hidden_share * process_std_K) ** 2
                           for n in model.state_names])
-        self.n_bias = len(rows) if bias_std_K is not None else 0
+        steps = self._bias_steps(bias_std_K, default_bias_std_K)
+        self.n_bias = len(steps)
         if self.n_bias:
             self.C = np.hstack([self.C, np.eye(self.n_bias)])
             self.Q = np.block([[self.Q, np.zeros((nx, self.n_bias))],
-                               [np.zeros((self.n_bias, nx)), np.eye(self.n_bias) * bias_std_K ** 2]])
+                               [np.zeros((self.n_bias, nx)), np.diag(np.square(steps))]])
+
+    def _bias_steps(self, bias_std_K, default_bias_std_K) -> list:
+        """Offset random-walk step of each measured sensor, K per step (empty: no offsets)."""
+        if bias_std_K is None:
+            return []
+        mapping = isinstance(bias_std_K, Mapping)
+        by_sensor, default = (dict(bias_std_K), default_bias_std_K) if mapping else ({}, bias_std_K)
+        for name in by_sensor:
+            if name not in self.measured:
+                raise InputError("bias_std_K", name, f"not a sensor the filter reads ({', '.join(self.measured)})")
+        steps = [float(by_sensor.get(name, default)) for name in self.measured]
+        for name, step in zip(self.measured, steps):
+            if not (np.isfinite(step) and step >= 0.0):
+                raise InputError(f"bias_std_K[{name}]", step, "give a finite step >= 0 K")
+        return steps
 
     def _initial_covariance(self) -> np.ndarray:
         """Small for nodes with a sensor of their own (their initial value was measured)."""
