@@ -81,23 +81,34 @@ class ErrorModel:
             :data:`MIN_CORRELATION_TIMES` correlation times of its most correlated sensor (the
             message names the minimum length).
         """
+        return cls.from_residuals([residual], names, dt_s, source)
+
+    @classmethod
+    def from_residuals(cls, residuals, names, dt_s: float, source: str = "") -> "ErrorModel":
+        """Estimate the error model from the residuals of several healthy records (each
+        (n_sensors, N_i), K, at ``dt_s`` s): the level over all samples, the lag-1 correlation from
+        the pairs of neighbouring samples within each record; their total length must meet the
+        minima of :meth:`from_residual`."""
         from .search import noise_std
 
-        residual = np.atleast_2d(np.asarray(residual, dtype=float))
-        duration = residual.shape[1] * float(dt_s)
+        residuals = [np.atleast_2d(np.asarray(r, dtype=float)) for r in residuals]
+        duration = sum(r.shape[1] for r in residuals) * float(dt_s)
         check_baseline_length(duration)
         sensors = []
-        for name, e in zip(names, residual):
-            e = e[np.isfinite(e)]
+        for i, name in enumerate(names):
+            parts = [r[i][np.isfinite(r[i])] for r in residuals]
+            e = np.concatenate(parts)
             if e.size < 10:
                 raise InputError("baseline", name, "has fewer than 10 valid samples: no error model for it")
             level = float(np.sqrt(np.mean(e ** 2)))
-            phi = float(np.clip((e[1:] @ e[:-1]) / max(e @ e, 1e-300), 0.0, MAX_PHI))
+            lagged = sum(float(p[1:] @ p[:-1]) for p in parts)
+            phi = float(np.clip(lagged / max(e @ e, 1e-300), 0.0, MAX_PHI))
             sensors.append(SensorError(str(name), level, phi, noise_std(e[None, :])))
         model = cls(tuple(sensors), float(dt_s), source)
         needed = max(MIN_BASELINE_S, MIN_CORRELATION_TIMES * model.correlation_time_s)
         if duration < needed:
-            raise InputError("baseline", f"{duration / 3600:.2f} h",
+            raise InputError("baseline", f"{duration / 3600:.2f} h" + (f" over {len(residuals)} records"
+                                                                       if len(residuals) > 1 else ""),
                              f"too short to estimate the model's error: its residual stays correlated for "
                              f"{model.correlation_time_s / 60:.0f} min, so the healthy baseline must cover at least "
                              f"{needed / 3600:.1f} h ({MIN_CORRELATION_TIMES:.0f} correlation times)")
@@ -226,13 +237,21 @@ def check_same_sensors(measured, baseline) -> None:
 
 def baseline_error_model(model, viewed, baseline, dt_s, view, catalogue) -> ErrorModel:
     """The error model of the calibrated ``model`` (``viewed`` through the diagnosis' sensor
-    ``view``) on the healthy ``baseline`` record: the residual of the model with its initial
-    state fitted, as the diagnosis fits the record under test
+    ``view``) on the healthy ``baseline`` record, or list of records (pooled:
+    :meth:`ErrorModel.from_residuals`): the residual of the model with each record's initial state
+    fitted, as the diagnosis fits the record under test
     (:meth:`~genthermal.diagnose.search.EffectSearch.fit_found`)."""
     from .discover import series_for
     from .search import EffectSearch
 
-    series = series_for(viewed, baseline, dt_s)
-    search = EffectSearch(model, series, [], {}, catalogue, BIC(), view).fit_found()
-    residual = search.predicted_before - series.outputs
-    return ErrorModel.from_residual(residual, viewed.output_names, series.dt_s, series.source)
+    residuals, sources, steps = [], [], set()
+    for record in baseline if isinstance(baseline, (list, tuple)) else [baseline]:
+        series = series_for(viewed, record, dt_s)
+        search = EffectSearch(model, series, [], {}, catalogue, BIC(), view).fit_found()
+        residuals.append(search.predicted_before - series.outputs)
+        sources.append(series.source)
+        steps.add(round(series.dt_s, 9))
+    if len(steps) > 1:
+        raise InputError("baseline", ", ".join(sources), f"the records have different sample periods "
+                         f"({', '.join(f'{s:g}' for s in sorted(steps))} s): give one step (--dt or --fit-step)")
+    return ErrorModel.from_residuals(residuals, viewed.output_names, steps.pop(), ", ".join(sources))
