@@ -2,19 +2,16 @@
 
 :func:`calibrate_baselines` fits the baseline parameters to every record at once, each from its own
 measured initial state (:func:`~genthermal.diagnose.multi_record.fit_records`), and returns a
-:class:`RecordsCalibration`; :func:`as_record_list` checks a set of baselines against the record
-under test (same sensors, long enough together). The error model pooled over the set is
-:func:`~genthermal.diagnose.error_model.baseline_error_model`'s. Guide: ``docs/guide/evidence.md``.
+:class:`RecordsCalibration`. The checks of a set against the record under test
+(:func:`~genthermal.diagnose.error_model.baseline_records`) and the error model pooled over it
+(:func:`~genthermal.diagnose.error_model.baseline_error_model`) are the error model's.
 """
 
 from __future__ import annotations
 
 import dataclasses
 
-from ..errors import InputError
 from ..model import ThermalModel
-from .compare import as_measurements
-from .error_model import MIN_BASELINE_S, check_baseline_length, check_same_sensors
 
 
 @dataclasses.dataclass
@@ -54,29 +51,6 @@ class RecordsCalibration:
         return {"model": self.model.name, "records": self.records, "parameters": rows, "converged": self.converged,
                 "rmse_after": self.rmse_after, "condition_number": self.fisher["condition_number"],
                 "warnings": self.fisher["warnings"]}
-
-
-def as_record_list(baseline, measured, interface) -> list:
-    """``baseline`` (one record or a list of them: MeasurementData, DataFrame or path) as a list of
-    MeasurementData, each of the sensors of ``measured``, together at least the error model's
-    minimum length (InputError naming the record, or the total, otherwise)."""
-    given = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
-    if not given:
-        raise InputError("baseline", "[]", "give at least one healthy record")
-    records = [as_measurements(b, interface) for b in given]
-    for record in records:
-        check_same_sensors(measured, record)
-        if record.time_s.size < 2:
-            raise InputError("baseline", record.source, "has fewer than two samples")
-    durations = [float(r.time_s[-1] - r.time_s[0]) for r in records]
-    if len(records) == 1:
-        check_baseline_length(durations[0])
-    elif sum(durations) < MIN_BASELINE_S:
-        names = "; ".join(f"{r.source} ({d / 3600:.2f} h)" for r, d in zip(records, durations))
-        raise InputError("baseline", f"together {sum(durations) / 3600:.2f} h",
-                         f"too short to estimate the model's error: the healthy records must cover at least "
-                         f"{MIN_BASELINE_S / 3600:.1f} h together ({names})")
-    return records
 
 
 def calibrate_baselines(model: ThermalModel, records, names, dt_s: float | None = None) -> RecordsCalibration:

@@ -24,8 +24,9 @@ from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
                        choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, same_change,
                        series_for)
-from .baseline_set import as_record_list, calibrate_baselines
-from .error_model import STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, widened_calibration
+from .baseline_set import calibrate_baselines
+from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, baseline_records,
+                          widened_calibration)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
@@ -299,7 +300,7 @@ class Discovery:
         view = self._view(model, measured)
         calibration, error_model = None, self._error_model
         if baseline is not None:
-            baseline = as_record_list(baseline, measured, model.spec.interface)
+            baseline = baseline_records(baseline, measured, model.spec.interface)
             calibration = self._baseline_calibration(model, baseline, dt_s)
             if calibration is not None:
                 model = calibration.model

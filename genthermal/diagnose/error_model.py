@@ -235,6 +235,31 @@ def check_same_sensors(measured, baseline) -> None:
                          "healthy record of the same machine and sensors")
 
 
+def baseline_records(baseline, measured, interface) -> list:
+    """``baseline`` (one record or a list of them: MeasurementData, DataFrame or path) as a list of
+    MeasurementData, each of the sensors of ``measured``, together at least the error model's
+    minimum length (InputError naming the record, or the total, otherwise)."""
+    given = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
+    if not given:
+        raise InputError("baseline", "[]", "give at least one healthy record")
+    from .compare import as_measurements
+
+    records = [as_measurements(b, interface) for b in given]
+    for record in records:
+        check_same_sensors(measured, record)
+        if record.time_s.size < 2:
+            raise InputError("baseline", record.source, "has fewer than two samples")
+    durations = [float(r.time_s[-1] - r.time_s[0]) for r in records]
+    if len(records) == 1:
+        check_baseline_length(durations[0])
+    elif sum(durations) < MIN_BASELINE_S:
+        names = "; ".join(f"{r.source} ({d / 3600:.2f} h)" for r, d in zip(records, durations))
+        raise InputError("baseline", f"together {sum(durations) / 3600:.2f} h",
+                         f"too short to estimate the model's error: the healthy records must cover at least "
+                         f"{MIN_BASELINE_S / 3600:.1f} h together ({names})")
+    return records
+
+
 def baseline_error_model(model, viewed, baseline, dt_s, view, catalogue) -> ErrorModel:
     """The error model of the calibrated ``model`` (``viewed`` through the diagnosis' sensor
     ``view``) on the healthy ``baseline`` record, or list of records (pooled:
