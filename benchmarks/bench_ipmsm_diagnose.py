@@ -4,8 +4,8 @@ Per cross-validation fold of ``bench_ipmsm.py`` (4 folds of 3 profiles): the pla
 loss, constant convection) is calibrated on the other 9 profiles as the tutorial does (every
 assumed parameter, 30-s blocks, prior 30); each held-out profile is diagnosed on 60-s blocks
 against the sensor noise and against the error model of the 9 training profiles (``--baseline``);
-the effect the held-out profiles vote for (:func:`chosen_votes`: a verdict counts 2, the best
-plausible effect of a profile without one 1) is added, the plain model with it is calibrated
+the effect with the most evidence over the held-out profiles (the sum of its ΔBIC where it was
+fitted within its plausible range, :func:`evidence_by_effect`) is added, the plain model with it is calibrated
 on the same 9 profiles, and both are scored open loop on the 3 (10-s blocks, node groups of
 ``bench_ipmsm.py``). The effect is chosen on the profiles it is then scored on: that choice, one
 discrete one, is not held out. Prints JSON lines. Run: ``python3 benchmarks/bench_ipmsm_diagnose.py
@@ -40,15 +40,12 @@ def diagnosis_summary(result) -> dict:
             "sensor_faults": [f["text"] for f in document["sensor_faults"]]}
 
 
-def chosen_votes(result) -> dict:
-    """The effect a held-out profile votes for: its verdict (weight 2), else its best-ranked
-    plausible effect (weight 1, :func:`~genthermal.diagnose.discover.implausible_reason`), else none."""
+def evidence_by_effect(result) -> dict:
+    """ΔBIC of each effect plausibly fitted on one held-out profile (fits outside their plausible
+    range, :func:`~genthermal.diagnose.discover.implausible_reason`, count nothing)."""
     from genthermal.diagnose.discover import implausible_reason
 
-    if result.found:
-        return {result.found[0].effect: 2}
-    plausible = [c for c in result.iterations[0].ranked if implausible_reason(c) is None]
-    return {plausible[0].effect: 1} if plausible else {}
+    return {c.effect: float(c.delta_bic) for c in result.iterations[0].ranked if implausible_reason(c) is None}
 
 
 def held_out_rmse(model, records) -> dict:
@@ -99,18 +96,19 @@ def main() -> int:
         baseline = [diagnosis_grid[i] for i in train]
         report = {"fold": fold, "held_out": [names[i] for i in held_out], "plain_fit_converged": fit.converged,
                   "diagnoses": {}}
-        votes = collections.Counter()
+        evidence = collections.Counter()
         for i in held_out:
             result = discovery.fit(fit.model, diagnosis_grid[i])
             against_noise = diagnosis_summary(result)
             against_floor = diagnosis_summary(discovery.fit(fit.model, diagnosis_grid[i], baseline=baseline))
             report["diagnoses"][names[i]] = {"against_noise": against_noise, "against_training_floor": against_floor}
-            votes.update(chosen_votes(result))
-        if not votes:
+            evidence.update(evidence_by_effect(result))
+        report["evidence_delta_bic"] = {e: round(v, 1) for e, v in evidence.most_common()[::-1]}
+        chosen = min(evidence, key=evidence.get) if evidence and min(evidence.values()) < 0 else None
+        if chosen is None:
             report["added"] = None
             print(json.dumps(report), flush=True)
             continue
-        chosen = max(votes, key=votes.get)
         effect = CATALOGUE[chosen]
         extended = plain.with_effect(chosen, **{p.name: p.typical for p in effect.parameters})
         extended_names = plain_names + [p.name for p in effect.all_parameters]
