@@ -20,6 +20,7 @@ from .losses import LossFloor, input_symbol, mass_shares
 from .machines.interface import Role
 from .network import HeatSource, Network
 from .parameters import Parameter
+from . import speed_losses as speed
 
 
 @dataclasses.dataclass(frozen=True)
@@ -356,5 +357,59 @@ for _effect in (
            (EffectParameter("k_frame", 1.0, "1", 0.05, 20.0, 3.0, (0.5, 5.0)),), _scale_links(Role.FRAME_TO_AMBIENT),
            "slow error that follows ambient temperature and the frame: external cooling changed",
            needs=(Role.FRAME_TO_AMBIENT,)),
+):
+    register_effect(_effect)
+
+
+# --- speed-dependent effects (:mod:`genthermal.speed_losses`), for machines with a Role.SPEED ----
+# Sizes refer to the machine's reference speed n_ref (SpeedRole.reference_rpm). Plausible ranges,
+# all "assumed" orders of magnitude for machines of ~10-200 kW (docs/guide/evidence.md): iron loss
+# 1-3 % of rated power at top speed; the air-gap Nusselt number rises from ~2 (conduction) to
+# ~10-20 in Taylor-Couette flow with vortices (Becker and Kaye 1962); end-space convection
+# h = k1 (1 + k2 v^k3) rises a few-fold over the rotor's tip speeds (Boglietti et al. 2009); R_ac/R_dc
+# of stranded windings at top frequency 1-1.5, hairpins up to 2; magnet eddy loss tens to hundreds of
+# W, exponent 1 (skin-limited) to 2 (resistance-limited) and above with harmonics; bearing
+# friction and windage tens to hundreds of W (friction torque ~0.1-1 N m).
+for _effect in (
+    Effect("speed_iron_loss", "iron loss rising with speed (hysteresis ~ n, eddy currents ~ n^2)",
+           r"q_{iron} \mathrel{+}= P_{fe}\,(n/n_{ref})^{c_{fe}}",
+           (EffectParameter("P_fe_ref", 0.0, "W", 0.0, 5000.0, 300.0, (0.0, 3000.0)),), speed.speed_iron_loss,
+           "stator iron and winding run hot at speed whatever the current: an iron loss rising with speed",
+           speed.loss_not_modelled(Role.IRON, "a speed-dependent iron loss"),
+           shape_parameters=(EffectParameter("fe_speed_exponent", 1.5, "1", 1.0, 2.0, 1.5, (1.0, 2.0)),),
+           needs=(Role.SPEED, Role.IRON), from_start=True),
+    Effect("air_gap_convection_speed", "air-gap conductance rising with speed (Taylor-Couette flow)",
+           r"G_{gap} \to G_{gap}\,(1 + k_{gap}\,n/n_{ref})",
+           (EffectParameter("k_gap_speed", 0.0, "1", 0.0, 20.0, 2.0, (0.0, 10.0)),),
+           speed.convection_rise(Role.AIR_GAP),
+           "rotor cooler than modelled at speed, stator side warmer: the air gap conducts more when turning",
+           speed.convection_not_modelled(Role.AIR_GAP, "an air-gap convection rising with speed"),
+           needs=(Role.SPEED, Role.AIR_GAP), from_start=True),
+    Effect("end_space_convection_speed", "end-space convection rising with speed (the rotor stirs the air)",
+           r"G_{es} \to G_{es}\,(1 + k_{es}\,n/n_{ref})",
+           (EffectParameter("k_end_space", 0.0, "1", 0.0, 10.0, 1.0, (0.0, 5.0)),),
+           speed.convection_rise(Role.END_SPACE_CONVECTION),
+           "end windings and rotor cooler than modelled at speed: the end-space air is stirred",
+           speed.convection_not_modelled(Role.END_SPACE_CONVECTION, "an end-space convection rising with speed"),
+           needs=(Role.SPEED, Role.END_SPACE_CONVECTION), from_start=True),
+    Effect("ac_copper_loss", "copper loss rising with frequency (skin and proximity effect)",
+           r"P_{cu} \to P_{cu}\,(1 + k_{ac}(n/n_{ref})^2)",
+           (EffectParameter("k_ac_speed", 0.0, "1", 0.0, 2.0, 0.1, (0.0, 1.0)),), speed.ac_copper_loss,
+           "winding runs hot at high current and high speed together: the copper loss grows with frequency",
+           speed.copper_without_speed, needs=(Role.SPEED, Role.LOAD_CURRENTS), from_start=True),
+    Effect("magnet_eddy_loss", "rotor (magnet eddy-current) loss rising with speed and current",
+           r"q_{rotor} \mathrel{+}= P_{pm}\,(n/n_{ref})^{c_{pm}}\,(1 + k_{pm}(I/I_{ref})^2)",
+           (EffectParameter("P_pm_speed", 0.0, "W", 0.0, 2000.0, 50.0, (0.0, 1000.0)),), speed.magnet_eddy_loss,
+           "rotor runs hot at speed, more under load, stator barely affected: a rotor loss rising with speed",
+           speed.loss_not_modelled(Role.ROTOR, "a speed-dependent rotor loss"),
+           shape_parameters=(EffectParameter("pm_loss_exponent", 2.0, "1", 0.5, 3.0, 2.0, (1.0, 2.5)),
+                             EffectParameter("k_pm_load", 1.0, "1", 0.0, 10.0, 1.0, (0.0, 5.0))),
+           needs=(Role.SPEED, Role.ROTOR, Role.LOAD_CURRENTS), from_start=True),
+    Effect("bearing_friction", "bearing friction loss rising with speed",
+           r"q_{bearing} \mathrel{+}= P_{fr}\,n/n_{ref}",
+           (EffectParameter("P_friction_speed", 0.0, "W", 0.0, 1000.0, 40.0, (0.0, 500.0)),), speed.bearing_friction,
+           "bearing and shaft warm at speed without load: friction",
+           speed.loss_not_modelled(Role.BEARING, "a bearing friction loss"),
+           needs=(Role.SPEED, Role.BEARING), from_start=True),
 ):
     register_effect(_effect)

@@ -17,7 +17,7 @@ import sympy
 import yaml
 
 from genthermal.losses import input_symbol
-from genthermal.machines import InputKind, Machine, MachineInterface, ModelInput, Role, Sensor
+from genthermal.machines import InputKind, Machine, MachineInterface, ModelInput, Role, Sensor, SpeedRole
 from genthermal.network import HeatSource, Link, Network, Node
 from genthermal.parameters import Parameter, ParameterSet
 
@@ -75,6 +75,12 @@ ROLES = {
     Role.WINDING_INSULATION: (("winding_slot", "tooth"), ("winding_slot", "yoke_inner")),
     Role.FRAME_TO_AMBIENT: (("endcap", "ambient"),),
     Role.LOAD_CURRENTS: CURRENTS,
+    # the parts the speed-dependent catalogue effects act on (genthermal.speed_losses)
+    Role.SPEED: SpeedRole("motor_speed", N_REF_RPM, RATED_CURRENT_A),
+    Role.AIR_GAP: (("tooth", "rotor"),),
+    Role.END_SPACE_CONVECTION: (("end_winding", "end_space_air"), ("rotor", "end_space_air"),
+                                ("end_space_air", "endcap")),
+    Role.BEARING: ("shaft_bearing",),
 }
 INTERFACE = MachineInterface(
     INPUTS, SENSORS, {"water": "T_water", "ambient": "T_ambient"}, RATED_CURRENT_A,

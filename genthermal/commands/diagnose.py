@@ -1,16 +1,21 @@
-"""``genthermal diagnose DATA.csv [--model NAME|FILE] [--baseline HEALTHY.csv] [--json out.json]``: which
-catalogue effect (or open-library term) the model lacks. Reference: docs/guide/calibration-diagnosis.md."""
+"""``genthermal diagnose DATA.csv [DATA2.csv ...] [--model NAME|FILE] [--baseline HEALTHY.csv ...] [--json out.json]``:
+which catalogue effect (or open-library term) the model lacks. Several baselines give one calibration
+and one error model; several DATA records are each diagnosed against them. Reference:
+docs/guide/calibration-diagnosis.md."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
 from ..progress import say, working
 from ._common import add_choice_argument, add_json_argument, add_out_argument, model_from_args
 from ._vocabulary import PHASES
-from .compare import add_model_and_data_arguments, data_step, fitting_data
+from ._common import DEFAULT_FIT_STEP_S, add_model_arguments, positive_float
+from .compare import data_step, fitting_data
 
 #: Fewest samples a diagnosed record (and its baseline) may have.
 MIN_DIAGNOSIS_SAMPLES = 30
@@ -21,9 +26,21 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser("diagnose", help="find the physical effect a model lacks",
                                    description="Fit every catalogue effect the model lacks (parameters and "
                                    "onset), rank by ΔBIC, and say which one explains the data, or 'none'.")
-    add_model_and_data_arguments(parser)
-    parser.add_argument("--baseline", metavar="HEALTHY", help="healthy measurements: calibrate the uncertain "
-                        "parameters on them first")
+    add_model_arguments(parser)
+    parser.add_argument("data", metavar="DATA", nargs="*",
+                        help="measurements CSV to explain; several: each is diagnosed on its own against the same "
+                        "baseline calibration and error model, and the effects named on every one are reported")
+    parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step); "
+                        "for a logger file without a time column (read through a column map): its sample period")
+    parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV (default: the "
+                        "machine's own map, if it has one)")
+    parser.add_argument("--fit-step", metavar="S", help="files read through a column map: average them to this "
+                        f"step, s (default {DEFAULT_FIT_STEP_S:g} s)")
+    parser.add_argument("--baseline", metavar="HEALTHY", nargs="+", action="extend",
+                        help="healthy measurements: calibrate the uncertain parameters on them first and estimate "
+                        "the model's error (the discrepancy floor) on them; several records: one calibration and "
+                        "one error model over all, each record from its own initial state. It takes every file "
+                        "after it: put DATA first, or end the list with --")
     add_json_argument(parser, "the diagnosis (ranked effects, verdict, residual, sensor faults)")
     parser.add_argument("--iterate", action="store_true", help="add the best effect and search again until "
                         "nothing is significant")
@@ -39,9 +56,9 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _long_enough(data, args, option: str):
-    """``data``, or InputError when it has fewer than :data:`MIN_DIAGNOSIS_SAMPLES` (on ``--dt``'s grid)."""
-    time_s, step = data.time_s, data_step(args)
+def _long_enough(data, step, option: str):
+    """``data``, or InputError when it has fewer than :data:`MIN_DIAGNOSIS_SAMPLES` (on ``step``'s grid)."""
+    time_s = data.time_s
     samples = time_s.size if step is None else int((time_s[-1] - time_s[0]) / step) + 1
     if samples < MIN_DIAGNOSIS_SAMPLES:
         raise InputError(option, data.source, f"{samples} sample(s): a diagnosis fits an effect's size and onset "
@@ -49,27 +66,80 @@ def _long_enough(data, args, option: str):
     return data
 
 
+def read_records(model, args) -> tuple:
+    """(DATA records, baseline records or None, the diagnosis' step ``dt_s``) of ``args``: through a
+    column map (``--columns`` or the machine's own; ``--dt`` is then the file's sample period and
+    the records are averaged to ``--fit-step``) or in the CSV schema; every file of the call must
+    have the same columns."""
+    from ..column_map import read_logged_set
+    from ..diagnose.multi_record import decimated
+    from ._records import _column_map
+
+    if not args.data:
+        raise InputError("DATA", "none", "no record to diagnose: --baseline takes every file after it; put DATA "
+                         "first (diagnose DATA --baseline A B) or end the baselines with -- (--baseline A B -- DATA)")
+    paths = list(args.data) + list(args.baseline or [])
+    column_map = _column_map(args, model)
+    interface, rated = model.spec.interface, model.spec.rated_current_A
+    if column_map is not None:
+        step = DEFAULT_FIT_STEP_S if args.fit_step is None else positive_float("--fit-step", args.fit_step)
+        records = read_logged_set(paths, column_map, interface, data_step(args), rated)
+        records = [decimated(r, step) if float(np.median(np.diff(r.time_s))) < step else r for r in records]
+        dt_s = None
+    else:
+        records = [fitting_data(p, model, args) for p in paths]
+        first = set(records[0].frame.columns)  # the baselines' sensors are checked by the diagnosis
+        for path, record in zip(paths[1:len(args.data)], records[1:len(args.data)]):
+            if set(record.frame.columns) != first:
+                different = sorted(set(record.frame.columns) ^ first)[0]
+                raise InputError(f"{path}: columns", different, "the records of one call must have the same columns")
+        dt_s = data_step(args)
+    data = [_long_enough(r, dt_s, "DATA") for r in records[:len(args.data)]]
+    baselines = [_long_enough(r, dt_s, "--baseline") for r in records[len(args.data):]] or None
+    return data, baselines, dt_s
+
+
 def run(args) -> int:
-    """Diagnose and print the ranking and verdict."""
+    """Diagnose each DATA record and print the ranking and verdict."""
     from ..diagnose.discovery import Discovery
     from ..diagnose.fitter import OnsetFitter
-    from ..model_file import save_model
-    from ..outputs import replacing_folder, report_json
+    from ..outputs import report_json
 
     model = model_from_args(args)
-    data = _long_enough(fitting_data(args.data, model, args), args, "DATA")
-    baseline = None if args.baseline is None else _long_enough(fitting_data(args.baseline, model, args), args,
-                                                                "--baseline")
+    data, baselines, dt_s = read_records(model, args)
+    if len(data) > 1:
+        for option in ("report", "out"):
+            if getattr(args, option):
+                raise InputError(f"--{option}", getattr(args, option), "writes one diagnosis: give one DATA record")
+    discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
+                          progress=lambda line: say(f"  ... {line}"))
+    documents = [_diagnose_one(discovery, model, record, baselines, dt_s, args) for record in data]
+    if len(documents) > 1:
+        named = [set(f["effect"] for f in d["found"]) for d in documents]
+        common = sorted(set.intersection(*named))
+        print(f"on {len(documents)} records: named on every one: {', '.join(common) or 'none'}; per record: "
+              + "; ".join(f"{d['data']}: {', '.join(sorted(n)) or 'none'}" for d, n in zip(documents, named)))
+        document = {"records": documents, "named_on_every_record": common}
+    else:
+        document = documents[0]
+    if args.json:
+        report_json(args.json, document)
+    return 0
+
+
+def _diagnose_one(discovery, model, data, baselines, dt_s, args) -> dict:
+    """Diagnose ``data``, print it (and write ``--report``, ``--out``); its JSON document."""
+    from ..model_file import save_model
+    from ..outputs import replacing_folder
+
     with working("diagnose"):
-        discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
-                              progress=lambda line: say(f"  ... {line}"))
-        result = discovery.fit(model, data, baseline=baseline, dt_s=data_step(args))
+        result = discovery.fit(model, data, baseline=baselines, dt_s=dt_s)
     if result.unexplained and not args.no_open_search:
         from ..diagnose.open_followup import open_followup
 
         with working("open search"):
             say("  ... the catalogue leaves the residual unexplained: searching the open library of heat flows")
-            result.open_search = open_followup(discovery, result, data, data_step(args))
+            result.open_search = open_followup(discovery, result, data, dt_s)
     document = result.to_dict()
     floor = document["residual"].get("floor_K")
     print(f"{model.name} on {document['data']}: noise ≈ {result.noise_std:.3f} K"
@@ -100,8 +170,6 @@ def run(args) -> int:
                                                                         term["code"].splitlines()))
     print(document["explanation"])
     print(document["residual"]["summary"])
-    if args.json:
-        report_json(args.json, document)
     if args.report:
         from ..diagnose.report import write_diagnosis_report
 
@@ -110,4 +178,4 @@ def run(args) -> int:
         print(f"wrote {Path(args.report) / written.name}")
     if args.out:
         print(f"wrote {save_model(result.improved_model(), args.out, {f.effect: f.onset_s for f in result.found})}")
-    return 0
+    return document

@@ -24,8 +24,9 @@ from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
                        choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, same_change,
                        series_for)
-from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, check_baseline_length,
-                          check_same_sensors, widened_calibration)
+from .baseline_set import calibrate_baselines
+from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, baseline_records,
+                          widened_calibration)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
@@ -118,6 +119,8 @@ class Discovery:
         self.baseline_parameters = tuple(baseline_parameters)
         self.design_experiment, self.progress = bool(design_experiment), progress
         self._memo: dict = {}
+        #: Baseline calibrations and error models already made, by model and records.
+        self._baselines: dict = {}
         #: Error model of a baseline calibrated earlier (a tie-break refit of the calibrated model).
         self._error_model = None
 
@@ -234,6 +237,23 @@ class Discovery:
             for p in profiles))
         return iteration.added
 
+    def _baseline_calibration(self, model: ThermalModel, baseline: list, dt_s):
+        """The calibration of the baseline parameters ``model`` has on the ``baseline`` records
+        (cached by the records' identity), or None when it has none of them."""
+        from .calibrate import calibrate
+
+        names = [n for n in self.baseline_parameters if n in model.parameters]
+        if not names:
+            self._report("baseline: the model has none of the baseline parameters "
+                         f"({', '.join(self.baseline_parameters)}): taken as calibrated, the baseline gives the error model")
+            return None
+        key = ("calibration", model, tuple(id(b) for b in baseline), dt_s)
+        if key not in self._baselines:  # the records are kept with it: their ids stay theirs
+            self._baselines[key] = (baseline, calibrate(model, baseline[0], names, dt_s) if len(baseline) == 1 else
+                                    calibrate_baselines(model, baseline, names, dt_s))
+            self._report(f"baseline calibrated on {len(baseline)} record(s): {', '.join(names)}")
+        return self._baselines[key][1]
+
     def _report(self, text: str) -> None:
         if self.progress:
             self.progress(text)
@@ -246,13 +266,17 @@ class Discovery:
         model : ThermalModel
         data : MeasurementData, pandas.DataFrame or path
             The measurements to explain.
-        baseline : MeasurementData, pandas.DataFrame or path, optional
-            Healthy measurements of the same machine and sensors: ``baseline_parameters`` are
-            calibrated on them first, so that what remains in ``data`` is the effect; the
-            calibrated model's error on them (:mod:`~genthermal.diagnose.error_model`) then scores
-            every hypothesis (effective samples, tests against the discrepancy floor) and widens
-            the calibration's intervals. A baseline of other sensors, or shorter than the error
-            model needs, is refused (InputError).
+        baseline : MeasurementData, pandas.DataFrame or path, or a list of them, optional
+            Healthy measurements of the same machine and sensors: ``baseline_parameters`` (those
+            the model has; none: the model is taken as calibrated) are calibrated on them first, so
+            that what remains in ``data`` is the effect; the calibrated model's error on them
+            (:mod:`~genthermal.diagnose.error_model`) then scores every hypothesis (effective
+            samples, tests against the discrepancy floor) and widens the calibration's intervals.
+            Several records: one calibration over all, each from its own initial state, and one
+            error model pooled over them (:mod:`~genthermal.diagnose.baseline_set`); fitting
+            several ``data`` records against the same list (the same objects) calibrates once. A
+            baseline of other sensors, or shorter than the error model needs, is refused
+            (InputError).
         dt_s : float, optional
             Resample the data (and baseline) to this period first, s.
 
@@ -262,8 +286,6 @@ class Discovery:
             ``ranking``, ``verdict``, ``improved_model()``, the residual tests and, for
             look-alikes, the separating experiment.
         """
-        from .calibrate import calibrate
-
         if not isinstance(model, ThermalModel):
             raise InputError("model", type(model).__name__, "expected a ThermalModel")
         measured = data if isinstance(data, MeasuredSeries) else as_measurements(data, model.spec.interface)
@@ -278,21 +300,23 @@ class Discovery:
         view = self._view(model, measured)
         calibration, error_model = None, self._error_model
         if baseline is not None:
-            baseline = as_measurements(baseline, model.spec.interface)
-            check_same_sensors(measured, baseline)
-            check_baseline_length(float(baseline.time_s[-1] - baseline.time_s[0]))
-            names = [n for n in self.baseline_parameters if n in model.parameters]
-            calibration = calibrate(model, baseline, names, dt_s)
-            model = calibration.model
-            self._report(f"baseline calibrated: {', '.join(names)}")
+            baseline = baseline_records(baseline, measured, model.spec.interface)
+            calibration = self._baseline_calibration(model, baseline, dt_s)
+            if calibration is not None:
+                model = calibration.model
         memo = self._memo if calibration is None else {}
         if view is not None and ("view", model, view) not in memo:
             memo[("view", model, view)] = view(model)
         viewed = model if view is None else memo[("view", model, view)]
         series = series_for(viewed, measured, dt_s)
-        if calibration is not None:
-            error_model = baseline_error_model(model, viewed, baseline, dt_s, view, self.candidates)
-            calibration.fisher = widened_calibration(calibration.fisher, calibration.values, error_model)
+        if baseline is not None:
+            key = ("error model", model, view, tuple(id(b) for b in baseline), dt_s)
+            if key not in self._baselines:  # the records are kept with it: their ids stay theirs
+                error_model = baseline_error_model(model, viewed, baseline, dt_s, view, self.candidates)
+                self._baselines[key] = (baseline, error_model)
+                if calibration is not None:
+                    calibration.fisher = widened_calibration(calibration.fisher, calibration.values, error_model)
+            error_model = self._baselines[key][1]
             self._report(error_model.summary())
         criterion = self.criterion
         if error_model is not None and type(self.criterion) is BIC:

@@ -81,23 +81,34 @@ class ErrorModel:
             :data:`MIN_CORRELATION_TIMES` correlation times of its most correlated sensor (the
             message names the minimum length).
         """
+        return cls.from_residuals([residual], names, dt_s, source)
+
+    @classmethod
+    def from_residuals(cls, residuals, names, dt_s: float, source: str = "") -> "ErrorModel":
+        """Estimate the error model from the residuals of several healthy records (each
+        (n_sensors, N_i), K, at ``dt_s`` s): the level over all samples, the lag-1 correlation from
+        the pairs of neighbouring samples within each record; their total length must meet the
+        minima of :meth:`from_residual`."""
         from .search import noise_std
 
-        residual = np.atleast_2d(np.asarray(residual, dtype=float))
-        duration = residual.shape[1] * float(dt_s)
+        residuals = [np.atleast_2d(np.asarray(r, dtype=float)) for r in residuals]
+        duration = sum(r.shape[1] for r in residuals) * float(dt_s)
         check_baseline_length(duration)
         sensors = []
-        for name, e in zip(names, residual):
-            e = e[np.isfinite(e)]
+        for i, name in enumerate(names):
+            parts = [r[i][np.isfinite(r[i])] for r in residuals]
+            e = np.concatenate(parts)
             if e.size < 10:
                 raise InputError("baseline", name, "has fewer than 10 valid samples: no error model for it")
             level = float(np.sqrt(np.mean(e ** 2)))
-            phi = float(np.clip((e[1:] @ e[:-1]) / max(e @ e, 1e-300), 0.0, MAX_PHI))
+            lagged = sum(float(p[1:] @ p[:-1]) for p in parts)
+            phi = float(np.clip(lagged / max(e @ e, 1e-300), 0.0, MAX_PHI))
             sensors.append(SensorError(str(name), level, phi, noise_std(e[None, :])))
         model = cls(tuple(sensors), float(dt_s), source)
         needed = max(MIN_BASELINE_S, MIN_CORRELATION_TIMES * model.correlation_time_s)
         if duration < needed:
-            raise InputError("baseline", f"{duration / 3600:.2f} h",
+            raise InputError("baseline", f"{duration / 3600:.2f} h" + (f" over {len(residuals)} records"
+                                                                       if len(residuals) > 1 else ""),
                              f"too short to estimate the model's error: its residual stays correlated for "
                              f"{model.correlation_time_s / 60:.0f} min, so the healthy baseline must cover at least "
                              f"{needed / 3600:.1f} h ({MIN_CORRELATION_TIMES:.0f} correlation times)")
@@ -224,15 +235,48 @@ def check_same_sensors(measured, baseline) -> None:
                          "healthy record of the same machine and sensors")
 
 
+def baseline_records(baseline, measured, interface) -> list:
+    """``baseline`` (one record or a list of them: MeasurementData, DataFrame or path) as a list of
+    MeasurementData, each of the sensors of ``measured``, together at least the error model's
+    minimum length (InputError naming the record, or the total, otherwise)."""
+    given = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
+    if not given:
+        raise InputError("baseline", "[]", "give at least one healthy record")
+    from .compare import as_measurements
+
+    records = [as_measurements(b, interface) for b in given]
+    for record in records:
+        check_same_sensors(measured, record)
+        if record.time_s.size < 2:
+            raise InputError("baseline", record.source, "has fewer than two samples")
+    durations = [float(r.time_s[-1] - r.time_s[0]) for r in records]
+    if len(records) == 1:
+        check_baseline_length(durations[0])
+    elif sum(durations) < MIN_BASELINE_S:
+        names = "; ".join(f"{r.source} ({d / 3600:.2f} h)" for r, d in zip(records, durations))
+        raise InputError("baseline", f"together {sum(durations) / 3600:.2f} h",
+                         f"too short to estimate the model's error: the healthy records must cover at least "
+                         f"{MIN_BASELINE_S / 3600:.1f} h together ({names})")
+    return records
+
+
 def baseline_error_model(model, viewed, baseline, dt_s, view, catalogue) -> ErrorModel:
     """The error model of the calibrated ``model`` (``viewed`` through the diagnosis' sensor
-    ``view``) on the healthy ``baseline`` record: the residual of the model with its initial
-    state fitted, as the diagnosis fits the record under test
+    ``view``) on the healthy ``baseline`` record, or list of records (pooled:
+    :meth:`ErrorModel.from_residuals`): the residual of the model with each record's initial state
+    fitted, as the diagnosis fits the record under test
     (:meth:`~genthermal.diagnose.search.EffectSearch.fit_found`)."""
     from .discover import series_for
     from .search import EffectSearch
 
-    series = series_for(viewed, baseline, dt_s)
-    search = EffectSearch(model, series, [], {}, catalogue, BIC(), view).fit_found()
-    residual = search.predicted_before - series.outputs
-    return ErrorModel.from_residual(residual, viewed.output_names, series.dt_s, series.source)
+    residuals, sources, steps = [], [], set()
+    for record in baseline if isinstance(baseline, (list, tuple)) else [baseline]:
+        series = series_for(viewed, record, dt_s)
+        search = EffectSearch(model, series, [], {}, catalogue, BIC(), view).fit_found()
+        residuals.append(search.predicted_before - series.outputs)
+        sources.append(series.source)
+        steps.add(round(series.dt_s, 9))
+    if len(steps) > 1:
+        raise InputError("baseline", ", ".join(sources), f"the records have different sample periods "
+                         f"({', '.join(f'{s:g}' for s in sorted(steps))} s): give one step (--dt or --fit-step)")
+    return ErrorModel.from_residuals(residuals, viewed.output_names, steps.pop(), ", ".join(sources))

@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..effects import FROM_START_TOLERANCE_S
 from ..errors import InputError
 from .search import _indicator, _Problem, _Structure
 
@@ -184,7 +185,11 @@ def refine_verdict(search, chosen, pool: list):
     profiler = OnsetProfiler(structure, search.x0_coefficients, search.criterion)
     refined_onsets, z, _, profiles = profiler.refine(effects, onsets, z)
     result = chosen
-    if refined_onsets != onsets:
+    # a design property (Effect.from_start) keeps its onset in the first minutes: one the profile
+    # moves later is no finding (Effect.implausible), so the verdict's own onset stays
+    late = any(search.effect(e).from_start and search.elapsed_s(k * factor) > FROM_START_TOLERANCE_S
+               for e, k in zip(effects, refined_onsets))
+    if refined_onsets != onsets and not late:
         if isinstance(chosen, JointCandidate):
             moved = pairs._finish(tuple(effects), refined_onsets, z, polish=True)
         else:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ..model import ModelSpec, ThermalModel
 from ..parameters import ParameterSet
 from . import genco_rf201a
-from .interface import GeneratorRole, InputKind, Machine, MachineInterface, ModelInput, Role, Sensor
+from .interface import GeneratorRole, InputKind, Machine, MachineInterface, ModelInput, Role, Sensor, SpeedRole
 from .registry import BUILT_IN, known_machines, resolve_machine
 
 #: Built-in machines by name (plug-ins are found through :func:`resolve_machine`).
@@ -19,7 +19,7 @@ MACHINES = BUILT_IN
 DEFAULT_MACHINE = genco_rf201a.NAME
 
 __all__ = ["MACHINES", "DEFAULT_MACHINE", "GeneratorRole", "InputKind", "Machine", "MachineInterface",
-           "ModelInput", "Role", "Sensor", "build_model", "known_machines", "resolve_machine"]
+           "ModelInput", "Role", "Sensor", "SpeedRole", "build_model", "known_machines", "resolve_machine"]
 
 
 def build_model(machine: "str | Machine" = DEFAULT_MACHINE, parameters: ParameterSet | None = None,

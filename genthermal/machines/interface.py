@@ -24,14 +24,17 @@ class Role(enum.Enum):
 
     The value a machine gives each role is, by role:
 
-    * node roles (``SLOT_WINDING``: a node; ``END_WINDINGS``, ``IRON``, ``ROTOR``, ``FRAME``: tuples
-      of nodes),
-    * link roles (``WINDING_INSULATION``, ``FRAME_TO_AMBIENT``: tuples of (node, node) links),
+    * node roles (``SLOT_WINDING``: a node; ``END_WINDINGS``, ``IRON``, ``ROTOR``, ``FRAME``,
+      ``BEARING``: tuples of nodes),
+    * link roles (``WINDING_INSULATION``, ``FRAME_TO_AMBIENT``, ``AIR_GAP``, ``END_SPACE_CONVECTION``:
+      tuples of (node, node) links; ``END_SPACE_CONVECTION`` the convection paths of the end-space air),
     * ``INTERNAL_CONVECTION``: names of convection-coefficient parameters swept by the coolant flow,
     * ``COOLANT_FLOW``: True when the coolant is modelled as advected air streams,
     * input roles (``LOAD_CURRENTS``: the current inputs whose squares sum is proportional to the
       copper loss; ``PHASE_CURRENTS``: the three per-phase RMS currents; ``EXCITATION_CURRENT``:
       the exciter field current input),
+    * ``SPEED``: a :class:`SpeedRole` (the rotor speed input and the operating point the
+      speed-dependent effects refer to),
     * ``GENERATOR``: a :class:`GeneratorRole` (the power system and load scheduler need it).
     """
 
@@ -48,6 +51,10 @@ class Role(enum.Enum):
     PHASE_CURRENTS = "phase_currents"
     EXCITATION_CURRENT = "excitation_current"
     GENERATOR = "generator"
+    SPEED = "speed"
+    AIR_GAP = "air_gap"
+    END_SPACE_CONVECTION = "end_space_convection"
+    BEARING = "bearing"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,6 +109,32 @@ class Sensor:
     noise_variance_K2: float
     limit_C: float | None = None
     description: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class SpeedRole:
+    """The rotor speed of a machine whose losses and convection depend on it.
+
+    Attributes
+    ----------
+    input : str
+        The speed input (kind :attr:`InputKind.SPEED`), rpm.
+    reference_rpm : float
+        Speed the speed-dependent effects' sizes refer to (their loss or conductance rise at this
+        speed), rpm: the machine's top speed in service.
+    reference_current_A : float
+        Current amplitude of the load currents the current-dependent parts refer to, A.
+    """
+
+    input: str
+    reference_rpm: float
+    reference_current_A: float
+
+    def __post_init__(self):
+        for field in ("reference_rpm", "reference_current_A"):
+            value = getattr(self, field)
+            if not (isinstance(value, (int, float)) and value > 0):
+                raise InputError(f"SpeedRole.{field}", value, "must be a number > 0")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -193,6 +226,13 @@ class MachineInterface:
             for name in self._as_tuple(self.roles.get(role, ())):
                 if name not in names:
                     raise InputError(f"interface.roles[{role.name}]", name, "not an input of the machine")
+        speed = self.roles.get(Role.SPEED)
+        if speed is not None:
+            kinds = {i.name: i.kind for i in self.inputs}
+            if not isinstance(speed, SpeedRole):
+                raise InputError("interface.roles[SPEED]", speed, "must be a genthermal.machines.SpeedRole")
+            if kinds.get(speed.input) is not InputKind.SPEED:
+                raise InputError("interface.roles[SPEED].input", speed.input, "not a speed input of the machine")
         for field in ("rated_inputs", "linearisation_inputs"):
             unknown = sorted(set(getattr(self, field)) - set(names))
             if unknown:
