@@ -131,6 +131,9 @@ BENCHMARKS = (
     Benchmark("ipmsm", "bench_ipmsm.py", (), None, json_flag=False,
               reason="cross-validated calibration over 12 real bench profiles (4 folds and one fit over all): "
               "about 10 min; needs ../shared/records"),
+    Benchmark("ipmsm_diagnose", "bench_ipmsm_diagnose.py", (), None, json_flag=False,
+              reason="diagnosis of the plain model on 4 folds of the real bench profiles, then a calibration "
+              "with the effect named: about 10 min; needs ../shared/records"),
 )
 #: Scripts of ``benchmarks/`` that are not benchmarks (helpers, report writers), with what they are.
 NOT_BENCHMARKS = {
