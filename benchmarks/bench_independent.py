@@ -8,7 +8,8 @@ the record's truth file:
   names, and no sensor is blamed; for a single-effect record, one effect claimed with a flagged
   look-alike that contains the true one counts too; for the stretch records, "not explained by
   the catalogue" with an open-search term in the right node group (:data:`STRETCH_GROUPS`) and no
-  confident catalogue verdict, a flagged look-alike being none; for the control record without
+  confident catalogue verdict, a flagged look-alike or a nearest catalogue effect (claim
+  confidence ``nearest``) being none; for the control record without
   the copper resistance rise, no catalogue or sensor claim), ``partly`` (some true effect named or
   flagged, or a healthy record with only an "unexplained" flag), ``wrong``;
 * ``false_claims``: claims (machine effects or sensor faults; on a record without an effect also
@@ -53,7 +54,7 @@ EFFECT_NAMES = {"coolant_blockage": "coolant_flow_reduction", "inter_turn_short"
 #: Open-search terms in the right node group for the stretch records (prefixes of the term names of
 #: :func:`genthermal.diagnose.open_search.heat_flow_library`): a flow-dependent convection is a
 #: change of the air streams or the internal convection, a phase-resolved short a heat flow into
-#: the slot winding.
+#: the slot winding (of every surface or of one, ``conductance_internal_convection_h_top_air``).
 STRETCH_GROUPS = {"stretch_a_blockage_flow_dependent_h": ("conductance_air_streams", "conductance_internal_convection"),
                   "stretch_d_short_phase_resolved": ("heat_I_w2_slot_winding", "heat_I2_slot_winding",
                                                      "heat_I_u2_slot_winding", "heat_I_v2_slot_winding")}
@@ -77,7 +78,9 @@ def claims_of(document: dict) -> dict:
     lookalike = None
     if document.get("experiment"):
         lookalike = document["experiment"].get("explanations") or document["experiment"].get("candidates")
-    return {"machine": machine, "sensors": sensors, "unexplained": bool(document.get("unexplained")),
+    nearest = [c["effect"] for c in document.get("claims", [])
+               if c.get("kind") == "machine_effect" and c.get("confidence") == "nearest"]
+    return {"machine": machine, "nearest": nearest, "sensors": sensors, "unexplained": bool(document.get("unexplained")),
             "open_terms": [t.get("term", t.get("name")) for t in document.get("open_search", {}).get("terms", [])]
             if isinstance(document.get("open_search"), dict) else [],
             "lookalike": lookalike}
@@ -107,7 +110,7 @@ def score(name: str, truth: dict, document: dict) -> dict:
     lookalike = _lookalike_names(claims["lookalike"])
     if category == "stretch":
         nearest = expected
-        flagged = machine & lookalike if lookalike else set()
+        flagged = (machine & lookalike if lookalike else set()) | set(claims["nearest"])
         confident = machine - flagged
         right_group = any(t.startswith(STRETCH_GROUPS.get(name, ("-",))) for t in claims["open_terms"])
         if claims["unexplained"] and right_group and not confident and not sensors:

@@ -19,6 +19,7 @@ import pytest
 from genthermal.diagnose.criterion import BIC
 from genthermal.diagnose.error_model import (MIN_BASELINE_S, ErrorModel, WhitenedBIC, check_same_sensors,
                                               widened_calibration)
+from genthermal.diagnose.phase_spread import PhaseSpread
 from genthermal.diagnose.sensor_faults import SensorHypothesis
 from genthermal.diagnose.sensor_plausibility import refusal
 from genthermal.effects import CATALOGUE
@@ -60,6 +61,39 @@ def test_a_baseline_too_short_for_the_error_model_names_the_minimum_length():
     slow = np.array([_ar1(0.995, 0.3, 400, 4)])
     with pytest.raises(InputError, match="correlation times"):
         ErrorModel.from_residual(slow, ["T_winding"], 10.0)
+
+
+PHASES = ("T_winding_u", "T_winding_v", "T_winding_w")
+
+
+def _phase_residual(seed: int, n: int = 1500) -> np.ndarray:
+    """Residuals (model - measurement, K) of three phase sensors and the iron at 10 s: a common
+    model error of 0.3 K (correlated) plus each sensor's own 0.05 K."""
+    common = _ar1(0.98, 0.3, n, seed)
+    return np.array([common + _ar1(0.6, 0.05, n, seed + k + 1) for k in range(3)] + [_ar1(0.9, 0.2, n, seed + 9)])
+
+
+def test_a_persistent_one_phase_difference_is_unexplained_and_a_common_error_is_not():
+    names = [*PHASES, "T_iron"]
+    spread = PhaseSpread.from_residual(_phase_residual(1), names, PHASES, 10.0)
+    assert all(0 < level < 0.05 for level in spread.levels_K)  # the 0.3 K common error cancels
+    healthy = spread.test(_phase_residual(2), names, 10.0)
+    assert not healthy["unexplained"] and max(p["ratio"] for p in healthy["per_phase"].values()) < 2
+    # another mission: the common error four times larger, still no phase difference
+    larger = _phase_residual(3)
+    larger[:3] += 4 * _ar1(0.99, 0.3, larger.shape[1], 4)
+    assert not spread.test(larger, names, 10.0)["unexplained"]
+    # phase w 0.3 K hotter than the model from halfway (the model cold there: residual -0.3 K)
+    faulted = _phase_residual(5)
+    faulted[2, 750:] -= 0.3
+    result = spread.test(faulted, names, 10.0)
+    assert result["unexplained"] and max(result["per_phase"], key=lambda c: result["per_phase"][c]["ratio"]) == PHASES[2]
+    assert "T_winding_w" in result["summary"]
+    # without the three phase sensors fitted one by one there is no spread test
+    assert PhaseSpread.from_residual(_phase_residual(1)[2:], names[2:], PHASES, 10.0) is None
+    assert spread.test(_phase_residual(1)[2:], names[2:], 10.0) is None
+    with pytest.raises(InputError, match="phase sensors"):
+        PhaseSpread.from_residual(np.zeros((3, 1500)), PHASES, PHASES, 10.0)
 
 
 def test_whitened_bic_counts_effective_samples_only():
@@ -329,3 +363,39 @@ def test_a_single_effect_explained_to_the_floor_gets_no_partner(tmp_path):
     assert code == 0
     assert [f["effect"] for f in document["found"]] == ["winding_insulation_degradation"]
     assert document["sensor_faults"] == [] and not document["unexplained"]
+
+
+@pytest.mark.slow
+def test_a_blockage_whose_convection_falls_otherwise_is_the_nearest_effect_with_a_convection_term(tmp_path):
+    """stretch_a: the independent blockage's convection falls as flow^0.8 over other surfaces than
+    the model's; the blockage is only the nearest catalogue effect, and the open search describes
+    its misfit in the internal convection (not the insulation or a heat flow)."""
+    code, document = _diagnose(tmp_path, "stretch_a_blockage_flow_dependent_h")
+    assert code == 0 and document["sensor_faults"] == []
+    assert document["unexplained"] and document["nearest"]
+    machine = [c for c in document["claims"] if c["kind"] == "machine_effect"]
+    assert [c["effect"] for c in machine] == ["coolant_flow_reduction"] and {c["confidence"] for c in machine} == {"nearest"}
+    assert any(c["kind"] == "unexplained" and c["text"].startswith("not explained by the catalogue")
+               for c in document["claims"])
+    terms = document["open_search"]["terms"]
+    assert terms and all(t["group"] == "the internal convection to the cooling air" for t in terms)
+    truth = json.loads((RECORDS / "truth" / "stretch_a_blockage_flow_dependent_h.json").read_text())["effects"][0]
+    assert all(abs(t["onset_s"] - truth["onset_s"]) <= 600.0 for t in terms)
+    assert document["open_search"]["rmse_after"] <= 1.5 * document["residual"]["floor_K"]
+
+
+@pytest.mark.slow
+def test_a_short_that_heats_one_phase_is_not_the_catalogue_short_but_a_heat_in_that_phase(tmp_path):
+    """stretch_d: the faulted phase's sensor reads hotter than the others; the catalogue's short
+    (phase u) cannot make that, the phase spread test says so, and the open search puts an I_w²
+    heat into the slot winding from the short's onset."""
+    code, document = _diagnose(tmp_path, "stretch_d_short_phase_resolved")
+    assert code == 0 and document["sensor_faults"] == []
+    spread = document["residual"]["phase_spread"]
+    assert spread["unexplained"] and spread["per_phase"]["T_winding_w"]["ratio"] > spread["threshold"]
+    assert document["nearest"] and [f["effect"] for f in document["found"]] == ["phase_short_circuit"]
+    truth = json.loads((RECORDS / "truth" / "stretch_d_short_phase_resolved.json").read_text())["effects"][0]
+    [term] = document["open_search"]["terms"]
+    assert term["term"] == "heat_I_w2_slot_winding" and document["open_search"]["in_place_of"] == "phase_short_circuit"
+    assert term["params"]["k_heat_I_w2_slot_winding"] == pytest.approx(truth["params"]["k_W_per_A2"], rel=0.2)
+    assert abs(term["onset_s"] - truth["onset_s"]) <= 600.0

@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 
 from genthermal.diagnose.catalogue import Catalogue
+from genthermal.diagnose.discover import misfit_of
 from genthermal.diagnose.discovery import Discovery
 from genthermal.diagnose.hidden import Injection, make_hidden_effect_case
 from genthermal.diagnose.loss_terms import loss_nodes, loss_reform_effect, loss_temperature_effect
 from genthermal.diagnose.open_search import conductance_effect, describe_term, effect_code, heat_flow_library
+from genthermal.diagnose.search import FoundEffect
 from genthermal.effects import CATALOGUE
 from genthermal.errors import InputError
 from genthermal.synth import THESIS_NOISE_VARIANCE_K2
@@ -76,6 +78,44 @@ def test_a_linearised_copper_loss_undone_is_the_copper_loss_re_formed_on_I2(desi
         _steady_outputs(design_model.with_effect("quadratic_copper_loss", lambda_I2=weight), **INPUTS), atol=1e-9)
     np.testing.assert_allclose(_steady_outputs(design_model.with_effect(reform), **INPUTS),
                                _steady_outputs(design_model, **INPUTS), atol=1e-9)
+
+
+def test_one_surface_convection_terms_together_are_the_whole_convection_term(plant_model):
+    """The three one-surface convection factors at k are the internal-convection factor at k; one of
+    them alone changes the outputs less, and its code rebuilds it."""
+    library = heat_flow_library(plant_model)
+    surfaces = [n for n in library if n.startswith("conductance_internal_convection_")]
+    assert len(surfaces) == 3
+    k, each = 0.6, plant_model
+    for name in surfaces:
+        each = each.with_effect(library[name], **{f"k_{name}": k})
+    whole = plant_model.with_effect(library["conductance_internal_convection"], k_conductance_internal_convection=k)
+    np.testing.assert_allclose(_steady_outputs(each, **INPUTS), _steady_outputs(whole, **INPUTS), atol=1e-9)
+    top = plant_model.with_effect(library["conductance_internal_convection_h_top_air"],
+                                  k_conductance_internal_convection_h_top_air=k)
+    rise = _steady_outputs(top, **INPUTS)[0] - _steady_outputs(plant_model, **INPUTS)[0]
+    assert 0 < rise < _steady_outputs(whole, **INPUTS)[0] - _steady_outputs(plant_model, **INPUTS)[0]
+    found = FoundEffect("conductance_internal_convection_h_top_air",
+                        {"k_conductance_internal_convection_h_top_air": k}, 3600.0, 60)
+    assert "h_top_air multiplied by about 0.60 from 1.00 h" in describe_term(found, library)
+    namespace = {"model": plant_model}
+    exec(effect_code(found, library, "top_convection"), namespace)
+    np.testing.assert_allclose(_steady_outputs(namespace["model"], **INPUTS), _steady_outputs(top, **INPUTS), atol=1e-9)
+    with pytest.raises(InputError, match="coefficients"):
+        conductance_effect("air_streams", coefficients=("h_top_air",))
+
+
+def test_a_term_beginning_with_the_nearest_effect_must_act_where_it_acts(plant_model):
+    """On top of a blockage, a term of the convection is its misfit, the insulation is not; on top
+    of a short, a heat flow into the slot winding is."""
+    library = heat_flow_library(plant_model)
+    blockage, short = CATALOGUE["coolant_flow_reduction"], CATALOGUE["phase_short_circuit"]
+    assert misfit_of(library["conductance_internal_convection_h_top_air"], blockage)
+    assert misfit_of(library["conductance_air_streams"], blockage)
+    assert not misfit_of(library["conductance_winding_insulation"], blockage)
+    assert not misfit_of(library["heat_constant_stator_iron"], blockage)
+    assert misfit_of(library["heat_I_w2_slot_winding"], short) and misfit_of(library["heat_I2_slot_winding"], short)
+    assert not misfit_of(library["heat_constant_frame"], short)
 
 
 def test_library_has_the_new_terms_and_refuses_unknown_ones(plant_model, design_model):

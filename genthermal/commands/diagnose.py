@@ -158,12 +158,17 @@ def _diagnose_one(discovery, model, data, baselines, dt_s, args) -> dict:
         print(f"  sensor fault: {fault['text']} (ΔBIC {fault['delta_ic']:.0f}, by {fault['evidence']})")
     for refused in document.get("refused_sensor_faults", []):
         print(f"  refused sensor fault: {refused['refused']}")
-    print(f"verdict: {document['verdict']}")
+    print(f"verdict: {document['verdict']}" + (" (the nearest catalogue effect, not a confident verdict: it leaves "
+                                               "the residual unexplained)" if document["nearest"] else ""))
     if document.get("open_search"):
         terms = document["open_search"]["terms"]
         lead = ("not explained by the catalogue" if not document["found"] else
-                f"{' + '.join(f['effect'] for f in document['found'])} leaves the residual unexplained")
-        print(f"{lead}; open search ({document['open_search']['library_size']} terms): "
+                f"not explained by the catalogue: {' + '.join(f['effect'] for f in document['found'])} leaves the "
+                "residual unexplained")
+        on_top, in_place = document["open_search"]["on_top_of"], document["open_search"]["in_place_of"]
+        print(f"{lead}; open search ({document['open_search']['library_size']} terms"
+              + (f", in place of {in_place}" if in_place else "")
+              + (f", on top of {' + '.join(on_top)}" if on_top else "") + "): "
               + ("; ".join(t["text"] for t in terms) if terms else "no term is significant either"))
         for term in terms:
             print(f"  to keep {term['term']} as an effect:\n" + "".join(f"    {line}\n" for line in

@@ -90,6 +90,15 @@ def same_change(first_s: float, second_s: float) -> bool:
     return min(first_s, second_s) > FROM_START_TOLERANCE_S and abs(first_s - second_s) <= SAME_ONSET_S
 
 
+def misfit_of(candidate: Effect, nearest: Effect) -> bool:
+    """True when ``candidate``, beginning with the catalogue's ``nearest`` effect (:func:`same_change`),
+    describes that change's misfit: it acts on a part or input the nearest effect acts on (a role
+    both need: a blockage's misfit lies in the air streams or the convection, a short's in the slot
+    winding). A term on another part beginning in the same minutes would be a second fault starting
+    with the first, which :func:`one_change` refuses for pairs."""
+    return bool(set(candidate.needs) & set(nearest.needs))
+
+
 def choose_pair(pairs: Sequence[JointCandidate], singles: Sequence[Candidate], noise: float,
                 evidence_limit: float = DELTA_BIC_LIMIT, design: DesignSensorScale | None = None) -> JointCandidate | None:
     """The best-ranked pair that passes the four tests against the model without effects, against
@@ -268,19 +277,27 @@ class Diagnosis:
         chosen = self.iterations[0].added_pair or self.iterations[0].added
         return list(chosen.onset_profiles) if chosen is not None else []
 
+    @property
+    def nearest(self) -> bool:
+        """True when the effects found leave the residual unexplained: they are the catalogue's
+        nearest effects, not a confident verdict (the open search describes what they miss)."""
+        return bool(self.found) and self.unexplained
+
     def claims(self) -> list:
         """Every claim with its kind (``machine_effect``, ``sensor_fault``, ``unexplained``), what it
         says, its evidence and its confidence (the criterion's change: ``strong`` below twice the
-        evidence limit, else ``moderate``; ``unexplained`` has the residual's level instead)."""
+        evidence limit, else ``moderate``; ``nearest`` for effects that leave the residual
+        unexplained; ``unexplained`` has the residual's level instead)."""
         claims = []
         rounds = {e: it for it in self.iterations for e in it.added_effects}
         for found in self.found:
             iteration = rounds.get(found.effect, self.iterations[0])
             chosen = iteration.added_pair or iteration.added
             delta = chosen.delta_bic if chosen is not None else float("nan")
+            confidence = "nearest" if self.nearest else "strong" if delta < 2 * DELTA_BIC_LIMIT else "moderate"
             claims.append({"kind": "machine_effect", "effect": found.effect, "params": found.values,
                            "onset_s": found.onset_s, "evidence": f"{self.criterion} change {delta:.1f} on the record",
-                           "delta_ic": delta, "confidence": "strong" if delta < 2 * DELTA_BIC_LIMIT else "moderate"})
+                           "delta_ic": delta, "confidence": confidence})
         for fault in (self.sensor_screen.found if self.sensor_screen is not None else []):
             claims.append({"kind": "sensor_fault", "sensor": fault.fault.sensor, "text": fault.fault.describe(),
                            "evidence": fault.evidence, "delta_ic": fault.delta_bic,
@@ -288,8 +305,9 @@ class Diagnosis:
                            fault.delta_bic < 2 * DELTA_BIC_LIMIT else "moderate"})
         if self.unexplained:
             terms = (self.open_search or {}).get("terms", [])
-            text = "not explained by the catalogue" if not self.found else \
-                f"{' + '.join(f.effect for f in self.found)} leaves a residual the catalogue does not explain"
+            text = "not explained by the catalogue" if not self.found else (
+                f"not explained by the catalogue: {' + '.join(f.effect for f in self.found)}, the nearest catalogue "
+                "effect, leaves a residual it does not explain")
             claims.append({"kind": "unexplained", "text": text, "residual": self.residual.get("summary", ""),
                            "evidence": "residual tests", "rmse_K": self.residual.get("rmse_K"),
                            "floor_K": self.residual.get("floor_K"),
@@ -337,7 +355,7 @@ class Diagnosis:
             "model": self.model.name, "data": self.series.source, "samples": int(self.series.time_s.size),
             "dt_s": self.series.dt_s, "noise_std_K": self.noise_std, "criterion": self.criterion,
             "sensors": self.output_names,
-            "verdict": self.verdict,
+            "verdict": self.verdict, "nearest": self.nearest,
             "explanation": first.explanation, "ranked": [c.to_dict() for c in first.ranked],
             "pairs": [p.to_dict() for p in first.pairs],
             "thresholds": {"delta_bic_below": DELTA_BIC_LIMIT, "min_rmse_reduction": MIN_RMSE_REDUCTION,

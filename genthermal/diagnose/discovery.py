@@ -22,8 +22,8 @@ from .catalogue import Catalogue
 from .criterion import BIC
 from .design_scale import DesignSensorScale
 from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosis, Iteration, _explanations,
-                       choose_pair, explain, explain_pair, implausible_reason, is_significant, rival, same_change,
-                       series_for)
+                       choose_pair, explain, explain_pair, implausible_reason, is_significant, misfit_of, rival,
+                       same_change, series_for)
 from .baseline_set import calibrate_baselines
 from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, baseline_records,
                           widened_calibration)
@@ -52,6 +52,24 @@ def residual_verdict(series, predicted, viewed: ThermalModel, error_model=None) 
                           viewed.spec.interface, "the discrepancy floor",
                           {e.sensor: max(e.level_K, noise) for e in error_model.sensors},
                           (UNEXPLAINED_OVER_FLOOR, STRUCTURE_OVER_FLOOR))
+
+
+def final_residual(series, predicted, viewed: ThermalModel, error_model=None) -> dict:
+    """:func:`residual_verdict` with, when the phase sensors are fitted one by one, their spread
+    against its baseline level (:mod:`~genthermal.diagnose.phase_spread`, ``phase_spread`` in the
+    result): the verdict's test. It does not decide whether another catalogue effect is sought:
+    no catalogue round can remove a one-phase difference the first round leaves (the catalogue's
+    one phase-resolved effect was fitted there); the open search can."""
+    residual = residual_verdict(series, predicted, viewed, error_model)
+    spread = None if error_model is None or error_model.phase_spread is None else \
+        error_model.phase_spread.test(predicted - series.outputs, viewed.output_names, series.dt_s)
+    if spread is not None:
+        residual["phase_spread"] = spread
+        if spread["unexplained"]:
+            residual["summary"] = (residual["summary"] + " " + spread["summary"] if residual["unexplained"] else
+                                   f"{spread['summary']} Do not read the effects found as the whole answer.")
+            residual["unexplained"] = True
+    return residual
 
 
 class Discovery:
@@ -258,7 +276,8 @@ class Discovery:
         if self.progress:
             self.progress(text)
 
-    def fit(self, model: ThermalModel, data, baseline=None, dt_s: float | None = None) -> Diagnosis:
+    def fit(self, model: ThermalModel, data, baseline=None, dt_s: float | None = None,
+            found: Sequence[FoundEffect] = ()) -> Diagnosis:
         """Search ``data`` for the candidates ``model`` lacks.
 
         Parameters
@@ -279,6 +298,11 @@ class Discovery:
             (InputError).
         dt_s : float, optional
             Resample the data (and baseline) to this period first, s.
+        found : sequence of FoundEffect, optional
+            Effects the search starts from (their values and onsets refitted with each candidate;
+            names looked up in ``candidates``): the catalogue's nearest effects under the open
+            search (:mod:`~genthermal.diagnose.open_followup`). A candidate may begin with one of
+            them, since it then describes that change's misfit.
 
         Returns
         -------
@@ -332,14 +356,17 @@ class Discovery:
             screen.use_error_model(error_model, criterion)
         catalogue = self.candidates
         evidence = criterion.evidence_limit
-        found: list[FoundEffect] = []
+        given = {f.effect for f in found}
+        found: list[FoundEffect] = list(found)
         iterations: list[Iteration] = []
         while True:
             search = EffectSearch(model, series, found, memo, catalogue, criterion, view).fit_found()
             if error_model is not None:
                 search.noise = max(search.noise, error_model.floor_K)
-            if found and error_model is not None and not residual_verdict(
-                    series, search.predicted_before, viewed, error_model)["unexplained"]:
+            # on top of given effects (the open search) the verdict's test decides, as it called them unexplained
+            test = final_residual if given else residual_verdict
+            if found and error_model is not None and not test(series, search.predicted_before, viewed,
+                                                              error_model)["unexplained"]:
                 # the found effects explain the record to the floor: no further effect is fitted
                 self._report(f"round {len(iterations) + 1}: the residual after {', '.join(f.effect for f in found)} "
                              "is within the discrepancy floor's tests: nothing left for another effect")
@@ -352,9 +379,11 @@ class Discovery:
                 candidate.significant = is_significant(candidate, search.noise, evidence, design)
             self._report(f"round {len(iterations) + 1}: {len(ranked)} single effects fitted"
                          + (f", best {ranked[0].effect} (RMSE {ranked[0].rmse_after:.3f} K)" if ranked else ""))
-            # a further effect beginning with a found one is that change's misfit, not a second finding
+            # a further effect beginning with a found one is that change's misfit, not a second finding;
+            # on top of the effects given (the nearest ones) it may describe that misfit where they act
             plausible = [c for c in ranked if implausible_reason(c) is None
-                         and not any(same_change(c.onset_s, f.onset_s) for f in found)]
+                         and not any(same_change(c.onset_s, f.onset_s) and not (
+                             f.effect in given and misfit_of(catalogue[c.effect], catalogue[f.effect])) for f in found)]
             best = plausible[0] if plausible and plausible[0].significant else None
             runner_up = ranked[1] if len(ranked) > 1 else None
             if screen is not None and not screen.model_round_done and screen.against_model(search, ranked,
@@ -393,7 +422,7 @@ class Discovery:
             if not self.iterate or len(iterations) >= self.max_iterations:
                 break
         noise = noise_std(series.outputs)
-        residual = residual_verdict(series, iterations[-1].predicted_after, viewed, error_model)
+        residual = final_residual(series, iterations[-1].predicted_after, viewed, error_model)
         residual["noise_K"] = noise
         if error_model is not None:
             residual["floor_K"] = error_model.floor_K

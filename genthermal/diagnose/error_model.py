@@ -64,11 +64,15 @@ class ErrorModel:
         Sample period the correlations were estimated at, s.
     source : str
         The record it was estimated on.
+    phase_spread : PhaseSpread or None
+        The level of the phase sensors' spread residual, when they are fitted one by one
+        (:mod:`~genthermal.diagnose.phase_spread`).
     """
 
     sensors: tuple
     dt_s: float
     source: str = ""
+    phase_spread: object = None
 
     @classmethod
     def from_residual(cls, residual: np.ndarray, names, dt_s: float, source: str = "") -> "ErrorModel":
@@ -151,6 +155,7 @@ class ErrorModel:
         return {"source": self.source, "dt_s": self.dt_s, "floor_K": self.floor_K, "noise_K": self.noise_K,
                 "effective_fraction": self.effective_fraction(), "correlation_time_s": self.correlation_time_s,
                 "per_sensor": [s.to_dict() for s in self.sensors],
+                "phase_spread": self.phase_spread.to_dict() if self.phase_spread is not None else None,
                 "form": "AR(1) per sensor fitted to the healthy baseline's residual after calibration"}
 
     def summary(self) -> str:
@@ -265,8 +270,11 @@ def baseline_error_model(model, viewed, baseline, dt_s, view, catalogue) -> Erro
     ``view``) on the healthy ``baseline`` record, or list of records (pooled:
     :meth:`ErrorModel.from_residuals`): the residual of the model with each record's initial state
     fitted, as the diagnosis fits the record under test
-    (:meth:`~genthermal.diagnose.search.EffectSearch.fit_found`)."""
+    (:meth:`~genthermal.diagnose.search.EffectSearch.fit_found`), with the phase sensors' spread
+    level when they are fitted one by one."""
     from .discover import series_for
+    from .phase_spread import PhaseSpread
+    from .phase_winding import phase_sensor
     from .search import EffectSearch
 
     residuals, sources, steps = [], [], set()
@@ -279,4 +287,9 @@ def baseline_error_model(model, viewed, baseline, dt_s, view, catalogue) -> Erro
     if len(steps) > 1:
         raise InputError("baseline", ", ".join(sources), f"the records have different sample periods "
                          f"({', '.join(f'{s:g}' for s in sorted(steps))} s): give one step (--dt or --fit-step)")
-    return ErrorModel.from_residuals(residuals, viewed.output_names, steps.pop(), ", ".join(sources))
+    dt_s = steps.pop()
+    error = ErrorModel.from_residuals(residuals, viewed.output_names, dt_s, ", ".join(sources))
+    reader = phase_sensor(model)
+    spread = None if reader is None else PhaseSpread.from_residual(np.concatenate(residuals, axis=1),
+                                                                   viewed.output_names, reader.columns, dt_s)
+    return dataclasses.replace(error, phase_spread=spread)

@@ -2,9 +2,9 @@
 
 :func:`heat_flow_library` builds one :class:`~genthermal.effects.Effect` per node group (slot and
 end windings, stator iron, rotor, frame) and form (constant, ΣI², I_exc², per-phase I², I²θ, a
-temperature-dependent or re-formed modelled loss, a conductance factor); :func:`open_search` runs
-the catalogue search with it. :func:`describe_term` says in words what was found and
-:func:`effect_code` writes it as Python that registers a new effect. Method:
+temperature-dependent or re-formed modelled loss, a conductance factor, one surface's convection
+factor); :func:`open_search` runs the catalogue search with it. :func:`describe_term` says in words
+what was found and :func:`effect_code` writes it as Python that registers a new effect. Method:
 ``docs/guide/methods.md``.
 """
 
@@ -46,12 +46,16 @@ CONDUCTANCE_NEEDS = {"winding_insulation": (Role.WINDING_INSULATION,), "frame_to
                      "air_streams": (Role.COOLANT_FLOW,), "internal_convection": (Role.INTERNAL_CONVECTION,)}
 
 
+#: Node groups of the extra heat flows: plain name → the machine role that names their nodes.
+GROUP_ROLES = {"slot winding": Role.SLOT_WINDING, "end windings": Role.END_WINDINGS, "stator iron": Role.IRON,
+               "rotor": Role.ROTOR, "frame": Role.FRAME}
+
+
 def node_groups(model: ThermalModel) -> dict[str, tuple[str, ...]]:
     """Node groups of ``model`` for extra heat flows: plain name → capacitive nodes."""
     roles, states = model.spec.roles, set(model.state_names)
-    groups = {"slot winding": (roles.get(Role.SLOT_WINDING),), "end windings": tuple(roles.get(Role.END_WINDINGS, ())),
-              "stator iron": tuple(roles.get(Role.IRON, ())), "rotor": tuple(roles.get(Role.ROTOR, ())),
-              "frame": tuple(roles.get(Role.FRAME, ()))}
+    groups = {g: (roles.get(role),) if role is Role.SLOT_WINDING else tuple(roles.get(role, ()))
+              for g, role in GROUP_ROLES.items()}
     return {g: nodes for g, nodes in groups.items() if nodes and all(n in states for n in nodes)}
 
 
@@ -106,27 +110,44 @@ def heat_flow_effect(group: str, nodes: tuple[str, ...], form: str, name: str | 
                   rf"q_{{{_slug(group)}}} \mathrel{{+}}= k\,{label or '1'}",
                   (EffectParameter(f"k_{name}", 0.0, unit, -bound, bound, typical),), transform,
                   f"residual follows {label or 'a constant heat input'} and is largest near the {group}",
-                  needs=FORM_NEEDS[form])
+                  needs=FORM_NEEDS[form] + ((GROUP_ROLES[group],) if group in GROUP_ROLES else ()))
 
 
-def conductance_effect(role: str, name: str | None = None) -> Effect:
-    """A change of a conductance (``role`` of :data:`CONDUCTANCES`) by a factor :math:`k`."""
+def conductance_effect(role: str, name: str | None = None, coefficients: tuple[str, ...] | None = None) -> Effect:
+    """A change of a conductance (``role`` of :data:`CONDUCTANCES`) by a factor :math:`k`.
+
+    Parameters
+    ----------
+    role : str
+        A key of :data:`CONDUCTANCES`.
+    name : str, optional
+        Effect name (default ``conductance_<role>``, with ``_<coefficient>`` for one surface); its
+        parameter is ``k_<name>``.
+    coefficients : tuple of str, optional
+        With ``role`` ``"internal_convection"``: only these convection coefficients (of the
+        machine's ``Role.INTERNAL_CONVECTION``) change, e.g. ``("h_top_air",)``: the convection of
+        one surface (default: all of them).
+    """
     if role not in CONDUCTANCES:
         raise InputError("conductance", role, f"must be one of {', '.join(CONDUCTANCES)}")
-    name = name or f"conductance_{role}"
+    if coefficients is not None and (role != "internal_convection" or not coefficients):
+        raise InputError("coefficients", coefficients, "name one or more convection coefficients, and only for "
+                         "the internal_convection conductance")
+    name = name or f"conductance_{role}" + ("_" + "_".join(coefficients) if coefficients else "")
+    what = CONDUCTANCES[role] if not coefficients else f"the convection {', '.join(coefficients)}"
 
     def transform(network, roles, k):
         if role == "air_streams":
             return network.scale_air_streams(k)
         if role == "internal_convection":
-            return _scale_convection(network, roles[Role.INTERNAL_CONVECTION], k)
+            return _scale_convection(network, coefficients or roles[Role.INTERNAL_CONVECTION], k)
         for a, b in roles[Role(role)]:
             network = network.scale_links(a, b, k)
         return network
 
-    return Effect(name, f"{CONDUCTANCES[role]} multiplied by a factor", r"G \to k\,G",
+    return Effect(name, f"{what} multiplied by a factor", r"G \to k\,G",
                   (EffectParameter(f"k_{name}", 1.0, "1", 0.05, 20.0, 0.5),), transform,
-                  f"{CONDUCTANCES[role]} changed", needs=CONDUCTANCE_NEEDS[role])
+                  f"{what} changed", needs=CONDUCTANCE_NEEDS[role])
 
 
 def _scale_convection(network, coefficients, k):
@@ -155,6 +176,11 @@ def heat_flow_library(model: ThermalModel) -> dict[str, Effect]:
         effect = conductance_effect(role)
         if all(model.spec.interface.has_role(need) for need in effect.needs):
             library[effect.name] = effect
+    if "conductance_internal_convection" in library:
+        # one surface's convection: which surfaces the through-flow sweeps depends on the flow path
+        for coefficient in model.spec.roles[Role.INTERNAL_CONVECTION]:
+            effect = conductance_effect("internal_convection", coefficients=(coefficient,))
+            library[effect.name] = effect
     return library
 
 
@@ -165,7 +191,9 @@ def describe_term(found: FoundEffect, catalogue: Mapping[str, Effect]) -> str:
     value = found.values[parameters[0].name]
     when = "from the start" if found.onset_index == 0 else f"from {found.onset_s / 3600:.2f} h"
     if found.effect.startswith("conductance_"):
-        return f"{CONDUCTANCES[found.effect[len('conductance_'):]]} multiplied by about {value:.2f} {when}"
+        role, coefficients = conductance_role(found.effect)
+        what = CONDUCTANCES[role] if not coefficients else f"the convection coefficient {coefficients[0]}"
+        return f"{what} multiplied by about {value:.2f} {when}"
     if found.effect.startswith("loss_theta_"):
         label = found.effect[len("loss_theta_"):]
         return (f"the {label} loss of the {LOSS_GROUPS[label]} {'rising' if value > 0 else 'falling'} by about "
@@ -187,8 +215,8 @@ def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) 
     out, registers the effect so that model files and the command line know it by name."""
     effect = catalogue[found.effect]
     if found.effect.startswith("conductance_"):
-        role = found.effect[len("conductance_"):]
-        build = f"conductance_effect({role!r}, name={name!r})"
+        role, coefficients = conductance_role(found.effect)
+        build = f"conductance_effect({role!r}, name={name!r}" + (f", coefficients={coefficients!r})" if coefficients else ")")
     elif found.effect.startswith("loss_theta_"):
         build = f"loss_temperature_effect({found.effect[len('loss_theta_'):]!r}, name={name!r})"
     elif found.effect.startswith("loss_I2_"):
@@ -207,6 +235,18 @@ def effect_code(found: FoundEffect, catalogue: Mapping[str, Effect], name: str) 
               f"model = model.with_effect(effect, {values})   # fitted: {describe_term(found, catalogue)}",
               "# from genthermal.effects import register_effect; register_effect(effect)   # to use it by name"]
     return "\n".join(lines) + "\n"
+
+
+def conductance_role(effect_name: str) -> tuple[str, tuple[str, ...] | None]:
+    """The conductance (a key of :data:`CONDUCTANCES`) and the convection coefficients of one
+    surface (or None) of a conductance term's name (``conductance_internal_convection_h_top_air``)."""
+    rest = effect_name[len("conductance_"):]
+    for role in sorted(CONDUCTANCES, key=len, reverse=True):
+        if rest == role:
+            return role, None
+        if rest.startswith(role + "_"):
+            return role, (rest[len(role) + 1:],)
+    raise InputError("effect", effect_name, "not a conductance term of the open library")
 
 
 def _form_and_group(effect_name: str) -> tuple[str, str]:
