@@ -50,11 +50,10 @@ def _record(units, changed=None, seed=1):
     currents, inlet = np.tile(current, (len(units), 1)), np.full((len(units), n), 20.0)
     measured = np.empty((len(units), 2, n))
     for g, unit in enumerate(units):
-        x = np.full(unit.model.n_states, 20.0)
+        x, kalman = np.full(unit.model.n_states, 20.0), KalmanFilter(unit.model, DT)
         for i in range(n):
             if g == 0 and changed is not None and i == int(ONSET_MIN * 60 / DT):
-                unit = changed
-            kalman = KalmanFilter(unit.model, DT)
+                unit, kalman = changed, KalmanFilter(changed.model, DT)
             x, _ = kalman.predict(x, None, unit.input(currents[g, i], inlet[g, i], 20.0))
             measured[g, :, i] = kalman.C @ x + kalman.e
     return currents, inlet, measured + np.random.default_rng(seed).normal(0.0, 0.05, measured.shape)
