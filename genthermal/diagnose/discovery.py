@@ -25,8 +25,8 @@ from .discover import (DEFAULT_BASELINE_PARAMETERS, NOISE_FLOOR_FACTOR, Diagnosi
                        choose_pair, explain, explain_pair, implausible_reason, is_significant, misfit_of, rival,
                        same_change, series_for)
 from .baseline_set import calibrate_baselines
-from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, baseline_error_model, baseline_records,
-                          widened_calibration)
+from .error_model import (STRUCTURE_OVER_FLOOR, UNEXPLAINED_OVER_FLOOR, ErrorModel, baseline_error_model,
+                          baseline_records, widened_calibration)
 from .experiment import separating_experiment
 from .fitter import OnsetFitter
 from .joint import JointCandidate
@@ -112,6 +112,11 @@ class Discovery:
         Weigh sensor faults (bias, drift, stuck, gain, noise of one sensor) against the
         candidates (:mod:`genthermal.diagnose.sensor_screen`): the verdict is then about the
         machine on the record with the faulty sensors corrected.
+    error_model : ErrorModel, optional
+        The calibrated model's error (:mod:`~genthermal.diagnose.error_model`) to score every
+        hypothesis with when :meth:`fit` gets no baseline to estimate it on (the flight's, from
+        a healthy generator's record: :mod:`genthermal.schedule.monitoring.flight_error`). It must
+        describe the sensors the fit compares (InputError otherwise).
     """
 
     PHASE_MODES = ("auto", "resolved", "lumped")
@@ -119,7 +124,8 @@ class Discovery:
     def __init__(self, candidates=None, criterion=None, fitter: OnsetFitter | None = None, iterate: bool = False,
                  max_iterations: int = 4, baseline_parameters: Sequence[str] = DEFAULT_BASELINE_PARAMETERS,
                  design_experiment: bool = True, progress: Callable[[str], None] | None = None,
-                 phases: str = "auto", outlet: bool | None = None, sensor_faults: bool = True):
+                 phases: str = "auto", outlet: bool | None = None, sensor_faults: bool = True,
+                 error_model: ErrorModel | None = None):
         if phases not in self.PHASE_MODES:
             raise InputError("phases", phases, f"must be one of {', '.join(self.PHASE_MODES)}")
         self.phases, self.outlet, self.sensor_faults = phases, outlet, bool(sensor_faults)
@@ -139,8 +145,10 @@ class Discovery:
         self._memo: dict = {}
         #: Baseline calibrations and error models already made, by model and records.
         self._baselines: dict = {}
-        #: Error model of a baseline calibrated earlier (a tie-break refit of the calibrated model).
-        self._error_model = None
+        if error_model is not None and not isinstance(error_model, ErrorModel):
+            raise InputError("error_model", type(error_model).__name__, "expected a genthermal.diagnose.ErrorModel")
+        #: Error model given, or of a baseline calibrated earlier (a tie-break refit of the calibrated model).
+        self._error_model = error_model
 
     @property
     def memo(self) -> dict:
@@ -162,7 +170,7 @@ class Discovery:
                         iterate=self.iterate, max_iterations=self.max_iterations,
                         baseline_parameters=self.baseline_parameters, design_experiment=self.design_experiment,
                         progress=self.progress, phases=self.phases, outlet=self.outlet,
-                        sensor_faults=self.sensor_faults)
+                        sensor_faults=self.sensor_faults, error_model=self._error_model)
         unknown = sorted(set(changes) - set(settings))
         if unknown:
             raise InputError("setting", unknown[0], f"unknown; Discovery takes {', '.join(settings)}")
@@ -342,6 +350,8 @@ class Discovery:
                     calibration.fisher = widened_calibration(calibration.fisher, calibration.values, error_model)
             error_model = self._baselines[key][1]
             self._report(error_model.summary())
+        elif error_model is not None and view is None:  # a phase or outlet view refits with the lumped one's
+            error_model.check_sensors(viewed.output_names)
         criterion = self.criterion
         if error_model is not None and type(self.criterion) is BIC:
             criterion = error_model.criterion(series.dt_s, self.criterion.evidence_limit)

@@ -118,6 +118,14 @@ class ErrorModel:
                              f"{needed / 3600:.1f} h ({MIN_CORRELATION_TIMES:.0f} correlation times)")
         return model
 
+    def check_sensors(self, names, field: str = "error_model") -> None:
+        """Raise :class:`~genthermal.errors.InputError` naming ``field`` unless this model
+        describes exactly the sensors ``names`` (an error model of another sensor set)."""
+        own, given = [s.sensor for s in self.sensors], [str(n) for n in names]
+        if sorted(own) != sorted(given):
+            raise InputError(field, ", ".join(own), f"describes other sensors than the record's "
+                             f"({', '.join(given)}): estimate it on a healthy record of the same sensors")
+
     def sensor(self, name: str) -> SensorError | None:
         """The error of sensor ``name`` (None when not modelled)."""
         return next((s for s in self.sensors if s.sensor == name), None)
@@ -200,6 +208,16 @@ class WhitenedBIC(BIC):
         n_eff = self.effective(n)
         log_ratio = (delta_white - k * math.log(max(n, 2))) / max(n, 1)
         return n_eff * log_ratio + k * math.log(max(n_eff, k + 1.0))
+
+
+def ar1(e) -> tuple:
+    """Level (RMS, units of ``e``) and lag-1 autocorrelation, clipped to [0, :data:`MAX_PHI`], of
+    the finite samples of the series ``e``: the AR(1) description of one error series."""
+    e = np.asarray(e, dtype=float)
+    e = e[np.isfinite(e)]
+    level = float(np.sqrt(np.mean(e ** 2))) if e.size else float("nan")
+    phi = float(np.clip((e[1:] @ e[:-1]) / max(e @ e, 1e-300), 0.0, MAX_PHI)) if e.size > 1 else 0.0
+    return level, phi
 
 
 def widened_calibration(fisher: dict, values, error: ErrorModel) -> dict:

@@ -88,7 +88,9 @@ def detection_summary(result: FlightResult) -> dict:
             "identified": [i.to_dict(names) for i in monitor.identifications],
             "false_alarms": len(monitor.alarms) - len(true_alarms),
             "recalibrations": [{"time_s": c["time_s"], "generator": names[c["generator"]],
-                                "parameters": c["parameters"]} for c in monitor.calibrations]}
+                                "parameters": c["parameters"],
+                                "error_model": None if c.get("error_model") is None else c["error_model"].to_dict()}
+                               for c in monitor.calibrations]}
 
 
 def summary_text(summary: dict, limit_C: float) -> str:

@@ -157,8 +157,17 @@ def confirms(new, believed, tolerance: float) -> bool:
     return True
 
 
+def implausible(candidate) -> str | None:
+    """Why a candidate of the flight's search (a ``+shape`` variant too) is no finding: its values
+    or onset judged by its registered effect (:meth:`~genthermal.effects.Effect.implausible`: a
+    parameter outside its plausible range, a design property begun in flight), or None."""
+    from ...effects import get_effect
+
+    return get_effect(registered_effect_name(candidate.effect)).implausible(candidate.values, candidate.onset_s)
+
+
 def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: float,
-                   settings: DetectionSettings) -> Identification:
+                   settings: DetectionSettings, error_model=None) -> Identification:
     """Identify the effect behind an alarm from the record (module docstring): the best-ranked
     significant effect of diagnose's search whose onset is at most ``max_onset_lead_s`` before
     the alarm and that makes the machine run hotter than the model, with the effects equivalent
@@ -167,7 +176,14 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
     made the planner load a healthy generator that had taken over shed load 1.7 K past θmax
     (``tests/test_closed_loop_shed.py``). Sensor faults are the sensor watch's
     (:mod:`genthermal.schedule.monitoring.sensor_watch`), so the search runs without its sensor screen. Each
-    parameter of the effect carries its interval (module docstring, "Uncertainty")."""
+    parameter of the effect carries its interval (module docstring, "Uncertainty").
+
+    With ``error_model`` (an :class:`~genthermal.diagnose.error_model.ErrorModel` of ``model``'s
+    sensors, :mod:`~genthermal.schedule.monitoring.flight_error`) every candidate is scored on
+    effective samples (:class:`~genthermal.diagnose.error_model.WhitenedBIC`) and its practical
+    tests are taken against the discrepancy floor, as offline; without it, as if the model's
+    error were white sensor noise. Either way a candidate that is :func:`implausible` is no
+    finding, and the next plausible one is taken."""
     from ...diagnose.catalogue import Catalogue
     from ...diagnose.discover import series_for
     from ...diagnose.discovery import Discovery
@@ -175,9 +191,12 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
 
     started = time.perf_counter()
     catalogue = flight_catalogue(settings.fault_effects)
+    if error_model is not None:
+        error_model.check_sensors(model.output_names)
     series = series_for(model, record, settings.identify_dt_s)
     discovery = Discovery(Catalogue.of(catalogue), fitter=OnsetFitter(pairs=False),  # one fault at a time
-                          design_experiment=False, sensor_faults=False)  # no rig test in flight
+                          design_experiment=False, sensor_faults=False,  # no rig test in flight
+                          error_model=error_model)
     diagnosis = discovery.fit(model, series)
     first = diagnosis.iterations[0]
     ranked = first.ranked
@@ -187,7 +206,7 @@ def identify_fault(model, record: pd.DataFrame, generator: int, detected_at_s: f
         after = slice(candidate.onset_index, None)
         return bool(np.nanmean(candidate.predicted[:, after] - first.predicted_before[:, after]) > 0.0)
 
-    admissible = [c for c in ranked if c.onset_s >= earliest and heats(c)]
+    admissible = [c for c in ranked if c.onset_s >= earliest and heats(c) and implausible(c) is None]
     best = admissible[0] if admissible and admissible[0].significant else None
     effect = None if best is None else registered_effect_name(best.effect)
     # the other explanations: other effects (a variant of the same effect is the same explanation)

@@ -1,5 +1,6 @@
 """A CUSUM on the Kalman filter's differential winding innovations: the baseline fault detector,
-and the alarm test the flight's fault monitor runs beside the disturbance CUSUM. Method:
+and the alarm test the flight's fault monitor runs beside the disturbance CUSUM; optionally
+whitened by the AR(1) level and correlation it learns in its first updates. Method:
 docs/guide/flight-methods.md.
 """
 
@@ -9,8 +10,13 @@ import dataclasses
 
 import numpy as np
 
+from ...diagnose.error_model import ar1
 from ...errors import InputError
 from ...estimation.kalman import KalmanFilter
+
+#: Fewest updates :attr:`InnovationCusumSettings.learn_updates` may learn from (a mean and a
+#: lag-1 correlation from fewer samples say nothing).
+MIN_LEARN_UPDATES = 6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -33,13 +39,33 @@ class InnovationCusumSettings:
         too warm, and the healthy unit alarmed at 70 min. The unit with the hotter inlet is still
         tested. In flight 1 K (``DetectionSettings.innovation``): any margin above 0 separates
         the shared inlet from a heated one.
+    learn_updates : int
+        0: the differential innovation :math:`d_g` is the statistic (the original). Otherwise
+        each generator's first ``learn_updates`` tested values of :math:`d_g` learn its unit's
+        own difference from its sisters: a level :math:`\\mu_g` per squared mean phase current
+        :math:`I_g^2` (K/A², least squares through the origin: a unit whose losses or cooling
+        differ from its sisters' by a few per cent differs in proportion to its losses) and the
+        lag-1 correlation :math:`\\phi_g` of what that leaves
+        (:func:`~genthermal.diagnose.error_model.ar1`, the offline error model's estimator). From
+        then on the statistic is :math:`(d_g - \\mu_g I_g^2)\\sqrt{(1-\\phi_g)/(1+\\phi_g)}`, whose
+        CUSUM sum grows no faster than that of white noise of the same level. While it learns,
+        the generator is not tested (the disturbance test watches it). Relearnt when the
+        generator's believed effects change. In flight 8 (``DetectionSettings.innovation``): the
+        test runs from the second 5-min cycle, so the learning ends at 45 min, before the
+        robustness grid's earliest onset.
     """
 
     drift_K: float = 0.25
     threshold_K: float = 0.2
     inlet_tolerance_K: float | None = None
+    learn_updates: int = 0
 
     def __post_init__(self):
+        if not (isinstance(self.learn_updates, (int, np.integer)) and
+                (self.learn_updates == 0 or self.learn_updates >= MIN_LEARN_UPDATES)):
+            raise InputError("innovation_cusum.learn_updates", self.learn_updates,
+                             f"must be 0 (no learning) or a whole number of updates >= {MIN_LEARN_UPDATES}: "
+                             "a level and a lag-1 correlation need that many")
         for name in ("drift_K", "threshold_K", "inlet_tolerance_K"):
             value = getattr(self, name)
             if value is None and name == "inlet_tolerance_K":
@@ -84,16 +110,25 @@ class InnovationCusum:
         self.last_inlet_C = np.full(n_generators, np.nan)
         #: Measurement updates so far: the test runs from the second on.
         self.updates = 0
+        #: Per generator, the ``(d_g K, I_g² A²)`` learnt so far (``learn_updates``).
+        self.learning = [[] for _ in range(n_generators)]
+        #: Per generator, the learnt level :math:`\mu_g` (K/A²) and scale :math:`\sqrt{(1-\phi)/(1+\phi)}`
+        #: (NaN until learnt).
+        self.level = np.full(n_generators, np.nan)
+        self.scale = np.full(n_generators, np.nan)
 
     def _filter(self, generator) -> KalmanFilter:
         if id(generator) not in self._filters:
             self._filters[id(generator)] = (generator, KalmanFilter(generator.model, self.dt_s))
         return self._filters[id(generator)][1]
 
-    def use(self, g: int, generator) -> None:
+    def use(self, g: int, generator, relearn: bool = False) -> None:
         """Continue generator ``g``'s filter on ``generator``'s design model (nodes carried over by
         name, covariance kept when the states are the same) and restart its sum; nothing happens
-        when that model is already in use."""
+        when that model is already in use. With ``relearn`` (its believed effects changed) its
+        learnt level and scale are learnt again."""
+        if relearn:
+            self.learning[g], self.level[g], self.scale[g] = [], np.nan, np.nan
         if generator is self.generators[g]:
             return
         old_names = self.generators[g].model.state_names
@@ -163,11 +198,32 @@ class InnovationCusum:
                 continue
             d = innovations[g] - float(np.median(innovations[others]))
             self.last_statistic[g] = d
-            self.sums[g] = max(0.0, self.sums[g] + d - self.settings.drift_K)
+            statistic = self._whitened(g, d, float(load[g]) ** 2)
+            if statistic is None:  # still learning: not tested
+                continue
+            self.sums[g] = max(0.0, self.sums[g] + statistic - self.settings.drift_K)
             if self.sums[g] > self.settings.threshold_K:
                 alarms.append((g, float(self.sums[g])))
                 self.sums[g] = 0.0
         return alarms
+
+
+    def _whitened(self, g: int, d: float, current_squared: float) -> float | None:
+        """The statistic of generator ``g``'s differential innovation ``d`` (K) at squared mean
+        phase current ``current_squared`` (A²); None while it learns its level and scale
+        (``learn_updates``, :class:`InnovationCusumSettings`)."""
+        if not self.settings.learn_updates:
+            return d
+        if np.isfinite(self.level[g]):
+            return (d - self.level[g] * current_squared) * self.scale[g]
+        self.learning[g].append((d, current_squared))
+        if len(self.learning[g]) < self.settings.learn_updates:
+            return None
+        learnt, squared = np.array(self.learning[g]).T
+        self.level[g] = float((learnt @ squared) / (squared @ squared)) if squared @ squared > 0 else 0.0
+        _, phi = ar1(learnt - self.level[g] * squared)
+        self.scale[g] = float(np.sqrt((1.0 - phi) / (1.0 + phi)))
+        return None
 
 
 def innovation_cusum_alarms(design_generator, currents_A, inlet_C, measured_C, ambient_C: float, dt_s: float,

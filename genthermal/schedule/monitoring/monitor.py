@@ -13,7 +13,9 @@ import pandas as pd
 from ...errors import InputError
 from ...measurements import required_columns
 from .detector import DetectorSettings, DisturbanceDetector, extra_heat_flow
+from ...diagnose.error_model import MIN_BASELINE_S
 from .fault_identification import FAULT_EFFECTS, confirms, identify_fault
+from .flight_error import flight_error_model
 from .innovation_detector import InnovationCusum, InnovationCusumSettings
 from .record_grid import check_fit_step, on_fit_grid
 from ..state_estimator import believed_model
@@ -30,6 +32,7 @@ class DetectionSettings:
     innovation : InnovationCusumSettings or None
         Drift and threshold of the innovation test
         (:mod:`genthermal.schedule.monitoring.innovation_detector`); None: the disturbance test alone.
+        In flight whitened by what it learns in its first 8 tested updates (``learn_updates``).
     model_drift, model_threshold : float
         :math:`\nu_m, h_m` of the common (model error) CUSUM.
     calibrate_parameters : tuple of str
@@ -85,6 +88,12 @@ class DetectionSettings:
         (Kass & Raftery 1995: a BIC difference below 2 is not worth more than a bare mention);
         a shorted turn and an end-winding stray loss, both a loss ∝ I² in the winding, are
         typically within it.
+    error_model : bool
+        Score the identification's hypotheses on the AR(1) error of the recalibrated model on the
+        healthy generator's record it was recalibrated on
+        (:mod:`~genthermal.schedule.monitoring.flight_error`), re-estimated at each recalibration
+        on a record long enough for it (1 h and 5 correlation times); until then, and with
+        False, as if the model's error were white sensor noise.
     interval_level : float
         Coverage of the identified parameters' intervals; the manager believes the end of each
         that is the most severe fault (:mod:`genthermal.schedule.monitoring.fault_identification`,
@@ -92,7 +101,7 @@ class DetectionSettings:
     """
 
     detector: DetectorSettings = DetectorSettings()
-    innovation: InnovationCusumSettings | None = InnovationCusumSettings(inlet_tolerance_K=1.0)
+    innovation: InnovationCusumSettings | None = InnovationCusumSettings(inlet_tolerance_K=1.0, learn_updates=8)
     model_drift: float = 2.5
     model_threshold: float = 5.0
     calibrate_parameters: tuple = ("R0", "h_end_air", "h_top_air", "P_iron", "m_dot_fan")
@@ -107,6 +116,7 @@ class DetectionSettings:
     late_onset_s: float = 3600.0
     confirm_tolerance: float = 0.25
     equivalent_delta_bic: float = 2.0
+    error_model: bool = True
     interval_level: float = 0.95
 
     def __post_init__(self):
@@ -195,7 +205,11 @@ class FaultMonitor:
         disturbance test's :math:`r`) of every fault alarm.
     identifications : list of Identification
     calibrations : list of dict
-        ``time_s``, ``generator`` (whose record), ``parameters`` and the model.
+        ``time_s``, ``generator`` (whose record), ``parameters``, the model and ``error_model``
+        (the :class:`~genthermal.diagnose.error_model.ErrorModel` estimated on that record, None
+        when it was too short or ``DetectionSettings.error_model`` is off).
+    error_model : ErrorModel or None
+        The latest of those the identification scores with (None: white noise).
     """
 
     def __init__(self, system_frame, planning_model, design_generator_for, settings: DetectionSettings,
@@ -209,12 +223,15 @@ class FaultMonitor:
         self.model_test = Cusum(settings.model_drift, settings.model_threshold, two_sided=True)
         self.model, self.beliefs = planning_model, [()] * n
         self.alarms, self.identifications, self.calibrations = [], [], []
+        self.error_model = None
         #: ``(generator, node index)`` out of the fault test after a sensor of the generator was
         #: masked by the sensor watch (:meth:`mask`, :meth:`DisturbanceDetector.statistics`).
         self.masked: set = set()
         self.innovation_test = None if settings.innovation is None or n < 2 else InnovationCusum(
             n, dt_s, system_frame.T_ambient_C, design_generator_for(()), settings.innovation)
         self._time, self._currents, self._measured, self._inputs = [], [], [], []
+        #: Beliefs the innovation test's filters last ran on (a change relearns its level).
+        self._tested_beliefs = list(self.beliefs)
 
     def record(self, t0: float, currents_A, measured_C, inputs_C=None) -> None:
         """Add the steps flown from ``t0``: currents (n_gen, n) and sensors (n_gen, 2, n) at the end
@@ -332,7 +349,8 @@ class FaultMonitor:
             return []
         n = self.system_frame.n_generators
         for g in range(n):
-            test.use(g, self.design_generator(g))
+            test.use(g, self.design_generator(g), relearn=self.beliefs[g] != self._tested_beliefs[g])
+        self._tested_beliefs = list(self.beliefs)
         measured = self._measured[-1][:, :, -1]
         left_out = {g for g, _ in self.masked}
         references = [[h for h in range(n) if h != g and not self.beliefs[h] and h not in left_out] for g in range(n)]
@@ -366,10 +384,19 @@ class FaultMonitor:
             return
         g = min(candidates, key=lambda h: z[h])
         names = [n for n in self.settings.calibrate_parameters if n in self.planning_model.parameters]
-        result = calibrate(self.planning_model, self.fit_record(g), names, self.settings.identify_dt_s)
+        record = self.fit_record(g)
+        result = calibrate(self.planning_model, record, names, self.settings.identify_dt_s)
         self.model = result.model
+        error_model = None
+        if self.settings.error_model and record["time_s"].iloc[-1] - record["time_s"].iloc[0] >= MIN_BASELINE_S:
+            try:
+                error_model = flight_error_model(result.model, record, self.settings.identify_dt_s)
+            except InputError as short:  # its residual stays correlated for more than a fifth of the record
+                if short.field != "baseline":
+                    raise
+        self.error_model = error_model or self.error_model
         self.calibrations.append({"time_s": t_s, "generator": g, "model": result.model,
-                                  "parameters": dict(zip(result.names, result.values))})
+                                  "parameters": dict(zip(result.names, result.values)), "error_model": error_model})
 
     def _fault_alarm(self, g: int, t_s: float, z, node: int, statistic: float, test: str) -> None:
         self.alarms.append({"time_s": t_s, "generator": g, "node": self.node_roles[node], "test": test,
@@ -383,7 +410,7 @@ class FaultMonitor:
         others = [h for h in range(len(z)) if h != g and not self.beliefs[h]]
         if others:
             self._recalibrate(t_s, others, z)
-        found = identify_fault(self.model, self.fit_record(g), g, t_s, self.settings)
+        found = identify_fault(self.model, self.fit_record(g), g, t_s, self.settings, self.error_model)
         self.identifications.append(found)
         if found.effect and not confirms(found.effects, self.beliefs[g], self.settings.confirm_tolerance):
             self.beliefs[g] = found.effects
