@@ -8,8 +8,6 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import InputError
 from ..progress import say, working
 from ._common import add_choice_argument, add_json_argument, add_out_argument, model_from_args
@@ -82,6 +80,8 @@ def read_records(model, args) -> tuple:
     column_map = _column_map(args, model)
     interface, rated = model.spec.interface, model.spec.rated_current_A
     if column_map is not None:
+        import numpy as np
+
         step = DEFAULT_FIT_STEP_S if args.fit_step is None else positive_float("--fit-step", args.fit_step)
         records = read_logged_set(paths, column_map, interface, data_step(args), rated)
         records = [decimated(r, step) if float(np.median(np.diff(r.time_s))) < step else r for r in records]
