@@ -124,7 +124,7 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
 
     document = robustness_case(6)  # 2 generators, 4.5 h
 
-    def broken(system, scheduler, settings):
+    def broken(system, scheduler, settings, preflight=None):
         raise ZeroDivisionError("division by zero in a planner")
     monkeypatch.setattr(closed_loop, "fly", broken)
     failed = sweep.fly_flight(document, "engineer")

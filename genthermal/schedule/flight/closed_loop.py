@@ -22,6 +22,7 @@ from .manager_settings import ManagerSettings, flight_filter, infeasible_respons
 from ..monitoring.monitor import FaultMonitor
 from ..state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
+from .preflight import preflight_check
 from ..planning.plan import Schedule, build_timeline, generator_inputs, predict, remaining_after
 from ..power_system import PowerSystem
 from ..monitoring.record_grid import check_fit_step
@@ -107,7 +108,8 @@ def _filter_inputs(system: PowerSystem, inputs_C: dict, times, currents_A=None) 
     return inlet, ambient
 
 
-def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings(), plant=None) -> FlightResult:
+def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings(), plant=None,
+        preflight: dict | bool | None = None) -> FlightResult:
     """Fly the mission in closed loop on the true plant (module docstring).
 
     Parameters
@@ -125,12 +127,16 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         reads other sensors, other timestamps or a non-finite value), the flight stops there: the
         result holds what was flown and the fault (``plant_fault``), the manager holding the
         minimum power mode.
+    preflight : dict or False, optional
+        The verdict before take-off (:func:`~genthermal.schedule.flight.preflight.preflight_check`,
+        which a caller that prints it first passes here); None (default): the flight makes it;
+        False: none (a robustness sweep, whose flights are judged by what they fly).
 
     Returns
     -------
     FlightResult
-        True-plant temperatures, applied currents, one record per re-plan and the alarms with
-        what was identified.
+        True-plant temperatures, applied currents, one record per re-plan, the alarms with
+        what was identified and ``preflight``.
 
     Raises
     ------
@@ -140,6 +146,13 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         When the plant's sensors are not the machine's, or it raises at its reset.
     """
     started = time.process_time()
+    settings = settings.for_flight(scheduler, flight_filter(system, settings))  # planner_model "auto" resolved
+    settings.check_scheduler(scheduler)
+    if settings.nonlinear and flight_filter(system, settings) != "ekf":
+        raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
+                         "filter's model and covariance: fly this scenario with --filter ekf")
+    if preflight is None:
+        preflight = preflight_check(system, scheduler, settings)
     dt = settings.dt_s
     cycle_steps = max(int(round(settings.cycle_s / dt)), 1)
     rng = np.random.default_rng(settings.seed)
@@ -148,10 +161,6 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     schedule = Schedule.nominal(system.n_generators, len(segments))
     cold = np.full((system.n_generators, system.nominal_model.n_states), system.mission.T_ambient_C)
     filter_cache: dict = {}
-    settings.check_scheduler(scheduler)
-    if settings.nonlinear and flight_filter(system, settings) != "ekf":
-        raise InputError("generators.filter", system.filter, "the nonlinear planner plans on the extended Kalman "
-                         "filter's model and covariance: fly this scenario with --filter ekf")
     estimators = [StateEstimator(system.design_generator_for(()), lambda: system.planning_model, cold[g], dt,
                                  filter_cache, flight_filter(system, settings)) for g in range(system.n_generators)]
     # the fault detector reads an extended Kalman filter's disturbance states: with the linear
@@ -286,6 +295,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                              rest_budget_s=budget)
     result.sensor_watch = watch
     result.plant_fault = plant_fault
+    result.preflight = preflight or None
+    if preflight and not preflight["feasible"]:
+        result.warnings.insert(0, preflight["message"])
     if getattr(plant, "replays_log", False):
         result.replay = replay_score(result, recorder, plant)
     return result

@@ -15,18 +15,19 @@ from ..planning.milp import MilpSettings
 from ..monitoring.monitor import DetectionSettings
 from ..planning.optimal import OptimalSettings
 from ..planning.plan import DEFAULT_MARGIN_K
-from ..planning.registry import BUILT_IN_PLANNERS, planner
+from ..planning.registry import BUILT_IN_PLANNERS, model_for, planner
 from ..power_system import PowerSystem
 from ..monitoring.sensor_watch import SensorWatchSettings
 from ..planning.shed import INFEASIBLE_RESPONSES
 
 #: The schedulers genthermal ships (others may be registered: :mod:`genthermal.schedule.planning.registry`).
 SCHEDULERS = BUILT_IN_PLANNERS
-#: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
-#: model with the margin and the rise back-off; ``nonlinear``, the flown model the filter runs
-#: on, with the back-off of its covariance (:mod:`genthermal.schedule.planning.flown`), the mission cut
-#: into control intervals of one cycle (the thesis heuristic keeps its K-conditions).
-PLANNER_MODELS = ("affine", "nonlinear")
+#: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``auto``, each planner's
+#: own default when the filter allows (:func:`~genthermal.schedule.planning.registry.model_for`);
+#: ``affine``, the design model with the margin and the rise back-off; ``nonlinear``, the flown
+#: model the filter runs on, with the back-off of its covariance (:mod:`genthermal.schedule.planning.flown`),
+#: the mission cut into control intervals of one cycle (the thesis heuristic keeps its K-conditions).
+PLANNER_MODELS = ("auto", "affine", "nonlinear")
 #: Schedulers that plan on the flown model when ``planner_model`` is ``nonlinear``; the engineer's
 #: heuristic and the MILP are defined on the design model.
 FLOWN_SCHEDULERS = tuple(name for name in BUILT_IN_PLANNERS if planner(name).on_flown_model)
@@ -88,7 +89,9 @@ class ManagerSettings:
     input_watch : InputWatchSettings
         Inlet and ambient sensor faults in flight (:mod:`genthermal.schedule.monitoring.input_watch`).
     planner_model : str
-        One of :data:`PLANNER_MODELS`: ``affine`` (default) plans on the design model within θmax −
+        One of :data:`PLANNER_MODELS`: ``auto`` (default) is resolved per flight by
+        :meth:`for_flight` (the optimal scheduler on the flown model when the flight's filter is
+        ``ekf``, every other planner and the ``kf`` filter on the design model); ``affine`` plans on the design model within θmax −
         ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
         ``filter`` must be ``ekf``) within θmax with the back-off of the filter's covariance
         (``confidence_sigmas`` standard deviations; ``margin_K`` and ``rise_backoff`` unused), and
@@ -113,7 +116,8 @@ class ManagerSettings:
     when_infeasible : str
         One of :data:`INFEASIBLE_RESPONSES`: what the manager does when even the lowest reachable
         peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
-        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A
+        own plan with all load served, breaching θmax as predicted (the thesis heuristic; the
+        optimal scheduler flies the lowest-peak schedule when its own plan peaks higher). A
         scenario that gives ``generators.when_infeasible`` flies with that instead
         (:func:`infeasible_response`).
     """
@@ -129,7 +133,7 @@ class ManagerSettings:
     tell_fault: bool = False
     replan: bool = True
     filter: str = "ekf"
-    planner_model: str = "affine"
+    planner_model: str = "auto"
     confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
     own_shed: bool = True
     detection: DetectionSettings = DetectionSettings()
@@ -168,6 +172,11 @@ class ManagerSettings:
         if self.nonlinear and not planner(scheduler).on_flown_model:
             raise InputError("planner_model", self.planner_model, f"the {scheduler} scheduler plans on the design "
                              f"model; on the flown model plan with one of {', '.join(FLOWN_SCHEDULERS)}")
+
+    def for_flight(self, scheduler: str, filter_flown: str) -> "ManagerSettings":
+        """These settings with ``planner_model`` resolved for ``scheduler`` flown with the filter
+        ``filter_flown`` (:func:`flight_filter`): :func:`~genthermal.schedule.planning.registry.model_for`."""
+        return dataclasses.replace(self, planner_model=model_for(scheduler, self.planner_model, filter_flown))
 
     @property
     def nonlinear(self) -> bool:

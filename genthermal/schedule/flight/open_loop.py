@@ -9,7 +9,7 @@ import numpy as np
 from ...estimation.ekf import ExtendedKalmanFilter
 from .flight_result import FlightRecorder, FlightResult
 from ..planning.flown import FlownPlanning
-from .manager_settings import ManagerSettings, infeasible_response
+from .manager_settings import ManagerSettings, flight_filter, infeasible_response
 from ..state_estimator import believed_model
 from ..planning.optimal import lowest_reachable_peak
 from ..planning.plan import Schedule, build_timeline, predict, remaining_after, within_limit
@@ -151,6 +151,7 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         The design-model (or flown-model) temperatures and currents of the plan, with its
         ``schedule_table``.
     """
+    settings = settings.for_flight(scheduler, flight_filter(system, settings))  # planner_model "auto" resolved
     settings.check_scheduler(scheduler)
     dt = settings.dt_s
     segments = flight_segments(system, settings, scheduler)
@@ -205,5 +206,5 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         table = schedule.table(segments, system.generator_names)
         recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
         judge_forecast(recorder, t_plan, problem, outputs, settings, system.generator_names)
-    return recorder.result(scheduler, False, table, rest_budget_s=budget)
+    return recorder.result(scheduler, False, table, settings=settings, rest_budget_s=budget)
 
