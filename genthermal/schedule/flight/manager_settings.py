@@ -116,8 +116,7 @@ class ManagerSettings:
     when_infeasible : str
         One of :data:`INFEASIBLE_RESPONSES`: what the manager does when even the lowest reachable
         peak is above θmax; ``shed`` (default) sheds load, ``best_effort`` flies the scheduler's
-        own plan with all load served, breaching θmax as predicted (the thesis heuristic; the
-        optimal scheduler flies the lowest-peak schedule when its own plan peaks higher). A
+        own plan with all load served, breaching θmax as predicted (the thesis heuristic). A
         scenario that gives ``generators.when_infeasible`` flies with that instead
         (:func:`infeasible_response`).
     """

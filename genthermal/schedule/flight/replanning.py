@@ -74,7 +74,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         above θmax and ``when_infeasible`` is ``shed``, the plan sheds load (``method`` ``shed``;
         ``shedding``: the generators whose load is shed, ``switched_off``: the generators off); with
         ``best_effort`` it is the scheduler's own plan, all load served (``best_effort`` True in
-        ``details``; for the optimal scheduler the lowest-peak schedule when its own plan peaks higher).
+        ``details``).
     """
     response_mode = settings.when_infeasible if when_infeasible is None else when_infeasible
     if response_mode not in INFEASIBLE_RESPONSES:
@@ -119,13 +119,7 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: ManagerSetting
         shed.details.update(found)
         return shed
     if lowest.peak_C > limit_C:  # best effort: the scheduler's own plan, all load served
-        own = result
-        if scheduler == "optimal" and result.peak_C > lowest.peak_C + FEASIBLE_TOLERANCE_K:
-            # its best is the lowest-peak schedule: flying chapter7_blockage_large, the optimiser found no
-            # feasible schedule and its own plan was predicted at 133.8 °C where the lowest reachable peak was 112.0 °C
-            own = dataclasses.replace(lowest, method=f"{result.method} (lowest peak)", warnings=list(result.warnings),
-                                      details=dict(lowest.details), solve_s=result.solve_s)
-        best = _best_effort(problem, own, names, limit_C, where, found)
+        best = _best_effort(problem, result, names, limit_C, where, found)
         best.solve_s += lowest.solve_s
         return best
     within_lowest = dataclasses.replace(problem, limit_C=max(lowest.peak_C, problem.limit_C) + 0.1)
