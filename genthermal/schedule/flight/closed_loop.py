@@ -243,10 +243,12 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if settings.replan and (shedding or predict(problem, schedule).peak()[0]
                                 > problem.limit_C + settings.replan_tolerance_K):
+            planning_started = time.process_time()
             result = plan_with(scheduler, problem, settings, system.generator_names, system.limit_C,
                                previous=schedule, switched_off=schedule.switched_off,
                                when_infeasible=infeasible_response(system, settings), shedding=shedding,
                                flown_shed=flown if own_shed else None)
+            result.details["solve_cpu_s"] = time.process_time() - planning_started  # wall time is the machine's
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
