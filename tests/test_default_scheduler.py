@@ -54,7 +54,6 @@ def test_a_mission_no_plan_can_hold_says_so_before_take_off_and_breaches(tmp_pat
     assert summary["planner_model"] == "nonlinear" and summary["breach_s"] > 0
 
 
-@pytest.mark.slow
 def test_a_mission_a_plan_can_hold_says_so_and_holds_it(tmp_path, capsys):
     scenario = tmp_path / "short.yaml"
     scenario.write_text(SHORT)
