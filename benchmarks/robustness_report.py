@@ -4,13 +4,15 @@ Usage::
 
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json [--png benchmarks/figures/robustness.png]
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json --merge refly.json
+    python benchmarks/robustness_report.py copy_of_the_grid.json --merge refly.json --merged-only
     python benchmarks/robustness_report.py benchmarks/figures/robustness.json --add other_schedulers.json
 
 ``--merge`` puts the cases of a partial re-fly (``genthermal sweep --only ...``, same ``--cases`` and
 seed, some or all of the grid's schedulers) that every re-flown scheduler flew to the end in place of
 those schedulers' flights of the same cases of the whole grid, recomputes every summary key with
 :func:`genthermal.schedule.sweeps.sweep.summarise`, records the re-fly under ``provenance.merged`` and
-writes the whole grid's JSON back before reporting on it. ``--add`` joins the flights of the same
+writes the whole grid's JSON back before reporting on it (with ``--merged-only``, cut to the re-fly's
+cases: run it on a copy). ``--add`` joins the flights of the same
 grid flown with other schedulers (``genthermal sweep --schedulers heuristic_flown``, same
 ``--cases`` and seed) to each case, recomputes every summary key over all the schedulers (the best
 baseline then counts the added ones, :mod:`genthermal.schedule.sweeps.baseline_comparison`) and records
@@ -170,6 +172,17 @@ def merge_cases(report: dict, partial: dict) -> dict:
     return {**report, **summarise(cases, schedulers), "provenance": provenance, "cases": cases}
 
 
+def merged_cases_only(report: dict) -> dict:
+    """``report`` (a grid after :func:`merge_cases`) cut to the cases of its last merge, every summary key
+    recomputed over them: the figures of a re-fly that did not cover the whole grid, against the same
+    cases' baselines, without the grid's own flights of the cases it did not fly."""
+    from genthermal.schedule.sweeps.sweep import summarise
+
+    kept = set(report["provenance"]["merged"][-1]["cases"])
+    cases = [case for case in report["cases"] if case["name"] in kept]
+    return {**report, **summarise(cases, list(report["robustness"]["breach_s"])), "cases": cases}
+
+
 def add_schedulers(report: dict, other: dict) -> dict:
     """``report`` (a whole grid) with the flights of ``other`` (the same grid flown with other
     schedulers) added to each case, every summary key recomputed over all the schedulers and
@@ -269,6 +282,8 @@ def main(argv=None) -> int:
     parser.add_argument("--png", help="write the plot here (default: next to the JSON, .png)")
     parser.add_argument("--merge", metavar="REFLY_JSON", help="a partial re-fly of the grid: its cases replace "
                         "the grid's, and the JSON is written back with the summary recomputed")
+    parser.add_argument("--merged-only", action="store_true", help="with --merge: keep only the cases the re-fly "
+                        "flew to the end (a partial grid's figures against the whole grid's baselines)")
     parser.add_argument("--add", metavar="SWEEP_JSON", help="the same grid flown with other schedulers: their "
                         "flights join each case, and the JSON is written back with the summary recomputed")
     args = parser.parse_args(argv)
@@ -282,6 +297,8 @@ def main(argv=None) -> int:
             continue
         try:
             report = combine(report, json.loads(Path(option).read_text()))
+            if combine is merge_cases and args.merged_only:
+                report = merged_cases_only(report)
         except (KeyError, ValueError) as error:
             print(f"{option}: cannot {'merge into' if combine is merge_cases else 'add to'} {path}: {error}",
                   file=sys.stderr)

@@ -139,8 +139,9 @@ def test_closed_loop_on_a_plant_hot_at_rest_sheds_less_with_the_own_plan(tmp_pat
 
     def cost(summary):
         return summary["rested_s"] / 60.0 + 1000.0 * sum(summary["shed"]["not_served_Ah"].values())
-    shared = flight_summary(fly(_system(tmp_path, HOT_AT_REST), "optimal", ManagerSettings(own_shed=False)))
-    result = fly(_system(tmp_path, HOT_AT_REST), "optimal", ManagerSettings())
+    design = ManagerSettings(planner_model="affine")  # the own shed plan is the design-model planner's
+    shared = flight_summary(fly(_system(tmp_path, HOT_AT_REST), "optimal", dataclasses.replace(design, own_shed=False)))
+    result = fly(_system(tmp_path, HOT_AT_REST), "optimal", design)
     own = flight_summary(result)
     assert any(plan.get("shed_plan_flown") == "own" for plan in result.plans)
     assert cost(own) < 0.5 * cost(shared)

@@ -19,6 +19,9 @@ from genthermal.schedule.planning.plan import FEASIBLE_TOLERANCE_K
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
 
+#: The design model's planner: these tests hold its plans to θmax minus the margin.
+DESIGN = ManagerSettings(planner_model="affine")
+
 LATER_FAULT = """\
 name: later_fault
 rated_current_A: 7.0
@@ -67,7 +70,7 @@ def test_a_fault_after_the_plan_time_is_planned_for(tmp_path, scheduler):
     """Both schedulers wrote feasible: true over a 111.4 °C forecast; now they plan for gen2's
     fault from the plan time and their forecast keeps the margin, gen2's heating included."""
     system = _system(tmp_path, BLOCKAGE)
-    result = plan_mission(system, scheduler, ManagerSettings())
+    result = plan_mission(system, scheduler, DESIGN)
     summary = _assert_honest(result, system)
     assert summary["feasible"] is True
     after = result.time_s[1:] > system.faults[1].onset_s
@@ -77,7 +80,7 @@ def test_a_fault_after_the_plan_time_is_planned_for(tmp_path, scheduler):
 
 def test_a_later_fault_no_plan_survives_is_infeasible_with_the_lowest_peak(tmp_path):
     system = _system(tmp_path, SEVERE)
-    summary = _assert_honest(plan_mission(system, "optimal", ManagerSettings()), system)
+    summary = _assert_honest(plan_mission(system, "optimal", DESIGN), system)
     assert summary["feasible"] is False and summary["lowest_reachable_peak_C"] > system.limit_C
     assert any("lowest reachable peak" in w for w in summary["warnings"])
 
@@ -88,9 +91,9 @@ def test_a_forecast_that_breaches_the_plans_prediction_is_reported(tmp_path, mon
     on the forecast itself says infeasible; with the default, the plan made again keeps the limit."""
     system = _system(tmp_path, LOAD_FOLLOWING)
     monkeypatch.setattr(open_loop, "MAX_INLET_REPLANS", 0)
-    first = _assert_honest(plan_mission(system, "optimal", ManagerSettings()), system)
+    first = _assert_honest(plan_mission(system, "optimal", DESIGN), system)
     assert first["feasible"] is False
     assert any("the plan's own forecast" in w and "gen2" in w for w in first["warnings"])
     monkeypatch.undo()
-    again = _assert_honest(plan_mission(system, "optimal", ManagerSettings()), system)
+    again = _assert_honest(plan_mission(system, "optimal", DESIGN), system)
     assert again["feasible"] is True and again["max_T_winding"]["gen2"] <= _planning_limit(system) + 0.05

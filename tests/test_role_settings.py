@@ -31,7 +31,8 @@ def test_each_role_gets_the_scenarios_say_and_its_own_settings(thesis_system):
     assert not {f.name for f in dataclasses.fields(roles.monitor)} & {"optimal", "heuristic", "seed", "filter"}
     # the own shed plan needs the flown model: not with the thesis's linear filter
     assert not ManagerSettings().roles("optimal", 3600.0, {"filter": "kf"}).planner.own_shed
-    assert ManagerSettings().roles("optimal", 3600.0, {}).planner.own_shed
+    assert ManagerSettings(planner_model="affine").roles("optimal", 3600.0, {}).planner.own_shed
+    assert not ManagerSettings().roles("optimal", 3600.0, {}).planner.own_shed  # auto: plans on the flown model
 
 
 def test_the_planner_settings_are_manager_settings_of_the_same_names():

@@ -124,7 +124,7 @@ def test_a_flight_that_fails_or_runs_too_long_is_reported_not_lost(monkeypatch):
 
     document = robustness_case(6)  # 2 generators, 4.5 h
 
-    def broken(system, scheduler, settings):
+    def broken(system, scheduler, settings, preflight=None):
         raise ZeroDivisionError("division by zero in a planner")
     monkeypatch.setattr(closed_loop, "fly", broken)
     failed = sweep.fly_flight(document, "engineer")
@@ -269,6 +269,29 @@ def test_robustness_report_merges_a_re_fly_into_the_grid(tmp_path, capsys, bench
     alone.write_text(json.dumps({**summarise(milp, ("milp",)), "cases": milp}))
     assert report_module.main([str(whole), "--merge", str(alone), "--png", str(tmp_path / "g.png")]) == 2
     assert "--add joins new ones" in capsys.readouterr().err
+
+
+def test_robustness_report_cuts_a_grid_to_the_cases_a_partial_re_fly_flew(tmp_path, capsys, benchmark_script):
+    """``--merged-only``: the optimal scheduler re-flown on case 0 alone is compared with case 0's
+    baselines, not joined with the grid's own optimal flight of case 1."""
+    import json
+
+    report_module = benchmark_script("robustness_report")
+    schedulers = ("heuristic", "engineer", "optimal")
+    cases = [{"name": "case0:a", "faulty": True, "runs": {"heuristic": run(0, 600), "engineer": run(0, 300),
+                                                    "optimal": run(0, 400)}},
+             {"name": "case1:b", "faulty": True, "runs": {"heuristic": run(0, 100), "engineer": run(0, 100),
+                                                    "optimal": run(30, 900)}}]
+    refly = [{"name": "case0:a", "faulty": True, "runs": {"optimal": run(0, 150)}}]
+    whole, partial = tmp_path / "grid.json", tmp_path / "refly.json"
+    whole.write_text(json.dumps({**summarise(cases, schedulers), "provenance": {"command": "whole"}, "cases": cases}))
+    partial.write_text(json.dumps({**summarise(refly, ("optimal",)), "provenance": {"command": "refly a"},
+                                   "cases": refly}))
+    assert report_module.main([str(whole), "--merge", str(partial), "--merged-only", "--png", str(tmp_path / "g.png")]) == 0
+    cut = json.loads(whole.read_text())
+    assert [c["name"] for c in cut["cases"]] == ["case0:a"] and cut["robustness"]["breach_s"]["optimal"] == 0
+    assert cut["rest_vs_best_baseline"]["mean_ratio"] == pytest.approx(150 / 300)
+    capsys.readouterr()
 
 
 def test_the_flown_heuristic_counts_as_a_baseline_where_the_sweep_flew_it():

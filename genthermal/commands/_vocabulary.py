@@ -21,7 +21,7 @@ FLOWN_SCHEDULERS = ("optimal", "heuristic")
 #: ``--schedulers`` of sweep (``genthermal.schedule.sweeps.sweep.SWEEP_SCHEDULERS``, hyphenated).
 SWEEP_SCHEDULERS = ("heuristic", "engineer", "optimal", "milp", "heuristic-flown", "optimal-flown")
 #: ``--planner-model`` of plan, fly and sweep (``manager_settings.PLANNER_MODELS``).
-PLANNER_MODELS = ("affine", "nonlinear")
+PLANNER_MODELS = ("auto", "affine", "nonlinear")
 #: ``--when-infeasible`` of plan and fly (``genthermal.schedule.planning.shed.INFEASIBLE_RESPONSES``, hyphenated).
 INFEASIBLE_RESPONSES = ("shed", "best-effort")
 #: ``--phases`` of diagnose (``genthermal.diagnose.discovery.Discovery`` ``phases``).
@@ -42,7 +42,7 @@ OLD_SPELLINGS = {"heuristic_flown": "heuristic-flown", "optimal_flown": "optimal
 #: when_infeasible, filter, cycle_s / 60), ``manager_settings.DEFAULT_REST_BUDGET_FRACTION``,
 #: ``schedule.sweeps.sweep.DEFAULT_FLIGHT_CPU_LIMIT_S``, ``synth`` noise, ``estimation.prediction``.
 MANAGER_DEFAULTS = {"margin_K": 2.5, "rise_backoff": 0.3, "confidence_sigmas": 2.0, "when_infeasible": "shed",
-                    "filter": "ekf", "cycle_min": 5.0, "planner_model": "affine"}
+                    "filter": "ekf", "cycle_min": 5.0, "planner_model": "auto"}
 DEFAULT_REST_BUDGET_FRACTION = 0.25
 DEFAULT_FLIGHT_CPU_LIMIT_S = 900.0
 THESIS_NOISE_VARIANCE_K2 = (0.0082, 0.013)

@@ -221,9 +221,9 @@ def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
     """Fly the large-blockage mission closed loop with the thesis heuristic, the engineer's
     heuristic (the strongest simple baseline) and the optimal scheduler on the flown model.
 
-    The optimal scheduler plans on the model the manager flies (``planner_model="nonlinear"``: the
-    extended Kalman filter's nonlinear model, state, disturbances and covariance back-off); the
-    baselines plan on the offset-free design model, as ``genthermal fly`` does by default.
+    Each flies with the default settings, as ``genthermal fly`` does: the optimal scheduler plans on
+    the model the manager flies (``planner_model`` ``auto``: the extended Kalman filter's nonlinear
+    model, state, disturbances and covariance back-off), the baselines on the offset-free design model.
 
     Parameters
     ----------
@@ -247,11 +247,9 @@ def run_scheduler_demo(out_dir, scenario: str = "blockage_large") -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     system = PowerSystem.from_mission(load_mission(scenario))
-    flights = {"heuristic": ManagerSettings(), "engineer": ManagerSettings(),
-               "optimal": ManagerSettings(planner_model="nonlinear")}
     summaries, plots = {}, []
-    for scheduler, settings in flights.items():
-        result = fly(system, scheduler, settings)
+    for scheduler in ("heuristic", "engineer", "optimal"):
+        result = fly(system, scheduler, ManagerSettings())
         summaries[scheduler] = flight_summary(result)
         path = out / f"schedule_{scheduler}.png"
         plot_flight(result, path=path)

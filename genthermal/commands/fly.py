@@ -51,6 +51,7 @@ def run(args) -> int:
     from ..plants import external_plant, is_external_plant
     from ..progress import working
     from ..schedule.flight.closed_loop import fly
+    from ..schedule.flight.preflight import preflight_check
     from ..schedule.report import flight_summary
 
     system, settings = settings_from_args(args)
@@ -64,8 +65,12 @@ def run(args) -> int:
         print("note: genthermal applies no fault effect to this plant; its inputs carry the faults' inlet rises and "
               "its reset is told the faults (PlantSetup.faults): what they do inside is the plant's", file=sys.stderr)
     try:
+        with working("before take-off"):
+            preflight = preflight_check(system, args.scheduler, settings)
+        print(f"{preflight['message']} (feasible: {str(preflight['feasible']).lower()}; planning on the "
+              f"{preflight['planner_model']} model)")
         with working(f"fly {args.scheduler}"):
-            result = fly(system, args.scheduler, settings, plant)
+            result = fly(system, args.scheduler, settings, plant, preflight)
     finally:
         getattr(plant, "close", lambda: None)()
     summary = flight_summary(result)

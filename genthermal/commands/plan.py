@@ -45,8 +45,10 @@ def add_schedule_arguments(parser) -> None:
                         f"{100 * DEFAULT_REST_BUDGET_FRACTION:g} %% of the mission); when it is spent, or no rest "
                         "keeps a generator within the limit, the manager switches that generator off and sheds load")
     add_choice_argument(parser, "--planner-model", PLANNER_MODELS, default=MANAGER_DEFAULTS["planner_model"],
-                        help="what the optimal scheduler or the heuristic plans on — affine: the linear design "
-                        "model within θmax minus --margin, with --rise-backoff (default); nonlinear: the flown model "
+                        help="what the optimal scheduler or the heuristic plans on — auto (default): each "
+                        "scheduler's own default, the flown model for the optimal scheduler with the filter ekf, else the "
+                        "design model; affine: the linear design "
+                        "model within θmax minus --margin, with --rise-backoff; nonlinear: the flown model "
                         "the filter runs on (--model with the faults believed), within θmax minus a back-off of "
                         "--confidence-sigmas standard deviations of the filter's covariance, displacement and rest "
                         "free per management cycle (the heuristic: per K-condition)")

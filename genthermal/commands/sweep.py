@@ -54,7 +54,7 @@ def register(subparsers) -> None:
                         "comma-separated indices from 0 (e.g. 0,15,50: each is the same seeded case as in the whole grid)")
     add_choice_argument(parser, "--planner-model", PLANNER_MODELS, default=MANAGER_DEFAULTS["planner_model"],
                         help="model the optimal scheduler plans on (the baselines plan on the design model; "
-                        "default affine)")
+                        "default auto: the flown model, the extended Kalman filter's)")
     parser.add_argument("--no-hindsight", action="store_true", help="do not plan the faulty cases in hindsight "
                         "(the least rest with the true plant and fault known from the onset, a few seconds a case)")
     parser.add_argument("--no-progress", dest="quiet", action="store_true", default=argparse.SUPPRESS,

@@ -25,9 +25,11 @@ def flight_summary(result: FlightResult) -> dict:
     moved_off = np.clip(result.nominal_A[None, :] - result.currents_A, 0.0, None)[:, ~result.resting]
     lost = not_served(result.nominal_A, result.currents_A, result.resting)
     solve_times = [plan["solve_s"] for plan in result.plans]
+    cpu_times = [plan["solve_cpu_s"] for plan in result.plans if "solve_cpu_s" in plan]
     lowest = [plan["lowest_peak_C"] for plan in result.plans if "lowest_peak_C" in plan]
     summary = {
         "scheduler": result.scheduler,
+        "planner_model": None if result.settings is None else result.settings.planner_model,
         "closed_loop": result.closed_loop,
         "mission_time_s": float(result.time_s[-1]),
         "added_rest_s": float(result.time_s[-1] - system.mission.duration_s),
@@ -37,9 +39,11 @@ def flight_summary(result: FlightResult) -> dict:
         "breach_s": float(np.count_nonzero(above.any(axis=(0, 1))) * dt),
         "replans": len(result.plans),
         "median_solve_s": float(np.median(solve_times)) if solve_times else 0.0,
+        "median_solve_cpu_s": float(np.median(cpu_times)) if cpu_times else None,
         "displaced_Ah": float((moved_off.sum() - lost.sum()) * dt / 3600.0),
         "feasible": bool(all(plan["feasible"] for plan in result.plans) and not result.shed_events
-                         and not lost.any() and getattr(result, "plant_fault", None) is None),
+                         and not lost.any() and getattr(result, "plant_fault", None) is None
+                         and (result.preflight is None or result.preflight["feasible"])),
         "lowest_reachable_peak_C": float(max(lowest)) if lowest else None,
         "manager_response": list(dict.fromkeys(plan["response"] for plan in result.plans if plan.get("response"))),
         "rest_budget_s": float(result.rest_budget_s),
@@ -48,6 +52,7 @@ def flight_summary(result: FlightResult) -> dict:
         "warnings": list(dict.fromkeys(result.warnings)),
     }
     if result.closed_loop:
+        summary["preflight"] = result.preflight
         summary["plant_fault"] = getattr(result, "plant_fault", None)
         if getattr(result, "replay", None) is not None:
             summary["replay"] = result.replay

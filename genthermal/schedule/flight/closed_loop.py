@@ -22,6 +22,7 @@ from .manager_settings import ManagerSettings
 from ..monitoring.monitor import FaultMonitor
 from ..state_estimator import StateEstimator, believed_model, planning_generator
 from .open_loop import told_beliefs
+from .preflight import preflight_check
 from ..planning.plan import Schedule, build_timeline, generator_inputs, predict, remaining_after
 from ..power_system import PowerSystem
 from ..system_frame import SystemFrame
@@ -106,7 +107,8 @@ def _filter_inputs(frame: SystemFrame, inputs_C: dict, times, currents_A=None) -
     return inlet, ambient
 
 
-def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings(), plant=None) -> FlightResult:
+def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = ManagerSettings(), plant=None,
+        preflight: dict | bool | None = None) -> FlightResult:
     """Fly the mission in closed loop on the true plant (module docstring).
 
     Parameters
@@ -124,12 +126,16 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         reads other sensors, other timestamps or a non-finite value), the flight stops there: the
         result holds what was flown and the fault (``plant_fault``), the manager holding the
         minimum power mode.
+    preflight : dict or False, optional
+        The verdict before take-off (:func:`~genthermal.schedule.flight.preflight.preflight_check`,
+        which a caller that prints it first passes here); None (default): the flight makes it;
+        False: none (a robustness sweep, whose flights are judged by what they fly).
 
     Returns
     -------
     FlightResult
-        True-plant temperatures, applied currents, one record per re-plan and the alarms with
-        what was identified.
+        True-plant temperatures, applied currents, one record per re-plan, the alarms with
+        what was identified and ``preflight``.
 
     Raises
     ------
@@ -141,6 +147,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
     started = time.process_time()
     roles = settings.roles(scheduler, system.mission.duration_s, system.manager_say)
     loop, planner, filter_name = roles.loop, roles.planner, roles.estimator.filter
+    settings = settings.for_flight(scheduler, filter_name)  # planner_model "auto" resolved, as in roles
+    if preflight is None:
+        preflight = preflight_check(system, scheduler, settings)
     frame = system.frame()
     n_gen, dt = frame.n_generators, loop.dt_s
     cycle_steps = max(int(round(loop.cycle_s / dt)), 1)
@@ -231,9 +240,11 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
         shedding = bool(recorder.plans) and recorder.plans[-1]["method"] == "shed"  # re-planned every cycle
         if loop.replan and (shedding or predict(problem, schedule).peak()[0]
                             > problem.limit_C + loop.replan_tolerance_K):
+            planning_started = time.process_time()
             result = plan_with(scheduler, problem, planner, frame.generator_names, frame.limit_C,
                                previous=schedule, switched_off=schedule.switched_off, shedding=shedding,
                                flown_shed=flown if planner.own_shed else None)
+            result.details["solve_cpu_s"] = time.process_time() - planning_started  # wall time is the machine's
             schedule = result.schedule.rounded(dt).within_rest_budget(problem.rest_budget_s,
                                                                       first_rest_max_s(problem))
             recorder.plan(t, result, beliefs)
@@ -282,6 +293,9 @@ def fly(system: PowerSystem, scheduler: str, settings: ManagerSettings = Manager
                           cycles=cycles, rest_budget_s=budget)
     result.sensor_watch = watch
     result.plant_fault = plant_fault
+    result.preflight = preflight or None
+    if preflight and not preflight["feasible"]:
+        result.warnings.insert(0, preflight["message"])
     if getattr(plant, "replays_log", False):
         result.replay = replay_score(result, recorder, plant)
     return result

@@ -77,6 +77,9 @@ class FlightResult:
     replay : dict or None
         Flown along a replayed log (:class:`~genthermal.plants.log_plant.LogPlant`): the manager's
         decisions scored, not applied (:func:`~genthermal.schedule.flight.closed_loop.replay_score`).
+    preflight : dict or None
+        The verdict before take-off (closed loop,
+        :func:`~genthermal.schedule.flight.preflight.preflight_check`): whether a plan holds θmax.
     """
 
     system: PowerSystem
@@ -99,6 +102,7 @@ class FlightResult:
     sensor_watch: object = None
     plant_fault: dict | None = None
     replay: dict | None = None
+    preflight: dict | None = None
 
     def to_pandas(self):
         """The flight as a table, one row per sample.

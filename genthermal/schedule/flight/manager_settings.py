@@ -17,18 +17,19 @@ from ..planning.milp import MilpSettings
 from ..monitoring.monitor import DetectionSettings
 from ..planning.optimal import OptimalSettings
 from ..planning.plan import DEFAULT_MARGIN_K
-from ..planning.registry import BUILT_IN_PLANNERS, planner
+from ..planning.registry import BUILT_IN_PLANNERS, model_for, planner
 from ..monitoring.sensor_watch import SensorWatchSettings
 from ..planning.shed import INFEASIBLE_RESPONSES
 from .role_settings import EstimatorSettings, LoopSettings, ManagerRoles, MonitorSettings, PlannerSettings
 
 #: The schedulers genthermal ships (others may be registered: :mod:`genthermal.schedule.planning.registry`).
 SCHEDULERS = BUILT_IN_PLANNERS
-#: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``affine``, the design
-#: model with the margin and the rise back-off; ``nonlinear``, the flown model the filter runs
-#: on, with the back-off of its covariance (:mod:`genthermal.schedule.planning.flown`), the mission cut
-#: into control intervals of one cycle (the thesis heuristic keeps its K-conditions).
-PLANNER_MODELS = ("affine", "nonlinear")
+#: Models the schedulers may plan on (``ManagerSettings.planner_model``): ``auto``, each planner's
+#: own default when the filter allows (:func:`~genthermal.schedule.planning.registry.model_for`);
+#: ``affine``, the design model with the margin and the rise back-off; ``nonlinear``, the flown
+#: model the filter runs on, with the back-off of its covariance (:mod:`genthermal.schedule.planning.flown`),
+#: the mission cut into control intervals of one cycle (the thesis heuristic keeps its K-conditions).
+PLANNER_MODELS = ("auto", "affine", "nonlinear")
 #: Schedulers that plan on the flown model when ``planner_model`` is ``nonlinear``; the engineer's
 #: heuristic and the MILP are defined on the design model.
 FLOWN_SCHEDULERS = tuple(name for name in BUILT_IN_PLANNERS if planner(name).on_flown_model)
@@ -90,7 +91,9 @@ class ManagerSettings:
     input_watch : InputWatchSettings
         Inlet and ambient sensor faults in flight (:mod:`genthermal.schedule.monitoring.input_watch`).
     planner_model : str
-        One of :data:`PLANNER_MODELS`: ``affine`` (default) plans on the design model within θmax −
+        One of :data:`PLANNER_MODELS`: ``auto`` (default) is resolved per flight by
+        :meth:`for_flight` (the optimal scheduler on the flown model when the flight's filter is
+        ``ekf``, every other planner and the ``kf`` filter on the design model); ``affine`` plans on the design model within θmax −
         ``margin_K`` with the rise back-off; ``nonlinear`` plans on the flown model (the filter's,
         ``filter`` must be ``ekf``) within θmax with the back-off of the filter's covariance
         (``confidence_sigmas`` standard deviations; ``margin_K`` and ``rise_backoff`` unused), and
@@ -131,7 +134,7 @@ class ManagerSettings:
     tell_fault: bool = False
     replan: bool = True
     filter: str = "ekf"
-    planner_model: str = "affine"
+    planner_model: str = "auto"
     confidence_sigmas: float = DEFAULT_CONFIDENCE_SIGMAS
     own_shed: bool = True
     detection: DetectionSettings = DetectionSettings()
@@ -170,6 +173,12 @@ class ManagerSettings:
         if self.nonlinear and not planner(scheduler).on_flown_model:
             raise InputError("planner_model", self.planner_model, f"the {scheduler} scheduler plans on the design "
                              f"model; on the flown model plan with one of {', '.join(FLOWN_SCHEDULERS)}")
+
+    def for_flight(self, scheduler: str, filter_flown: str) -> "ManagerSettings":
+        """These settings with ``planner_model`` resolved for ``scheduler`` flown with the filter
+        ``filter_flown`` (the scenario's ``generators.filter`` when it names one, else ``filter``):
+        :func:`~genthermal.schedule.planning.registry.model_for`."""
+        return dataclasses.replace(self, planner_model=model_for(scheduler, self.planner_model, filter_flown))
 
     @property
     def nonlinear(self) -> bool:
@@ -219,8 +228,9 @@ class ManagerSettings:
         InputError
             As :meth:`check_scheduler` and :meth:`with_scenario`.
         """
-        self.check_scheduler(scheduler)
         own = self.with_scenario(say or {})
+        own = own.for_flight(scheduler, own.filter)  # planner_model "auto" resolved
+        own.check_scheduler(scheduler)
         return ManagerRoles(
             LoopSettings(own.cycle_s, own.dt_s, own.seed, own.rest_budget_for(mission_duration_s), own.cpu_limit_s,
                          own.replan, own.replan_tolerance_K, own.tell_fault),

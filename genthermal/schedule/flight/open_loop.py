@@ -32,8 +32,8 @@ def told_beliefs(system: PowerSystem, t_s: float) -> list:
 
 def _design_steps(system: PowerSystem, x0, timeline, t0: float, n: int, faults_at):
     """Run the design models for ``n`` steps of ``timeline`` from ``t0``; ``faults_at(t)`` gives the
-    faults in force. Returns (outputs (n_gen, 2, n), states after (n_gen, nx))."""
-    outputs = np.empty((system.n_generators, 2, n))
+    faults in force. Returns (outputs (n_gen, n_outputs, n), states after (n_gen, nx))."""
+    outputs = np.empty((system.n_generators, len(system.planning_model.output_names), n))
     states = np.array(x0, dtype=float)
     for i in range(n):
         t = t0 + i * timeline.dt_s
@@ -156,6 +156,7 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
     say = {key: value for key, value in system.manager_say.items() if key != "filter"}
     roles = settings.roles(scheduler, system.mission.duration_s, say)
     loop, planner, frame = roles.loop, roles.planner, system.frame()
+    settings = settings.for_flight(scheduler, settings.filter)  # planner_model "auto" resolved, as in roles
     dt = loop.dt_s
     segments = flight_segments(system.mission, planner, scheduler)
     schedule = Schedule.nominal(system.n_generators, len(segments))
@@ -208,5 +209,6 @@ def plan_mission(system: PowerSystem, scheduler: str, settings: ManagerSettings 
         table = schedule.table(segments, system.generator_names)
         recorder.add(segments, timeline, timeline.n_steps, outputs, t_plan)
         judge_forecast(recorder, t_plan, problem, outputs, planner, system.generator_names)
-    return FlightResult(system, scheduler, False, **recorder.record(), schedule_table=table, rest_budget_s=budget)
+    return FlightResult(system, scheduler, False, **recorder.record(), schedule_table=table, settings=settings,
+                        rest_budget_s=budget)
 
