@@ -66,9 +66,10 @@ class FlownOpenLoop:
 
     def steps(self, z0, timeline, t0: float, n: int):
         """Run ``n`` steps of ``timeline`` from filter states ``z0`` (n_gen, n_z). Returns
-        (outputs (n_gen, 2, n), states after (n_gen, n_z))."""
+        (outputs (n_gen, n_outputs, n), states after (n_gen, n_z))."""
         system = self.system
-        outputs, states = np.empty((system.n_generators, 2, n)), np.array(z0, dtype=float)
+        n_outputs = len(system.planning_model.output_names)
+        outputs, states = np.empty((system.n_generators, n_outputs, n)), np.array(z0, dtype=float)
         for i in range(n):
             t = t0 + i * timeline.dt_s
             for g in range(system.n_generators):
