@@ -140,6 +140,7 @@ NOT_BENCHMARKS = {
     "run.py": "this dashboard",
     "readme_figures.py": "redraws the README's pictures",
     "robustness_report.py": "report of a `genthermal sweep` JSON (the robustness grid is the sweep)",
+    "flight_evidence_compare.py": "table of two partial `genthermal sweep` re-flies side by side (before/after a change)",
     "prediction_references.py": "helper of bench_prediction.py",
     "sensor_robustness_records.py": "helper of bench_sensor_robustness.py",
 }

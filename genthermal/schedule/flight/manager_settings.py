@@ -228,9 +228,9 @@ class ManagerSettings:
         InputError
             As :meth:`check_scheduler` and :meth:`with_scenario`.
         """
+        self.check_scheduler(scheduler)
         own = self.with_scenario(say or {})
-        own = own.for_flight(scheduler, own.filter)  # planner_model "auto" resolved
-        own.check_scheduler(scheduler)
+        own = own.for_flight(scheduler, own.filter)  # planner_model "auto" resolved to what the planner can
         return ManagerRoles(
             LoopSettings(own.cycle_s, own.dt_s, own.seed, own.rest_budget_for(mission_duration_s), own.cpu_limit_s,
                          own.replan, own.replan_tolerance_K, own.tell_fault),
