@@ -53,8 +53,9 @@ def test_plant_hot_at_rest_finishes_sheds_and_keeps_the_healthy_generator_below_
     assert event["shedding"] == ["gen1"] and event["time_s"] >= 600.0  # not before the onset
     assert event["lowest_reachable_peak_C"] > system.limit_C and "shed load of gen1" in event["response"]
     # the shared shed plan (the baselines') leaves 1.10 A·h of gen1's load unserved; the optimal
-    # scheduler's own plan on the flown model 0.36 (tests/test_optimal_own_shed.py)
-    least_not_served_Ah = 0.2 if scheduler == "optimal" else 0.5
+    # scheduler planning on the flown model (its default) 0.18 (its own shed plan on the design
+    # model 0.36, tests/test_optimal_own_shed.py)
+    least_not_served_Ah = 0.1 if scheduler == "optimal" else 0.5
     assert summary["shed"]["not_served_Ah"]["gen1"] > least_not_served_Ah
     assert summary["shed"]["first_s"] >= event["time_s"]
     assert any("shed load of gen1" in response for response in summary["manager_response"])
