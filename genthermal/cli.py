@@ -192,6 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
+        _forget_interrupt_in_string_code()
         if isinstance(exc, Terminated):
             _error(f"\n{command}: {exc.args[0] if exc.args else 'terminated'}; no partial output file was left")
             return 128 + (exc.args[1] if len(exc.args) > 1 else signal.SIGTERM)
@@ -214,6 +215,19 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: internal error: {type(exc).__name__}: {_one_line(exc)}\n{BUG_REPORT_HINT} "
                f"(genthermal {__version__}); traceback saved in {_save_traceback()}")
         return EXIT_INTERNAL_ERROR
+
+
+def _forget_interrupt_in_string_code() -> None:
+    """Clear CPython's note of an interrupt that ended code run from a string (handled here).
+
+    CPython (3.11 here, and 3.12 by its source) notes a KeyboardInterrupt that ends code run from
+    source text (``exec``/``eval`` of a string: scipy.stats attaching its distributions' methods on
+    a lazy import, a named tuple being made, sympy parsing), even when a caller handles it; under
+    ``python -m`` the interpreter then ends by SIGINT itself after the cleanups instead of with the
+    exit code (the demo's Ctrl-C once ended -SIGINT so). Each string evaluation resets the note
+    first, so an empty one forgets it.
+    """
+    eval("None")  # noqa: S307 - a constant string: the reset is the point
 
 
 class _stopping_on_signals:
