@@ -163,3 +163,22 @@ def test_the_observer_names_a_bad_process_noise_in_python(model):
         NodeObserver(model, 10.0, ("T_rotor",), process_std_K=-0.5)
     with pytest.raises(InputError, match=r"initial_std_K = 0.0: give a finite standard deviation > 0 K"):
         NodeObserver(model, 10.0, ("T_rotor",), initial_std_K=0.0)
+
+
+def test_a_prior_on_one_record_in_the_csv_schema_is_not_ignored(tmp_path):
+    """One rig record of a plant whose h_end_air is 13 (the model's 15.5): a heavy prior keeps the
+    start value, none lets the record move it (the prior takes the several-record fit)."""
+    data = tmp_path / "rig.csv"
+    assert main(["synth", "thesis_fig_3_2", "--out", str(data), "--seed", "4", "--param", "h_end_air=13"]) == 0
+
+    def fitted(*prior):
+        out = tmp_path / f"fit_{prior[-1]}.json"
+        assert main(["calibrate", str(data), "--params", "h_end_air", "--json", str(out), *prior]) == 0
+        report = json.loads(out.read_text())
+        return report["parameters"][0]["value"]
+
+    free = fitted("--prior-weight", "0")
+    assert abs(free / 13.0 - 1) < 0.03
+    # 1e8 K² per ln² outweighs the record's misfit of some 1e4 K² at a 10 % error
+    held = fitted("--prior-weight", "1e8")
+    assert abs(math.log(held / 15.5)) < 0.05 * abs(math.log(free / 15.5))

@@ -61,8 +61,8 @@ def add_record_set_arguments(parser, fitting: bool = False) -> None:
                             help="weight of a prior pulling a fitted parameter towards its start value, K² per unit "
                             "of ln(value/start)² (default 0: none); keeps the directions the records hardly see "
                             "near the machine's estimate. W: every fitted parameter; NAMES=W: the parameters named, "
-                            "comma-separated names or globs, e.g. --prior-weight 30 --prior-weight 'C_rotor,G_gap*=1000'; "
-                            "repeatable, a later item naming a parameter again wins")
+                            "comma-separated names or globs, e.g. --prior-weight 30 --prior-weight "
+                            "'C_rotor,G_gap*=1000'; repeatable, a later item naming a parameter again wins")
     parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
                         f"fitting, scoring or filtering (default {DEFAULT_FIT_STEP_S:g} s)")
 
