@@ -148,12 +148,16 @@ def test_bad_node_observer_options_are_named(options, message, capsys):
     assert message in capsys.readouterr().err
 
 
-def test_the_disturbance_filter_path_refuses_the_fit_step(tmp_path, capsys):
+def test_each_filter_refuses_the_other_ones_step(tmp_path, capsys):
     data = tmp_path / "rig.csv"
     assert main(["synth", "thesis_fig_3_2", "--out", str(data), "--seed", "3"]) == 0
     capsys.readouterr()
     assert main(["estimate", str(data), "--fit-step", "30"]) == 2
     assert "--fit-step = '30': the filter with disturbance states steps at --dt" in capsys.readouterr().err
+    assert main(["estimate", str(data), "--sensors", "T_iron", "--dt", "10"]) == 2
+    assert "--dt = '10': records in the CSV schema have a time column" in capsys.readouterr().err
+    assert main(["estimate", str(data), "--sensors", "T_iron"]) == 0  # the thesis machine takes it too
+    assert "T_winding (estimated)" in capsys.readouterr().out
 
 
 def test_the_observer_names_a_bad_process_noise_in_python(model):

@@ -58,6 +58,9 @@ def load_record_set(args, model) -> list:
     if column_map is not None:
         data = read_logged_set(args.data, column_map, model.spec.interface, dt, model.spec.rated_current_A)
     else:
+        if dt is not None:
+            raise InputError("--dt", args.dt, "records in the CSV schema have a time column and keep their own step "
+                             "here; --fit-step sets the step they are averaged to")
         data = [load_measurements(p, rated_current_A=model.spec.rated_current_A, interface=model.spec.interface)
                 for p in args.data]
         first = set(data[0].frame.columns)
