@@ -195,6 +195,33 @@ def test_an_interrupt_inside_code_run_from_a_string_still_exits_130(tmp_path):
     assert done.returncode == 130 and "interrupted" in done.stderr, (done.returncode, done.stderr)
 
 
+def test_ctrl_c_that_a_native_solver_takes_still_stops_the_command(tmp_path, monkeypatch, capsys):
+    """CasADi's IPOPT takes a Ctrl-C as a failed solve and returns (status NonIpopt_Exception_Thrown):
+    calibrate went on, exited 0 and wrote the interrupted fit. The command line notes the Ctrl-C."""
+    import genthermal.diagnose.multi_record as multi_record
+    from genthermal.resources import BENCH_MOTOR_DIR
+
+    real_fit = multi_record.fit_records
+
+    def solver_takes_the_interrupt(*args, **kwargs):
+        try:
+            signal.raise_signal(signal.SIGINT)  # Ctrl-C during the solve ...
+        except KeyboardInterrupt:
+            pass  # ... which the solver takes, returning what it has
+        return real_fit(*args, **kwargs)
+
+    monkeypatch.setattr(multi_record, "fit_records", solver_takes_the_interrupt)
+    out = tmp_path / "fit.yaml"
+    code = main(["calibrate", "--model", str(BENCH_MOTOR_DIR / "ipmsm_machine.py"),
+                 str(BENCH_MOTOR_DIR / "id_9_first_3000s.csv"), "--params", "G_jacket", "--fit-step", "60",
+                 "--out", str(out)])
+    assert code == 130 and "interrupted" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []  # neither the model file nor its temporary sibling
+    with replacing(tmp_path / "after.txt") as temporary:  # the next write, outside a command, is not refused
+        temporary.write_text("ok")
+    assert (tmp_path / "after.txt").read_text() == "ok"
+
+
 def test_ctrl_c_during_demo_leaves_no_plot_behind(tmp_path):
     out = tmp_path / "demo"
     code, err = _stop_when(["demo", "--quick", "--out", out], out,
