@@ -19,7 +19,8 @@ import warnings
 
 from . import __version__
 from .errors import GenthermalError
-from .outputs import FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, Terminated, check_output_paths, replacing_policy
+from .outputs import (FILE_OUTPUT_OPTIONS, FOLDER_OUTPUT_OPTIONS, Terminated, check_interrupt, check_output_paths,
+                      note_interrupt, replacing_policy)
 
 #: Sub-commands in the order ``genthermal --help`` lists them: name -> (module under
 #: :mod:`genthermal.commands`, one-line summary, the documentation page that says more). Only the
@@ -183,6 +184,7 @@ def main(argv: list[str] | None = None) -> int:
                     replacing_policy(bool(getattr(args, "force", False))), _stopping_on_signals(), \
                     quiet(bool(getattr(args, "quiet", False))):
                 code = int(args.func(args) or 0)
+                check_interrupt()  # a Ctrl-C a native solver took is an interrupt all the same
         sys.stdout.flush()
         return code
     except UsageError as exc:
@@ -192,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{command}: error: {_one_line(exc)}")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
+        _forget_interrupt_in_string_code()
         if isinstance(exc, Terminated):
             _error(f"\n{command}: {exc.args[0] if exc.args else 'terminated'}; no partial output file was left")
             return 128 + (exc.args[1] if len(exc.args) > 1 else signal.SIGTERM)
@@ -216,18 +219,41 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERNAL_ERROR
 
 
+def _forget_interrupt_in_string_code() -> None:
+    """Clear CPython's note of an interrupt that ended code run from a string (handled here).
+
+    CPython (3.11 here, and 3.12 by its source) notes a KeyboardInterrupt that ends code run from
+    source text (``exec``/``eval`` of a string: scipy.stats attaching its distributions' methods on
+    a lazy import, a named tuple being made, sympy parsing), even when a caller handles it; under
+    ``python -m`` the interpreter then ends by SIGINT itself after the cleanups instead of with the
+    exit code (the demo's Ctrl-C once ended -SIGINT so). Each string evaluation resets the note
+    first, so an empty one forgets it.
+    """
+    eval("None")  # noqa: S307 - a constant string: the reset is the point
+
+
 class _stopping_on_signals:
     """Within the block, SIGTERM and SIGHUP raise :class:`~genthermal.outputs.Terminated` in this
-    process (forked workers keep the default: they just end), so cleanups run as for Ctrl-C."""
+    process (forked workers keep the default: they just end), so cleanups run as for Ctrl-C; Ctrl-C
+    is noted too (:func:`~genthermal.outputs.check_interrupt`)."""
 
     def __enter__(self):
         self._pid, self._previous = os.getpid(), {}
+        note_interrupt(False)
         try:
             for number in STOP_SIGNALS:
                 self._previous[number] = signal.signal(number, self._handle)
+            if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not a caller's own handler
+                self._previous[signal.SIGINT] = signal.signal(signal.SIGINT, self._interrupt)
         except ValueError:  # not the main thread: leave the signals alone
             pass
         return self
+
+    @staticmethod
+    def _interrupt(number, frame):
+        """Ctrl-C: noted (a native solver may take the KeyboardInterrupt and return), then raised."""
+        note_interrupt()
+        signal.default_int_handler(number, frame)
 
     def _handle(self, number, frame):
         if os.getpid() != self._pid:
@@ -239,6 +265,7 @@ class _stopping_on_signals:
     def __exit__(self, *exc):
         for number, previous in self._previous.items():
             signal.signal(number, previous)
+        note_interrupt(False)  # a library call after the command writes as usual
         return False
 
 

@@ -3,8 +3,9 @@
 :func:`check_output_paths` refuses, before any work starts, an output that exists (unless
 ``--force``), an output that is also an input, and a link, device or FIFO; :func:`replacing` and
 :func:`replacing_folder` move complete results into place only at the end, so an error or a
-signal (:class:`Terminated`) leaves nothing half-written; :func:`write_json` writes NaN and ±inf
-as ``null``. The rules: ``docs/guide/safety.md``.
+signal (:class:`Terminated`) leaves nothing half-written, nor does a Ctrl-C a native solver took
+(:func:`check_interrupt`); :func:`write_json` writes NaN and ±inf as ``null``. The rules:
+``docs/guide/safety.md``.
 """
 
 from __future__ import annotations
@@ -36,6 +37,23 @@ _MAY_REPLACE: contextvars.ContextVar[bool] = contextvars.ContextVar("may_replace
 class Terminated(KeyboardInterrupt):
     """The process was asked to stop (SIGTERM, SIGHUP): unwinds like Ctrl-C, so that no partial
     output is left behind."""
+
+
+#: Whether Ctrl-C reached this process during the command (set by ``genthermal.cli``'s handler). A
+#: native solver may take the KeyboardInterrupt as a failed solve and return (CasADi's IPOPT does:
+#: status ``NonIpopt_Exception_Thrown``); the command must not then write the interrupted result.
+_INTERRUPT = {"received": False}
+
+
+def note_interrupt(received: bool = True) -> None:
+    """Record that Ctrl-C arrived (or, with ``received=False``, forget it: a new command starts)."""
+    _INTERRUPT["received"] = bool(received)
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt if Ctrl-C arrived during the command, even if something took it."""
+    if _INTERRUPT["received"]:
+        raise KeyboardInterrupt("Ctrl-C arrived during a native solver, which returned")
 #: Figure formats a ``--plot`` file may have (matplotlib's, without the raw buffer formats).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".svgz", ".jpg", ".jpeg", ".tif", ".tiff", ".webp", ".eps", ".ps")
 
@@ -207,6 +225,7 @@ def replacing(path) -> Iterator[Path]:
     try:
         os.chmod(temporary, 0o666 & ~_umask())
         yield Path(temporary)
+        check_interrupt()
         _move_file_into_place(temporary, path)
     except BaseException:
         _despite_interrupts(lambda: _unlink_if_present(temporary))
@@ -238,6 +257,7 @@ def replacing_folder(path, stale_patterns: tuple[str, ...] = ()) -> Iterator[Pat
     try:
         os.chmod(temporary, 0o777 & ~_umask())
         yield temporary
+        check_interrupt()
         _refuse_special("output", path)
         if path.is_dir() and not any(path.iterdir()):
             path.rmdir()

@@ -102,6 +102,7 @@ def test_old_spellings_the_docs_use_are_hidden_and_still_accepted():
 def test_the_words_agree_with_the_library():
     from genthermal.embedded.mission import PRECISIONS
     from genthermal.estimation.arx_search import INPUT_SIGNALS
+    from genthermal.estimation.node_observer import DEFAULT_OFFSET_STEP_K, DEFAULT_PROCESS_STD_K
     from genthermal.estimation.prediction import DEFAULT_EVERY_MIN, DEFAULT_MARGIN_K, THESIS_STARTS_MIN
     from genthermal.machines.registry import BUILT_IN
     from genthermal.schedule.flight.manager_settings import (DEFAULT_REST_BUDGET_FRACTION, FLOWN_SCHEDULERS, PLANNER_MODELS,
@@ -128,6 +129,7 @@ def test_the_words_agree_with_the_library():
                                                                              DEFAULT_CURRENT_NOISE)
     assert (words.DEFAULT_EVERY_MIN, words.THESIS_STARTS_MIN, words.DEFAULT_MARGIN_K) == (
         DEFAULT_EVERY_MIN, tuple(THESIS_STARTS_MIN), DEFAULT_MARGIN_K)
+    assert (words.DEFAULT_OFFSET_STEP_K, words.DEFAULT_PROCESS_STD_K) == (DEFAULT_OFFSET_STEP_K, DEFAULT_PROCESS_STD_K)
 
 
 def test_diagnose_phases_are_the_discoverys():

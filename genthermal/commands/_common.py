@@ -49,19 +49,22 @@ def add_model_arguments(parser: argparse.ArgumentParser, what: str = "the model"
 DEFAULT_FIT_STEP_S = 10.0
 
 
-def add_record_set_arguments(parser) -> None:
-    """``--columns FILE`` and ``--fit-step S``."""
+def add_record_set_arguments(parser, fitting: bool = False) -> None:
+    """``--columns FILE`` and ``--fit-step S``; with ``fitting``, ``--weight`` and ``--prior-weight`` too."""
     parser.add_argument("--columns", metavar="FILE", help="column map (YAML) of a logger's CSV: which column is "
                         "which input or sensor, in which unit (default: the machine's own map, if it has one)")
-    parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
-                        help="weight of a sensor in calibrate's sum of squares (default 1), e.g. --weight T_rotor=4; "
-                        "repeatable")
-    parser.add_argument("--prior-weight", metavar="W", type=float, default=0.0,
-                        help="calibrate over several records: weight of a prior pulling each fitted parameter "
-                        "towards its start value, K² per unit of ln(value/start)² (default 0: none); keeps the "
-                        "directions the records hardly see near the machine's estimate")
+    if fitting:
+        parser.add_argument("--weight", action="append", default=[], metavar="SENSOR=W",
+                            help="weight of a sensor in the sum of squares (default 1), e.g. --weight T_rotor=4; "
+                            "repeatable")
+        parser.add_argument("--prior-weight", action="append", default=[], metavar="[NAMES=]W",
+                            help="weight of a prior pulling a fitted parameter towards its start value, K² per unit "
+                            "of ln(value/start)² (default 0: none); keeps the directions the records hardly see "
+                            "near the machine's estimate. W: every fitted parameter; NAMES=W: the parameters named, "
+                            "comma-separated names or globs, e.g. --prior-weight 30 --prior-weight "
+                            "'C_rotor,G_gap*=1000'; repeatable, a later item naming a parameter again wins")
     parser.add_argument("--fit-step", metavar="S", help=f"average records logged faster to this step, s, before "
-                        f"fitting or scoring (default {DEFAULT_FIT_STEP_S:g} s)")
+                        f"fitting, scoring or filtering (default {DEFAULT_FIT_STEP_S:g} s)")
 
 
 def add_json_argument(parser: argparse.ArgumentParser, what: str) -> None:

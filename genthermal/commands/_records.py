@@ -58,6 +58,9 @@ def load_record_set(args, model) -> list:
     if column_map is not None:
         data = read_logged_set(args.data, column_map, model.spec.interface, dt, model.spec.rated_current_A)
     else:
+        if dt is not None:
+            raise InputError("--dt", args.dt, "records in the CSV schema have a time column and keep their own step "
+                             "here; --fit-step sets the step they are averaged to")
         data = [load_measurements(p, rated_current_A=model.spec.rated_current_A, interface=model.spec.interface)
                 for p in args.data]
         first = set(data[0].frame.columns)
@@ -101,20 +104,20 @@ def score_records(model, records) -> dict:
         predicted = simulate_record(model, record)
         error = predicted - record.outputs
         errors.append(error)
-        per_record[record.name] = {name: _metrics(error[i]) for i, name in enumerate(model.output_names)}
+        per_record[record.name] = {name: error_metrics(error[i]) for i, name in enumerate(model.output_names)}
         for band, (names, index) in _bands(model, record).items():
             for b, label in enumerate(names):
                 chosen = error[:, index == b]
                 band_errors.setdefault(band, {}).setdefault(label, []).append(chosen)
     pooled = np.hstack(errors)
-    by_band = {band: {label: {name: _metrics(np.hstack(parts)[i]) for i, name in enumerate(model.output_names)}
+    by_band = {band: {label: {name: error_metrics(np.hstack(parts)[i]) for i, name in enumerate(model.output_names)}
                       for label, parts in labels.items() if np.hstack(parts).shape[1]}
                for band, labels in band_errors.items()}
-    return {"records": per_record, "pooled": {name: _metrics(pooled[i]) for i, name in enumerate(model.output_names)},
+    return {"records": per_record, "pooled": {name: error_metrics(pooled[i]) for i, name in enumerate(model.output_names)},
             "by_band": by_band}
 
 
-def _metrics(error) -> dict:
+def error_metrics(error) -> dict:
     valid = np.isfinite(error)
     if not valid.any():
         return {"n": 0, "rmse": None, "max_abs": None, "bias": None}
@@ -161,6 +164,7 @@ def calibrate_record_set(model, names, args) -> int:
     from ..model_file import save_model
 
     from ._common import parse_assignments
+    from ._prior import prior_weights
 
     weights = parse_assignments(args.weight, "--weight")
     for name, value in weights.items():
@@ -168,14 +172,12 @@ def calibrate_record_set(model, names, args) -> int:
             raise InputError(f"--weight {name}", name, f"not a sensor of {model.name} ({', '.join(model.output_names)})")
         if not (np.isfinite(value) and value >= 0):
             raise InputError(f"--weight {name}", value, "a weight must be a number >= 0")
-    prior_weight = getattr(args, "prior_weight", 0.0)
-    if not (np.isfinite(prior_weight) and prior_weight >= 0):
-        raise InputError("--prior-weight", prior_weight, "a weight must be a number >= 0")
+    prior = prior_weights(args.prior_weight, model, names)
     records = load_record_set(args, model)
     before = score_records(model, records)
     with working("calibrate"):
         fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names],
-                          prior_weight=prior_weight)
+                          prior_weight=prior)
     fisher = records_fisher(fit)
     after = score_records(fit.model, records)
     print(f"{model.name}: {len(names)} parameter(s) fitted to {len(records)} record(s) in {fit.fit_time_s:.0f} s "
@@ -184,7 +186,9 @@ def calibrate_record_set(model, names, args) -> int:
     for i, name in enumerate(names):
         low, high = fisher["ci95"][i]
         unit = model.parameters[name].unit
-        print(f"  {name:>20s} = {fit.values[i]:.6g} {unit}  (start {fit.start[i]:.6g}; 95 % CI {low:.6g} .. {high:.6g})")
+        held = f"; prior weight {prior[name]:g}" if prior[name] else ""
+        print(f"  {name:>20s} = {fit.values[i]:.6g} {unit}  (start {fit.start[i]:.6g}; 95 % CI {low:.6g} .. {high:.6g}"
+              f"{held})")
     for warning in fisher["warnings"]:
         print(f"  warning: {warning}")
     _print_scores(fit.model, after)
@@ -195,7 +199,8 @@ def calibrate_record_set(model, names, args) -> int:
                                 "fit_time_s": fit.fit_time_s, "rmse_after_K": fit.rmse,
                                 "parameters": [{"name": n, "unit": model.parameters[n].unit, "start": float(fit.start[i]),
                                                 "value": float(fit.values[i]), "std": fisher["std"][i],
-                                                "ci95": list(fisher["ci95"][i])} for i, n in enumerate(names)],
+                                                "ci95": list(fisher["ci95"][i]), "prior_weight": prior[n]}
+                                               for i, n in enumerate(names)],
                                 "condition_number": fisher["condition_number"], "warnings": fisher["warnings"],
                                 "before": before, "after": after})
     return 0

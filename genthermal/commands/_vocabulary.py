@@ -40,7 +40,8 @@ OLD_SPELLINGS = {"heuristic_flown": "heuristic-flown", "optimal_flown": "optimal
 
 #: Defaults the help quotes: ``ManagerSettings`` (margin_K, rise_backoff, confidence_sigmas,
 #: when_infeasible, filter, cycle_s / 60), ``manager_settings.DEFAULT_REST_BUDGET_FRACTION``,
-#: ``schedule.sweeps.sweep.DEFAULT_FLIGHT_CPU_LIMIT_S``, ``synth`` noise, ``estimation.prediction``.
+#: ``schedule.sweeps.sweep.DEFAULT_FLIGHT_CPU_LIMIT_S``, ``synth`` noise, ``estimation.prediction``,
+#: ``estimation.node_observer``.
 MANAGER_DEFAULTS = {"margin_K": 2.5, "rise_backoff": 0.3, "confidence_sigmas": 2.0, "when_infeasible": "shed",
                     "filter": "ekf", "cycle_min": 5.0, "planner_model": "auto"}
 DEFAULT_REST_BUDGET_FRACTION = 0.25
@@ -50,6 +51,8 @@ DEFAULT_CURRENT_NOISE = 0.01
 DEFAULT_EVERY_MIN = 10.0
 THESIS_STARTS_MIN = (50, 75, 100, 125, 150, 175)
 DEFAULT_MARGIN_K = 0.25
+DEFAULT_OFFSET_STEP_K = 0.02
+DEFAULT_PROCESS_STD_K = 0.2
 
 
 def cli_spelling(value: str) -> str:

@@ -14,7 +14,7 @@ def register(subparsers) -> None:
                                    description="Least-squares fit of the named parameters (IPOPT, exact "
                                    "derivatives, bounds from the parameters' physical ranges) with 95 % "
                                    "confidence intervals and identifiability warnings.")
-    add_model_and_data_arguments(parser, several=True)
+    add_model_and_data_arguments(parser, several=True, fitting=True)
     parser.add_argument("--params", required=True, metavar="NAMES",
                         help="comma-separated parameter names, e.g. k_cr,h_end_air,R0, or 'assumed': every "
                         "parameter whose provenance is assumed")
@@ -35,7 +35,7 @@ def run(args) -> int:
     if args.params.strip() == "assumed":  # every parameter whose value was assumed
         args.params = ",".join(n for n in model.parameter_names if model.parameters[n].provenance == "assumed")
     names = check_parameter_names(model, args.params.split(","), "--params")
-    if uses_record_set(args, model):
+    if uses_record_set(args, model) or args.weight or args.prior_weight:  # the single-record fit has neither
         return calibrate_record_set(model, names, args)
     args.data = args.data[0]
     data = fitting_data(args.data, model, args)

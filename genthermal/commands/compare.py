@@ -7,9 +7,9 @@ from pathlib import Path
 from ._common import add_json_argument, add_model_arguments, add_record_set_arguments, model_from_args, positive_float
 
 
-def add_model_and_data_arguments(parser, several: bool = False) -> None:
+def add_model_and_data_arguments(parser, several: bool = False, fitting: bool = False) -> None:
     """``--model`` (built-in name or model file), ``DATA`` (CSV; several with ``several``, and then
-    ``--columns`` and ``--fit-step`` too) and ``--dt``."""
+    ``--columns`` and ``--fit-step`` too, and with ``fitting`` ``--weight`` and ``--prior-weight``) and ``--dt``."""
     add_model_arguments(parser)
     parser.add_argument("data", metavar="DATA", nargs="+" if several else None,
                         help="measurements CSV (time_s, I_u, I_v, I_w, I_exc, T_inlet, T_ambient, T_winding_u, "
@@ -18,7 +18,7 @@ def add_model_and_data_arguments(parser, several: bool = False) -> None:
     parser.add_argument("--dt", help="resample the data to this period in s first (default: the data's own step); "
                         "for a logger file without a time column (read through a column map): its sample period")
     if several:
-        add_record_set_arguments(parser)
+        add_record_set_arguments(parser, fitting)
 
 
 def data_step(args) -> float | None:

@@ -1,5 +1,6 @@
 """``genthermal estimate DATA.csv [--model NAME|FILE] [--filter ekf|kf] [--json out.json]``: filter and
-n-step prediction study (thesis 6.3) on rig data, against the open-loop model.
+n-step prediction study (thesis 6.3) on rig data, against the open-loop model; with ``--sensors``
+(or several records, or a logger's column map) every node from a subset of the sensors (``_observe``).
 
 Reference: docs/guide/estimation.md and docs/guide/cli.md.
 """
@@ -10,8 +11,13 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from ._common import add_choice_argument, add_json_argument, add_model_arguments, model_from_args, positive_float
-from ._vocabulary import DEFAULT_EVERY_MIN, DEFAULT_MARGIN_K, FILTERS, THESIS_STARTS_MIN
+from ._common import (add_choice_argument, add_json_argument, add_model_arguments, add_record_set_arguments,
+                      model_from_args, positive_float)
+from ._vocabulary import (DEFAULT_EVERY_MIN, DEFAULT_MARGIN_K, DEFAULT_OFFSET_STEP_K, DEFAULT_PROCESS_STD_K, FILTERS,
+                          THESIS_STARTS_MIN)
+
+#: Step of the filters with disturbance states when --dt is not given, s.
+DEFAULT_FILTER_STEP_S = 10.0
 
 
 def register(subparsers) -> None:
@@ -22,8 +28,12 @@ def register(subparsers) -> None:
         "Kalman filter with disturbance heat flows, or the thesis's linear filter on the design model), "
         "run the model open loop, predict from a start every 10 min, and report the prediction error "
         "at 15, 30 and 60 min against the open-loop model, the one-step error, and how long each "
-        "prediction from --predict-from beats the open-loop model.")
-    parser.add_argument("data", help="rig data CSV (genthermal.measurements schema)")
+        "prediction from --predict-from beats the open-loop model. With --sensors (or several records, or a "
+        "logger's file read through a column map): an extended Kalman filter of every node from the sensors "
+        "named, each read with an offset state, scored on every sensor the records hold.")
+    parser.add_argument("data", metavar="DATA", nargs="+", help="rig data CSV (genthermal.measurements schema, or a "
+                        "logger's file read through a column map); several: with the node observer (--sensors), each "
+                        "filtered on its own")
     add_model_arguments(parser)
     add_choice_argument(parser, "--filter", FILTERS, default="ekf",
                         help="ekf: extended Kalman filter on the model with disturbance heat flows (default); "
@@ -32,10 +42,24 @@ def register(subparsers) -> None:
                         help=f"interval between the starts of the error-by-horizon table, min (default "
                         f"{DEFAULT_EVERY_MIN:g})")
     add_json_argument(parser, "the errors and periods of increased accuracy")
-    parser.add_argument("--predict-from", default=",".join(str(s) for s in THESIS_STARTS_MIN), metavar="MIN,...",
-                        help="prediction start times, min after the first sample (default 50,75,100,125,150,175)")
-    parser.add_argument("--dt", default="10",
-                        help="filter step in s; data on another grid are resampled to it (default 10)")
+    parser.add_argument("--predict-from", metavar="MIN,...",
+                        help="prediction start times, min after the first sample (default "
+                        f"{','.join(str(s) for s in THESIS_STARTS_MIN)})")
+    parser.add_argument("--dt", help=f"filter step in s; data on another grid are resampled to it (default "
+                        f"{DEFAULT_FILTER_STEP_S:g}); with the node observer: the sample period of a logger's file "
+                        "without a time column, as in compare (the filter steps at --fit-step)")
+    parser.add_argument("--sensors", metavar="NAMES", help="node observer: the sensors the filter reads, "
+                        "comma-separated, e.g. T_end_winding,T_outer_yoke (default every sensor); every node is "
+                        "estimated, and every sensor the records hold is scored")
+    parser.add_argument("--offset-step", action="append", default=[], metavar="[SENSOR=]K",
+                        help="node observer: random-walk step of the offset state of each sensor read, K per filter "
+                        f"step (default {DEFAULT_OFFSET_STEP_K:g}): K for every sensor, SENSOR=K for one, e.g. "
+                        "--offset-step 0.3 --offset-step T_end_winding=0.02; repeatable. A large step lets the "
+                        "offset take up the model's error at that sensor; a small one makes the reading correct "
+                        "the nodes")
+    parser.add_argument("--process-std", metavar="K", help="node observer: process noise of a node with a sensor, "
+                        f"K per filter step (default {DEFAULT_PROCESS_STD_K:g}; nodes without one take 1 %% of it)")
+    add_record_set_arguments(parser)
     parser.add_argument("--plot", metavar="FILE.png", help="prediction plot (thesis Figs 6.8-6.10); the filter "
                         "plot goes next to it as <name>_filter.png, the predictions against the measured winding "
                         "and the error by horizon as <name>_horizons.png")
@@ -43,7 +67,7 @@ def register(subparsers) -> None:
                         help="use the converged (steady-state) gain (--filter kf only)")
     parser.add_argument("--estimate-noise", action="store_true",
                         help="estimate R from the data (thesis 6.2.2) instead of using eq. 6.10")
-    parser.add_argument("--min-improvement", default=str(DEFAULT_MARGIN_K), metavar="K",
+    parser.add_argument("--min-improvement", metavar="K",
                         help=f"smallest improvement over the open loop that counts, K (default {DEFAULT_MARGIN_K:g})")
     parser.set_defaults(func=run)
 
@@ -63,8 +87,31 @@ def parse_starts(text: str) -> list[float]:
     return starts
 
 
+def uses_node_observer(args, model) -> bool:
+    """True when the call names the node observer's options, several records or a column map."""
+    from ._records import uses_record_set
+
+    return (args.sensors is not None or bool(args.offset_step) or args.process_std is not None
+            or uses_record_set(args, model))
+
+
 def run(args) -> int:
-    """Run the filter and the prediction study; print a summary and write the JSON (and plots)."""
+    """Run the node observer (:mod:`._observe`) or the filter with disturbance states and its
+    prediction study; print a summary and write the JSON (and plots)."""
+    model = model_from_args(args)
+    if uses_node_observer(args, model):
+        from ._observe import estimate_nodes
+
+        return estimate_nodes(model, args)
+    if args.fit_step is not None:
+        raise InputError("--fit-step", args.fit_step, "the filter with disturbance states steps at --dt; --fit-step "
+                         "is the node observer's (--sensors)")
+    args.data = args.data[0]
+    return prediction_run(model, args)
+
+
+def prediction_run(model, args) -> int:
+    """The filter with disturbance states (``--filter``) and the prediction study on one record."""
     from ..design import linear_design_model
     from ..estimation.ekf import ExtendedKalmanFilter
     from ..estimation.kalman import KalmanFilter
@@ -73,18 +120,19 @@ def run(args) -> int:
     from ..measurements import load_measurements
     from ..outputs import report_json
 
-    dt = positive_float("--dt", args.dt)
-    starts = parse_starts(args.predict_from)
+    dt = DEFAULT_FILTER_STEP_S if args.dt is None else positive_float("--dt", args.dt)
+    starts = parse_starts(",".join(str(s) for s in THESIS_STARTS_MIN) if args.predict_from is None
+                          else args.predict_from)
+    margin_text = str(DEFAULT_MARGIN_K) if args.min_improvement is None else args.min_improvement
     try:
-        margin = float(args.min_improvement)
+        margin = float(margin_text)
     except ValueError:
-        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0") from None
+        raise InputError("--min-improvement", margin_text, "must be a number of kelvin >= 0") from None
     if not (math.isfinite(margin) and margin >= 0):
-        raise InputError("--min-improvement", args.min_improvement, "must be a number of kelvin >= 0")
+        raise InputError("--min-improvement", margin_text, "must be a number of kelvin >= 0")
     every = positive_float("--every", args.every)
     if args.steady_state and args.filter != "kf":
         raise InputError("--steady-state", True, "only the linear filter has a steady-state gain; add --filter kf")
-    model = model_from_args(args)
     data = on_grid(load_measurements(args.data, interface=model.spec.interface), dt)
     check_start_times(starts, (data.time_s[-1] - data.time_s[0]) / 60.0, field="--predict-from")
     horizon_starts(len(data.time_s), dt, DEFAULT_HORIZONS_MIN, every)

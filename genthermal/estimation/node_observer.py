@@ -21,6 +21,13 @@ from ..discretise import parametric_step
 from ..errors import InputError
 from ..model import ThermalModel
 
+#: Standard deviation of the process noise of a node with a sensor, K per step (assumed, not
+#: tuned: a model error of a few tenths of a kelvin per 10-s step).
+DEFAULT_PROCESS_STD_K = 0.2
+#: Random-walk step of each sensor's offset state, K per step (assumed: an offset that drifts by
+#: about 0.4 K over an hour of 10-s steps; the bench IPMSM's folds choose 0.3-1 K, docs/results/ipmsm.md).
+DEFAULT_OFFSET_STEP_K = 0.02
+
 
 class NodeObserver:
     """EKF of the model's nodes from the sensors ``measured``.
@@ -51,9 +58,15 @@ class NodeObserver:
         Step, K per filter step, of the sensors a ``bias_std_K`` mapping does not name.
     """
 
-    def __init__(self, model: ThermalModel, dt_s: float, measured: Sequence[str], process_std_K: float = 0.2,
-                 initial_std_K: float = 3.0, hidden_share: float = 0.01,
-                 measurement_std_K: float | None = None, bias_std_K=0.02, default_bias_std_K: float = 0.02):
+    def __init__(self, model: ThermalModel, dt_s: float, measured: Sequence[str],
+                 process_std_K: float = DEFAULT_PROCESS_STD_K, initial_std_K: float = 3.0, hidden_share: float = 0.01,
+                 measurement_std_K: float | None = None, bias_std_K=DEFAULT_OFFSET_STEP_K,
+                 default_bias_std_K: float = DEFAULT_OFFSET_STEP_K):
+        for name, value in (("process_std_K", process_std_K), ("hidden_share", hidden_share)):
+            if not (np.isfinite(value) and value >= 0):
+                raise InputError(name, value, "give a finite number >= 0")
+        if not (np.isfinite(initial_std_K) and initial_std_K > 0):
+            raise InputError("initial_std_K", initial_std_K, "give a finite standard deviation > 0 K")
         unknown = [m for m in measured if m not in model.output_names]
         if unknown:
             raise InputError("measured", unknown[0], f"not a sensor of {model.name} ({', '.join(model.output_names)})")
@@ -154,17 +167,18 @@ class NodeObserver:
             P = A @ P @ A.T + self.Q
         return states, outputs
 
-    def predict_errors(self, record, states: np.ndarray, horizons_s: Sequence[float], outputs: Sequence[str],
+    def horizon_errors(self, record, states: np.ndarray, horizons_s: Sequence[float], outputs: Sequence[str],
                        every_s: float = 300.0) -> dict:
-        """RMSE (K) of each output in ``outputs`` predicted ``h`` s ahead from the filtered state,
-        for each horizon ``h`` in ``horizons_s``, starting every ``every_s`` s: {output: {h: rmse}}."""
+        """Errors (K, predicted - measured) of each output in ``outputs`` predicted ``h`` s ahead from
+        the filtered state, for each horizon ``h`` in ``horizons_s``, starting every ``every_s`` s:
+        {output: {h: array}} (empty where the record is shorter than ``h`` or the sensor was not read)."""
         rows = [self.model.output_names.index(o) for o in outputs]
         stride = max(1, int(round(every_s / self.dt_s)))
         errors = {o: {float(h): [] for h in horizons_s} for o in outputs}
         longest = max(int(round(h / self.dt_s)) for h in horizons_s)
+        steps = {int(round(h / self.dt_s)): float(h) for h in horizons_s}
         for start in range(0, record.n_samples - 1, stride):
             x = states[:, start]
-            steps = {int(round(h / self.dt_s)): float(h) for h in horizons_s}
             for k in range(1, min(longest, record.n_samples - 1 - start) + 1):
                 x = np.asarray(self._step(x, record.inputs[:, start + k - 1])[0]).ravel()
                 if k in steps:
@@ -173,5 +187,13 @@ class NodeObserver:
                         measured = record.outputs[r, start + k]
                         if np.isfinite(measured):
                             errors[o][steps[k]].append(y[r] - measured)
-        return {o: {h: (float(np.sqrt(np.mean(np.square(e)))) if e else None) for h, e in by_h.items()}
+        return {o: {h: np.array(e) for h, e in by_h.items()} for o, by_h in errors.items()}
+
+    def predict_errors(self, record, states: np.ndarray, horizons_s: Sequence[float], outputs: Sequence[str],
+                       every_s: float = 300.0) -> dict:
+        """RMSE (K) of each output in ``outputs`` predicted ``h`` s ahead from the filtered state,
+        for each horizon ``h`` in ``horizons_s``, starting every ``every_s`` s: {output: {h: rmse}}
+        (None where :meth:`horizon_errors` has none)."""
+        errors = self.horizon_errors(record, states, horizons_s, outputs, every_s)
+        return {o: {h: (float(np.sqrt(np.mean(np.square(e)))) if e.size else None) for h, e in by_h.items()}
                 for o, by_h in errors.items()}
