@@ -33,7 +33,7 @@ def _frozen_reference(module):
         plain = module.build_network(module.plain_parameters())
         theta = plain.temperature_symbol
         speed = input_symbol("motor_speed") / module.N_REF_RPM
-        eps = module.SPEED_OFFSET
+        eps = 1e-3  # the file's offset of the speed ratio in its power law
         current_squared = input_symbol("i_d") ** 2 + input_symbol("i_q") ** 2
         load = current_squared / module.RATED_CURRENT_A ** 2
         copper = sympy.Rational(3, 2) * current_squared * S["R_0"] * (1 + S["k_ac"] * speed ** 2)
