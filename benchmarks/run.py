@@ -143,6 +143,7 @@ NOT_BENCHMARKS = {
     "flight_evidence_compare.py": "table of two partial `genthermal sweep` re-flies side by side (before/after a change)",
     "prediction_references.py": "helper of bench_prediction.py",
     "sensor_robustness_records.py": "helper of bench_sensor_robustness.py",
+    "ipmsm_rotor_candidates.py": "study of rotor terms for the bench IPMSM, none kept (docs/results/ipmsm.md, round 4)",
 }
 
 

@@ -364,7 +364,9 @@ for _effect in (
 # --- speed-dependent effects (:mod:`genthermal.speed_losses`), for machines with a Role.SPEED ----
 # Sizes refer to the machine's reference speed n_ref (SpeedRole.reference_rpm). Plausible ranges,
 # all "assumed" orders of magnitude for machines of ~10-200 kW (docs/guide/evidence.md): iron loss
-# 1-3 % of rated power at top speed; the air-gap Nusselt number rises from ~2 (conduction) to
+# 1-3 % of rated power at top speed, split at a fixed flux density into hysteresis (~ f) and
+# classical eddy currents (~ f^2), each part up to about two thirds of it, the armature reaction
+# raising it under load up to about twofold (assumed); the air-gap Nusselt number rises from ~2 (conduction) to
 # ~10-20 in Taylor-Couette flow with vortices (Becker and Kaye 1962); end-space convection
 # h = k1 (1 + k2 v^k3) rises a few-fold over the rotor's tip speeds (Boglietti et al. 2009); R_ac/R_dc
 # of stranded windings at top frequency 1-1.5, hairpins up to 2; magnet eddy loss tens to hundreds of
@@ -378,6 +380,15 @@ for _effect in (
            speed.loss_not_modelled(Role.IRON, "a speed-dependent iron loss"),
            shape_parameters=(EffectParameter("fe_speed_exponent", 1.5, "1", 1.0, 2.0, 1.5, (1.0, 2.0)),),
            needs=(Role.SPEED, Role.IRON), from_start=True),
+    Effect("iron_loss_hysteresis_eddy", "iron loss as hysteresis (~ n) plus eddy currents (~ n^2), rising under load",
+           r"q_{iron} \mathrel{+}= (P_h\,n/n_{ref} + P_e(n/n_{ref})^2)(1 + k_{fe}(I/I_{ref})^2)",
+           (EffectParameter("P_hyst_speed", 0.0, "W", 0.0, 5000.0, 150.0, (0.0, 2000.0)),
+            EffectParameter("P_eddy_speed", 0.0, "W", 0.0, 5000.0, 150.0, (0.0, 2000.0))),
+           speed.hysteresis_eddy_iron_loss,
+           "stator iron and winding run hot at speed, a little more under load: hysteresis and eddy iron loss",
+           speed.loss_not_modelled(Role.IRON, "a speed-dependent iron loss"),
+           shape_parameters=(EffectParameter("k_fe_load", 0.3, "1", 0.0, 5.0, 0.3, (0.0, 2.0)),),
+           needs=(Role.SPEED, Role.IRON, Role.LOAD_CURRENTS), from_start=True),
     Effect("air_gap_convection_speed", "air-gap conductance rising with speed (Taylor-Couette flow)",
            r"G_{gap} \to G_{gap}\,(1 + k_{gap}\,n/n_{ref})",
            (EffectParameter("k_gap_speed", 0.0, "1", 0.0, 20.0, 2.0, (0.0, 10.0)),),

@@ -1,8 +1,8 @@
 """Losses and convection that depend on the rotor speed, as transformations of a network.
 
 The transforms behind the speed-dependent catalogue effects (:mod:`genthermal.effects`): iron loss
-and magnet eddy loss as power laws of speed, AC copper loss, bearing friction, and air-gap and
-end-space convection rising with speed. Each reads the machine's roles (``Role.SPEED`` gives the
+as a power law of speed or as hysteresis plus eddy currents, magnet eddy loss, AC copper loss,
+bearing friction, and air-gap and end-space convection rising with speed. Each reads the machine's roles (``Role.SPEED`` gives the
 speed input and the reference speed the sizes refer to) and applies to any machine declaring them.
 """
 
@@ -46,6 +46,36 @@ def speed_iron_loss(network: Network, roles, P_fe_ref, exponent) -> Network:
     c = 1, eddy currents c = 2)."""
     shares = mass_shares(network, roles_nodes(roles[Role.IRON]))
     power = P_fe_ref * speed_power(roles, exponent)
+    return network.with_heat_sources([HeatSource(n, share * power, LABELS["iron"]) for n, share in shares.items()])
+
+
+def hysteresis_eddy_iron_loss(network: Network, roles, P_hyst_ref, P_eddy_ref, k_current,
+                              first_share=None) -> Network:
+    r"""Iron loss :math:`(P_h\,n/n_{ref} + P_e(n/n_{ref})^2)(1 + k_I (I/I_{ref})^2)` (W): hysteresis
+    and classical eddy currents at a flux density held by the magnets, raised under load by the
+    armature reaction.
+
+    Parameters
+    ----------
+    network : Network
+    roles : dict
+        The machine's roles (``Role.SPEED``, ``Role.IRON``, ``Role.LOAD_CURRENTS``).
+    P_hyst_ref, P_eddy_ref : sympy.Expr
+        Hysteresis and eddy-current loss at the reference speed and no load, W.
+    k_current : sympy.Expr
+        Relative rise of the loss at the reference current, 1.
+    first_share : sympy.Expr, optional
+        Share of the loss in the first iron node (the teeth, of higher flux density), the rest
+        shared over the other iron nodes by mass; None: every iron node by mass.
+    """
+    nodes = roles_nodes(roles[Role.IRON])
+    if first_share is None:
+        shares = mass_shares(network, nodes)
+    else:
+        shares = {nodes[0]: first_share}
+        shares.update({n: (1 - first_share) * share for n, share in mass_shares(network, nodes[1:]).items()})
+    s = speed_ratio(roles)
+    power = (P_hyst_ref * s + P_eddy_ref * s ** 2) * (1 + k_current * load_squared(roles))
     return network.with_heat_sources([HeatSource(n, share * power, LABELS["iron"]) for n, share in shares.items()])
 
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import sympy
 import yaml
 
+from genthermal import speed_losses as speed
 from genthermal.losses import input_symbol
 from genthermal.machines import InputKind, Machine, MachineInterface, ModelInput, Role, Sensor, SpeedRole
 from genthermal.network import HeatSource, Link, Network, Node
@@ -32,8 +33,6 @@ THERMOCOUPLE_NOISE_K2 = 0.02
 WINDING_LIMIT_C = 140.0
 #: Loss maps' reference speed, rpm (the top speed of the profiles).
 N_REF_RPM = 4000.0
-#: Offset of the speed ratio in the power laws of speed (keeps their derivative finite at rest).
-SPEED_OFFSET = 1e-3
 #: Speed at which the step's linear part is taken, rpm (mid-range: the convection's rise with speed
 #: is the step's explicit part, and it stays below the conductances at rest at every speed of the
 #: profiles, so that 10-s steps stay stable).
@@ -195,17 +194,13 @@ def default_parameters() -> ParameterSet:
 
 
 def build_network(parameters: ParameterSet) -> Network:
-    """The nine-node LPTN (module docstring) from the symbols of ``parameters``; an effect of
-    :data:`EFFECT_PARAMETERS` whose parameters the set lacks is left out (the plain model)."""
+    """The nine-node LPTN (module docstring) from the symbols of ``parameters``: the plain network
+    (copper loss, constant convection) and, for each effect of :data:`EFFECT_PARAMETERS` whose
+    parameters the set holds, its catalogue transform (:mod:`genthermal.speed_losses`) at the
+    file's parameters; an effect whose parameters the set lacks is left out (the plain model)."""
     S = parameters.symbols()
     has = {effect: all(n in parameters for n in names) for effect, names in EFFECT_PARAMETERS.items()}
-    speed = input_symbol("motor_speed") / N_REF_RPM  # n / n_ref
-
-    def speed_power(exponent):  # (n/n_ref)^c, 0 at standstill with a finite derivative in c
-        return (speed + SPEED_OFFSET) ** exponent - SPEED_OFFSET ** exponent
-
     current_squared = input_symbol("i_d") ** 2 + input_symbol("i_q") ** 2
-    load = current_squared / RATED_CURRENT_A ** 2  # (i / I_ref)^2
     nodes = (
         Node("winding_slot", "capacitive", S["C_winding_slot"], "solid"),
         Node("end_winding", "capacitive", S["C_end_winding"], "solid"),
@@ -238,36 +233,30 @@ def build_network(parameters: ParameterSet) -> Network:
     )
     network = Network(nodes, links, ())
     theta = network.temperature_symbol
-    ac = (1 + S["k_ac"] * speed ** 2) if has["ac_copper_loss"] else 1
-    copper_per_ohm = sympy.Rational(3, 2) * current_squared * S["R_0"] * ac
+    copper_per_ohm = sympy.Rational(3, 2) * current_squared * S["R_0"]
     end_share = S["end_winding_share"]
-    sources = [
+    network = network.with_heat_sources((
         HeatSource("winding_slot", (1 - end_share) * copper_per_ohm * (1 + S["alpha_cu"] * theta("winding_slot")),
                    "copper"),
         HeatSource("end_winding", end_share * copper_per_ohm * (1 + S["alpha_cu"] * theta("end_winding")), "copper"),
-    ]
+    ))
+    # the effects: the catalogue's equations at the file's parameters (the air-gap rise is sized in
+    # W/K, G_gap_speed; the catalogue's relative to the gap's conductance at rest)
+    if has["ac_copper_loss"]:
+        network = speed.ac_copper_loss(network, ROLES, S["k_ac"])
     if has["speed_iron_loss"]:
-        iron = (S["P_hyst_ref"] * speed + S["P_eddy_ref"] * speed ** 2) * (1 + S["k_fe_current"] * load)
-        sources += [HeatSource("tooth", S["tooth_iron_share"] * iron, "iron"),
-                    HeatSource("yoke_inner", (1 - S["tooth_iron_share"]) * iron, "iron")]
-    if has["magnet_eddy_loss"]:
-        pm_speed = speed_power(S["pm_speed_exponent"]) if has["magnet_loss_exponent"] else speed ** 2
-        sources.append(HeatSource("rotor", S["P_pm_ref"] * pm_speed * (1 + S["k_pm_current"] * load), "magnet"))
+        network = speed.hysteresis_eddy_iron_loss(network, ROLES, S["P_hyst_ref"], S["P_eddy_ref"], S["k_fe_current"],
+                                                  first_share=S["tooth_iron_share"])
+    if has["magnet_eddy_loss"]:  # without the fitted exponent, the square law of resistance-limited eddy currents
+        exponent = S["pm_speed_exponent"] if has["magnet_loss_exponent"] else 2
+        network = speed.magnet_eddy_loss(network, ROLES, S["P_pm_ref"], exponent, S["k_pm_current"])
     if has["bearing_friction"]:
-        sources.append(HeatSource("shaft_bearing", S["P_friction_ref"] * speed, "friction"))
-    # convection rising with speed: the conductance G(n) - G(0) between two nodes (W/K), as the heat
-    # it carries (link resistances may depend on parameters only)
-    rises = {}
+        network = speed.bearing_friction(network, ROLES, S["P_friction_ref"])
     if has["air_gap_convection_speed"]:
-        rises[("tooth", "rotor")] = S["G_gap_speed"] * speed
+        network = speed.convection_rise(Role.AIR_GAP)(network, ROLES, S["G_gap_speed"] / S["G_gap"])
     if has["end_space_convection_speed"]:
-        for pair, g in ((("end_winding", "end_space_air"), "G_end_winding_air"),
-                        (("rotor", "end_space_air"), "G_rotor_air"), (("end_space_air", "endcap"), "G_air_endcap")):
-            rises[pair] = S["k_end_space_speed"] * S[g] * speed
-    for (a, b), rise in rises.items():
-        flow = rise * (theta(a) - theta(b))
-        sources += [HeatSource(b, flow, "convection rise with speed"), HeatSource(a, -flow, "convection rise with speed")]
-    return network.with_heat_sources(tuple(sources))
+        network = speed.convection_rise(Role.END_SPACE_CONVECTION)(network, ROLES, S["k_end_space_speed"])
+    return network
 
 
 def parameters_without(*effects: str) -> ParameterSet:
