@@ -179,6 +179,15 @@ def fit_shape(kind: str, reference, truth, elapsed_s, baseline=None, onsets=None
     return value, onset, rss_before, rss_after, signal
 
 
+def robust_scale(values) -> float:
+    """Standard deviation of ``values`` from their median absolute deviation (× 1.4826: exact for
+    Gaussian samples), in their unit; NaN when there are none."""
+    values = np.asarray(values, float)
+    if values.size == 0:
+        return float("nan")
+    return float(1.4826 * np.median(np.abs(values - np.median(values))))
+
+
 def fit_noise_increase(reading, elapsed_s) -> tuple[float, int, float]:
     """Variance change-point of a sensor's noise.
 
@@ -197,12 +206,9 @@ def fit_noise_increase(reading, elapsed_s) -> tuple[float, int, float]:
     if n < 40:
         return 1.0, 0, 0.0
 
-    def scale(values):
-        return (1.4826 * np.median(np.abs(values - np.median(values)))) ** 2 + 1e-12
-
     best = (0.0, 0, 1.0)
     for k in _onset_grid(n, 20):
-        before, after = scale(d2[:k]), scale(d2[k:])
+        before, after = robust_scale(d2[:k]) ** 2 + 1e-12, robust_scale(d2[k:]) ** 2 + 1e-12
         pooled = (k * before + (n - k) * after) / n
         statistic = k * math.log(pooled / before) + (n - k) * math.log(pooled / after)
         if statistic > best[0]:
