@@ -11,9 +11,9 @@ import pytest
 
 from genthermal.column_map import ColumnMap, read_logged
 from genthermal.diagnose.multi_record import decimated, record_from_measurements, simulate_record
-from genthermal.diagnose.sensor_faults import (SensorHypothesis, fit_noise_increase, fit_shape, robust_scale,
-                                               sensor_columns, sensor_groups)
-from genthermal.diagnose.sensor_plausibility import noise_refusal, refusal, roughness_change
+from genthermal.diagnose.sensor_faults import (SensorHypothesis, fit_noise_increase, fit_shape, sensor_columns,
+                                               sensor_groups)
+from genthermal.diagnose.sensor_plausibility import noise_refusal, refusal, robust_scale, roughness_change
 from genthermal.machines import build_model, resolve_machine
 from genthermal.resources import BENCH_MOTOR_DIR
 from genthermal.sensor_faults import SensorFault

@@ -16,8 +16,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..sensor_faults import SensorFault
+from ..sensor_faults import MIN_NOISE_FACTOR, SensorFault
 from .search import noise_std
+from .sensor_plausibility import robust_scale
 
 #: Onset grid of the shape fits, samples between grid points (then every sample near the best).
 ONSET_GRID = 10
@@ -26,8 +27,6 @@ MIN_TAIL_FRACTION = 0.03
 #: A sensor fault must beat the best other explanation (heat flow) by this ΔBIC (as
 #: :data:`genthermal.diagnose.discover.AMBIGUITY_BIC`: closer is "cannot tell").
 PREFERENCE_BIC = 10.0
-#: Increased noise is claimed from this factor on the noise standard deviation.
-MIN_NOISE_FACTOR = 2.0
 #: The second differences of white noise are correlated (lag 1: -4/6, lag 2: 1/6), so a variance
 #: estimated from n of them varies as one from n / (1 + 2 (16 + 1) / 36) independent samples
 #: (Bartlett's formula): the likelihood ratio of a noise change is divided by this factor. Without
@@ -177,15 +176,6 @@ def fit_shape(kind: str, reference, truth, elapsed_s, baseline=None, onsets=None
     column = _shape_column(kind, onset, elapsed_s, truth)
     signal = (value - truth) * column if kind == "stuck" else value * column
     return value, onset, rss_before, rss_after, signal
-
-
-def robust_scale(values) -> float:
-    """Standard deviation of ``values`` from their median absolute deviation (× 1.4826: exact for
-    Gaussian samples), in their unit; NaN when there are none."""
-    values = np.asarray(values, float)
-    if values.size == 0:
-        return float("nan")
-    return float(1.4826 * np.median(np.abs(values - np.median(values))))
 
 
 def fit_noise_increase(reading, elapsed_s) -> tuple[float, int, float]:

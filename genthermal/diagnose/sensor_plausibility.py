@@ -13,8 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..sensor_faults import fault_bound_reason
-from .sensor_faults import MIN_NOISE_FACTOR, robust_scale
+from ..sensor_faults import MIN_NOISE_FACTOR, fault_bound_reason
 
 #: A fault's error over the record must be this many discrepancy floors of its sensor.
 MIN_SIZE_OVER_FLOOR = 3.0
@@ -38,6 +37,15 @@ STEP_MIN_SAMPLES = 3
 #: What a noise growth of :data:`MIN_NOISE_FACTOR` on one of two equally noisy sensors does to the
 #: roughness of their difference: :math:`\sqrt{(F^2 + 1)/2}` (the partner's noise unchanged).
 PARTNER_NOISE_FACTOR = float(np.sqrt((MIN_NOISE_FACTOR ** 2 + 1.0) / 2.0))
+
+
+def robust_scale(values) -> float:
+    """Standard deviation of ``values`` from their median absolute deviation (× 1.4826: exact for
+    Gaussian samples), in their unit; NaN when there are none."""
+    values = np.asarray(values, float)
+    if values.size == 0:
+        return float("nan")
+    return float(1.4826 * np.median(np.abs(values - np.median(values))))
 
 
 def window_steps(signal: np.ndarray, elapsed_s: np.ndarray) -> np.ndarray:
@@ -94,7 +102,7 @@ def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: 
 
 def roughness_change(signal: np.ndarray, onset: int) -> float:
     """Robust scale of the second differences of ``signal`` after sample ``onset`` over the one
-    before (:func:`~genthermal.diagnose.sensor_faults.robust_scale`); NaN when either side has
+    before (:func:`robust_scale`); NaN when either side has
     fewer than 10 of them or no roughness before."""
     signal = np.asarray(signal, float)
     d2 = signal[2:] - 2 * signal[1:-1] + signal[:-2]
