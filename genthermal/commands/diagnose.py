@@ -143,6 +143,8 @@ def run(args) -> int:
 def _diagnose_jointly(model, data, baselines, dt_s, args) -> dict:
     """``--joint``: every applicable effect fitted over the DATA records at once
     (:func:`~genthermal.diagnose.over_records.diagnose_over_records`), printed; its JSON document."""
+    import numpy as np
+
     from ..diagnose.baseline_set import calibrate_baselines
     from ..diagnose.catalogue import Catalogue
     from ..diagnose.discover import DEFAULT_BASELINE_PARAMETERS
@@ -164,7 +166,8 @@ def _diagnose_jointly(model, data, baselines, dt_s, args) -> dict:
                 model = calibration.model
             error_model = baseline_error_model(model, model, baselines, step, None, Catalogue.for_diagnosis())
             say(f"  ... {error_model.summary()}")
-        records = [record_from_measurements(model, d, step) for d in data]
+        records = [record_from_measurements(model, d, step if float(np.median(np.diff(d.time_s))) < step else None)
+                   for d in data]  # a record already on the grid (read through a column map) is kept
         result = diagnose_over_records(model, records, error_model=error_model,
                                        progress=lambda line: say(f"  ... {line}"))
     document = {**result.to_dict(), "error_model": error_model.to_dict() if error_model else None,
