@@ -30,7 +30,7 @@ FITTED_AGAINST_MODEL = ("model", "calibrated")
 ENERGY_BALANCE_TOLERANCE_K = 0.5
 #: Half-width of the windows over which a lone sensor's step is read, s (as
 #: :data:`~genthermal.diagnose.onset_signatures.JUMP_WINDOW_S`: about the fastest winding mode of
-#: the thesis model; the heat a load step brings moves a node by a fraction of its rise in it).
+#: the thesis model, over which the heat of a load step bends a node's curve smoothly).
 STEP_WINDOW_S = 300.0
 #: Samples needed in each window (the median of fewer is no level).
 STEP_MIN_SAMPLES = 3
@@ -49,18 +49,24 @@ def robust_scale(values) -> float:
 
 
 def window_steps(signal: np.ndarray, elapsed_s: np.ndarray) -> np.ndarray:
-    """At each sample, the median of ``signal`` over :data:`STEP_WINDOW_S` from it minus the median
-    over as long before it (K); NaN where either window has fewer than :data:`STEP_MIN_SAMPLES`
-    finite samples (near the ends of the record)."""
+    """At each sample, the step of ``signal`` there over a smooth local curve (K): least squares on
+    the samples within :data:`STEP_WINDOW_S` before and after it of an offset, a slope, a change of
+    slope at the sample (what heat switched on or off does to a node with inertia) and a step
+    there; NaN where either side has fewer than :data:`STEP_MIN_SAMPLES` finite samples."""
     signal, elapsed_s = np.asarray(signal, float), np.asarray(elapsed_s, float)
     steps = np.full(signal.size, np.nan)
     starts = np.searchsorted(elapsed_s, elapsed_s - STEP_WINDOW_S, side="left")
     ends = np.searchsorted(elapsed_s, elapsed_s + STEP_WINDOW_S, side="left")
     for k in range(signal.size):
-        before, after = signal[starts[k]:k], signal[k:ends[k]]
-        before, after = before[np.isfinite(before)], after[np.isfinite(after)]
-        if before.size >= STEP_MIN_SAMPLES and after.size >= STEP_MIN_SAMPLES:
-            steps[k] = np.median(after) - np.median(before)
+        window = slice(starts[k], ends[k])
+        values, local = signal[window], (elapsed_s[window] - elapsed_s[k]) / STEP_WINDOW_S
+        ok = np.isfinite(values)
+        after = local >= 0
+        if (ok & ~after).sum() < STEP_MIN_SAMPLES or (ok & after).sum() < STEP_MIN_SAMPLES:
+            continue
+        design = np.column_stack([np.ones(local.size), local, local * after, after.astype(float)])
+        coefficients, *_ = np.linalg.lstsq(design[ok], values[ok], rcond=None)
+        steps[k] = coefficients[-1]
     return steps
 
 
@@ -70,11 +76,11 @@ def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: 
 
     Against the model alone, an offset of a lone sensor from ``onset`` and the model's own error
     on that node from then (a misfit that a load change starts) are the same residual. The reading
-    itself tells them apart only by a step at the onset (:func:`window_steps`) that agrees with the
-    fitted value within :data:`AGREEMENT` and is larger than every step the reading makes over
-    windows as long elsewhere in the record (at least one window from the onset): heat moves a node
-    with thermal inertia no faster at the onset than it does at the record's other load changes.
-    A bias from the record's start has no window before it and is never shown.
+    itself tells them apart only by a step at the onset over its smooth local curve
+    (:func:`window_steps`: heat switched on changes the slope of a node with thermal inertia, an
+    offset its level at once) that agrees with the fitted value within :data:`AGREEMENT` and is
+    larger than every such step the reading makes elsewhere in the record (at least one window
+    from the onset). A bias from the record's start has no window before it and is never shown.
 
     Parameters
     ----------
@@ -93,8 +99,8 @@ def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: 
     elsewhere = float(np.nanmax(np.abs(steps[away]))) if np.isfinite(steps[away]).any() else 0.0
     if np.isfinite(step) and abs(step - fault.value) <= AGREEMENT * abs(fault.value) and abs(step) > elsewhere:
         return None
-    shown = (f"its reading steps by {step:+.2f} K there, against up to {elsewhere:.2f} K over "
-             f"{STEP_WINDOW_S / 60:.0f} min elsewhere" if np.isfinite(step) else
+    shown = (f"its reading steps by {step:+.2f} K there over its local curve, against up to {elsewhere:.2f} K "
+             "elsewhere" if np.isfinite(step) else
              f"no {STEP_WINDOW_S / 60:.0f}-min window of its reading lies before the onset")
     return (f"model error or sensor offset: not distinguishable: {fault.describe()} is fitted against the "
             f"model on a sensor with no redundant reading, and {shown}")
