@@ -229,8 +229,8 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
     if fault.kind not in ("bias", "drift"):
         return None
     sensor = fault.sensor
-    if fault.kind == "bias" and hypothesis.evidence in FITTED_AGAINST_MODEL and sensor not in phase_columns \
-            and sensor not in (coolant, ambient):
+    lone = sensor not in (coolant, ambient) and not ({sensor, *hypothesis.columns} & set(phase_columns))
+    if fault.kind == "bias" and hypothesis.evidence in FITTED_AGAINST_MODEL and lone:
         present = [c for c in hypothesis.columns if c in readings]
         reading = np.mean([readings[c] for c in present], axis=0) if present else np.full(elapsed_s.size, np.nan)
         reason = lone_bias_refusal(fault, reading, elapsed_s, onset)
