@@ -31,13 +31,15 @@ PRIOR_WEIGHT = 30.0
 
 
 def diagnosis_summary(result) -> dict:
-    """Verdict, the three best single effects and sensor faults of a Diagnosis."""
+    """Verdict, the three best single effects, and the sensor faults claimed and refused (with the
+    reason) of a Diagnosis."""
     document = result.to_dict()
     top = [{"effect": c["effect"], "rmse_after_K": round(c["rmse_after"], 3), "delta_ic": round(c["delta_ic"], 1),
             "params": {k: round(v, 4) for k, v in c["params"].items()}} for c in document["ranked"][:3]]
     return {"verdict": document["verdict"], "rmse_before_K": round(document["ranked"][0]["rmse_before"], 3)
             if document["ranked"] else None, "top": top, "floor_K": document["residual"].get("floor_K"),
-            "sensor_faults": [f["text"] for f in document["sensor_faults"]]}
+            "sensor_faults": [f["text"] for f in document["sensor_faults"]],
+            "refused_sensor_faults": [f["refused"] for f in document["refused_sensor_faults"]]}
 
 
 def evidence_by_effect(result) -> dict:

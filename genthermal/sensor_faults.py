@@ -28,6 +28,9 @@ SENSOR_FAULT_KINDS = {"bias": "K", "drift": "K/h", "stuck": "°C", "gain": "(rel
 SENSOR_FAULT_BOUNDS = {"air": {"bias": 10.0, "drift": 5.0, "gain": 0.05},
                        "winding": {"bias": 15.0, "drift": 10.0, "gain": 0.05},
                        "iron": {"bias": 15.0, "drift": 10.0, "gain": 0.05}}
+#: Increased noise is claimed from this factor on the noise standard deviation (a smaller growth is
+#: within what a healthy reading's noise estimate varies by).
+MIN_NOISE_FACTOR = 2.0
 #: Readings a stuck sensor can hold, °C (beyond: an open or shorted element, not a temperature).
 STUCK_RANGE_C = (-40.0, 200.0)
 

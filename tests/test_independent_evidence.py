@@ -165,6 +165,7 @@ def test_a_fault_smaller_than_the_floor_or_shared_by_the_machine_is_refused():
     small = _hypothesis("T_iron", "bias", 0.3, 700, n, evidence="calibrated", output="T_iron")
     assert "discrepancy floor" in refusal(small, readings, elapsed, {"T_iron": 0.2}, 0.2, "T_inlet", "T_ambient")
     step = 2.5 * (np.arange(n) >= 700)
+    readings = {**readings, "T_outlet": readings["T_outlet"] + step}  # the faulty reading carries its offset
     outlet = _hypothesis("T_outlet", "bias", 2.5, 700, n, evidence="calibrated", output="T_outlet")
     machine_moved = {"T_winding": 1.2 * step, "T_iron": 0.1 * step, "T_outlet": step}
     assert "machine changed" in refusal(outlet, readings, elapsed, {"T_outlet": 0.3}, 0.2, "T_inlet", "T_ambient",

@@ -1,7 +1,7 @@
-"""``genthermal diagnose DATA.csv [DATA2.csv ...] [--model NAME|FILE] [--baseline HEALTHY.csv ...] [--json out.json]``:
+"""``genthermal diagnose DATA.csv [DATA2.csv ...] [--model NAME|FILE] [--baseline HEALTHY.csv ...] [--joint] [--json out.json]``:
 which catalogue effect (or open-library term) the model lacks. Several baselines give one calibration
-and one error model; several DATA records are each diagnosed against them. Reference:
-docs/guide/calibration-diagnosis.md."""
+and one error model; several DATA records are each diagnosed against them, or with ``--joint`` one
+effect is fitted over all of them at once. Reference: docs/guide/calibration-diagnosis.md."""
 
 from __future__ import annotations
 
@@ -42,6 +42,11 @@ def register(subparsers) -> None:
     add_json_argument(parser, "the diagnosis (ranked effects, verdict, residual, sensor faults)")
     parser.add_argument("--iterate", action="store_true", help="add the best effect and search again until "
                         "nothing is significant")
+    parser.add_argument("--joint", action="store_true", help="several DATA records: fit each catalogue effect "
+                        "over all of them at once (one set of its values from the start of every record, each "
+                        "record from its measured initial state) and sum its evidence over the records: an "
+                        "effect present in every profile. With --baseline: the baseline parameters calibrated "
+                        "and the error model taken on the baselines first")
     parser.add_argument("--report", metavar="DIR", help="write report.md, diagnosis.json and plots into DIR")
     add_out_argument(parser, "model", "the model with the effects found")
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
@@ -111,6 +116,14 @@ def run(args) -> int:
         for option in ("report", "out"):
             if getattr(args, option):
                 raise InputError(f"--{option}", getattr(args, option), "writes one diagnosis: give one DATA record")
+    if args.joint:
+        for option in ("report", "out", "iterate"):
+            if getattr(args, option):
+                raise InputError(f"--{option}", getattr(args, option), "not with --joint (one ranking over the records)")
+        document = _diagnose_jointly(model, data, baselines, dt_s, args)
+        if args.json:
+            report_json(args.json, document)
+        return 0
     discovery = Discovery(fitter=OnsetFitter(workers=args.workers), iterate=args.iterate, phases=args.phases,
                           progress=lambda line: say(f"  ... {line}"))
     documents = [_diagnose_one(discovery, model, record, baselines, dt_s, args) for record in data]
@@ -125,6 +138,51 @@ def run(args) -> int:
     if args.json:
         report_json(args.json, document)
     return 0
+
+
+def _diagnose_jointly(model, data, baselines, dt_s, args) -> dict:
+    """``--joint``: every applicable effect fitted over the DATA records at once
+    (:func:`~genthermal.diagnose.over_records.diagnose_over_records`), printed; its JSON document."""
+    import numpy as np
+
+    from ..diagnose.baseline_set import calibrate_baselines
+    from ..diagnose.catalogue import Catalogue
+    from ..diagnose.discover import DEFAULT_BASELINE_PARAMETERS
+    from ..diagnose.error_model import baseline_error_model
+    from ..diagnose.multi_record import record_from_measurements
+    from ..diagnose.over_records import diagnose_over_records
+
+    if len(data) < 2:
+        raise InputError("--joint", data[0].source, "fits one effect over several records: give two DATA files or more")
+    # the fit's grid: --dt, else --fit-step (records read through a column map are on it already)
+    step = dt_s if dt_s is not None else (DEFAULT_FIT_STEP_S if args.fit_step is None else
+                                          positive_float("--fit-step", args.fit_step))
+    error_model, calibration = None, None
+    with working("diagnose over the records"):
+        if baselines:
+            names = [n for n in DEFAULT_BASELINE_PARAMETERS if n in model.parameters]
+            if names:
+                calibration = calibrate_baselines(model, baselines, names, step)
+                model = calibration.model
+            error_model = baseline_error_model(model, model, baselines, step, None, Catalogue.for_diagnosis())
+            say(f"  ... {error_model.summary()}")
+        records = [record_from_measurements(model, d, step if float(np.median(np.diff(d.time_s))) < step else None)
+                   for d in data]  # a record already on the grid (read through a column map) is kept
+        result = diagnose_over_records(model, records, error_model=error_model,
+                                       progress=lambda line: say(f"  ... {line}"))
+    document = {**result.to_dict(), "error_model": error_model.to_dict() if error_model else None,
+                "baseline_calibration": calibration.to_dict() if calibration else None}
+    print(f"{model.name} over {len(records)} records ({', '.join(r.name for r in records)}), "
+          f"{document['criterion']}:")
+    for entry in document["ranked"]:
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in entry["params"].items())
+        print(f"  {entry['effect']:>32s}: {params:<34s} RMSE {entry['rmse_before']:.3f} -> {entry['rmse_after']:.3f} K"
+              f"  ΔIC {entry['delta_ic']:9.1f}{'  *' if entry['significant'] else ''}"
+              + (f"  (no finding: {entry['implausible']})" if entry["implausible"] else ""))
+    alike = document["look_alikes"]
+    print(f"verdict over the records: {document['verdict']}"
+          + (f" (cannot be told from {', '.join(alike)} on these records)" if alike else ""))
+    return document
 
 
 def _diagnose_one(discovery, model, data, baselines, dt_s, args) -> dict:

@@ -3,7 +3,8 @@
 A :class:`Record` is one profile on a uniform grid with an initial state taken from its first
 measured temperatures; :class:`StateTrajectory` steps the model over it with the fitted parameters
 symbolic; :func:`fit_records` minimises the squared sensor errors over all records (IPOPT, exact
-Jacobian) and :func:`records_fisher` gives confidence intervals and identifiability warnings;
+Jacobian); its :class:`RecordsFit` carries confidence intervals and identifiability warnings
+(:func:`records_fisher`);
 :func:`decimated` block-averages long 1-Hz records first. Tutorial: ``docs/tutorials/real_motor.md``.
 """
 
@@ -172,6 +173,11 @@ class RecordsFit:
     converged : bool
     fit_time_s : float
         Wall time of the fit, s.
+    records : list of str
+        The records' names (their sources).
+    fisher : dict
+        Standard errors, 95 % intervals and warnings (:func:`records_fisher`); a caller may widen
+        them (:func:`~genthermal.diagnose.error_model.widened_calibration`).
     """
 
     model: ThermalModel
@@ -183,11 +189,27 @@ class RecordsFit:
     jacobian: np.ndarray
     converged: bool
     fit_time_s: float
+    records: list = dataclasses.field(default_factory=list)
+    fisher: dict = dataclasses.field(default=None)
+
+    def __post_init__(self):
+        if self.fisher is None:
+            self.fisher = records_fisher(self)
 
     @property
     def rmse(self) -> float:
         """RMSE over every valid sensor sample of every record, K."""
         return math.sqrt(self.rss / max(self.n_valid, 1))
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: each parameter's start, value, standard error and 95 % interval, the
+        records, convergence, the RMSE after the fit (K) and the identifiability warnings."""
+        rows = [{"name": n, "unit": self.model.parameters[n].unit, "start": float(self.start[i]),
+                 "value": float(self.values[i]), "std": self.fisher["std"][i], "ci95": list(self.fisher["ci95"][i])}
+                for i, n in enumerate(self.names)]
+        return {"model": self.model.name, "records": list(self.records), "parameters": rows,
+                "converged": self.converged, "rmse_after": self.rmse,
+                "condition_number": self.fisher["condition_number"], "warnings": self.fisher["warnings"]}
 
 
 def _scaled(model: ThermalModel, name: str, factor: float):
@@ -306,7 +328,8 @@ def fit_records(model: ThermalModel, records: Sequence[Record], names: Sequence[
     source = (f"least squares on {len(records)} record(s): " + ", ".join(r.name for r in records))
     fitted = model.with_parameters(provenance="fitted", source=source, **dict(zip(names, values)))
     return RecordsFit(fitted, list(names), np.array([model.parameters.value(n) for n in names]), values, rss,
-                      n_valid, jacobian, bool(solver.stats()["success"]), time.perf_counter() - started)
+                      n_valid, jacobian, bool(solver.stats()["success"]), time.perf_counter() - started,
+                      [r.name for r in records])
 
 
 def records_fisher(fit: RecordsFit) -> dict:

@@ -16,8 +16,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..sensor_faults import SensorFault
+from ..sensor_faults import MIN_NOISE_FACTOR, SensorFault
 from .search import noise_std
+from .sensor_plausibility import robust_scale
 
 #: Onset grid of the shape fits, samples between grid points (then every sample near the best).
 ONSET_GRID = 10
@@ -26,8 +27,6 @@ MIN_TAIL_FRACTION = 0.03
 #: A sensor fault must beat the best other explanation (heat flow) by this ΔBIC (as
 #: :data:`genthermal.diagnose.discover.AMBIGUITY_BIC`: closer is "cannot tell").
 PREFERENCE_BIC = 10.0
-#: Increased noise is claimed from this factor on the noise standard deviation.
-MIN_NOISE_FACTOR = 2.0
 #: The second differences of white noise are correlated (lag 1: -4/6, lag 2: 1/6), so a variance
 #: estimated from n of them varies as one from n / (1 + 2 (16 + 1) / 36) independent samples
 #: (Bartlett's formula): the likelihood ratio of a noise change is divided by this factor. Without
@@ -197,12 +196,9 @@ def fit_noise_increase(reading, elapsed_s) -> tuple[float, int, float]:
     if n < 40:
         return 1.0, 0, 0.0
 
-    def scale(values):
-        return (1.4826 * np.median(np.abs(values - np.median(values)))) ** 2 + 1e-12
-
     best = (0.0, 0, 1.0)
     for k in _onset_grid(n, 20):
-        before, after = scale(d2[:k]), scale(d2[k:])
+        before, after = robust_scale(d2[:k]) ** 2 + 1e-12, robust_scale(d2[k:]) ** 2 + 1e-12
         pooled = (k * before + (n - k) * after) / n
         statistic = k * math.log(pooled / before) + (n - k) * math.log(pooled / after)
         if statistic > best[0]:

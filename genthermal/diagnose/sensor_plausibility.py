@@ -2,16 +2,18 @@
 
 :func:`refusal` returns why a :class:`SensorHypothesis` is no claim: larger than a sensor of its
 kind can be wrong (:data:`genthermal.sensor_faults.SENSOR_FAULT_BOUNDS`), smaller than
-:data:`MIN_SIZE_OVER_FLOOR` discrepancy floors, or not shown by the record's redundant readings
-(inlet and ambient, the three phases, outlet and energy balance, the other outputs). The rules
-and their reasons: ``docs/guide/evidence.md``.
+:data:`MIN_SIZE_OVER_FLOOR` discrepancy floors, not shown by the record's redundant readings
+(inlet and ambient, the three phases, outlet and energy balance, the other outputs), or a bias
+of a lone sensor its reading does not show as a step (:func:`lone_bias_refusal`: then model
+error and offset are not distinguishable). :func:`noise_refusal` asks a noise claim for the
+reading's own roughness. The rules and their reasons: ``docs/guide/evidence.md``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..sensor_faults import fault_bound_reason
+from ..sensor_faults import MIN_NOISE_FACTOR, fault_bound_reason
 
 #: A fault's error over the record must be this many discrepancy floors of its sensor.
 MIN_SIZE_OVER_FLOOR = 3.0
@@ -21,8 +23,143 @@ WINDOW_S = 900.0
 AGREEMENT = 0.5
 #: Evidence kinds that are observed in the reading itself, not fitted against the model.
 OBSERVED = ("redundancy", "frozen", "noise")
+#: Evidence kinds fitted against the model's residual over the record (a local step, ``jump``,
+#: is already read against the reading's own change).
+FITTED_AGAINST_MODEL = ("model", "calibrated")
 #: Outlet air cooler than the inlet air by more than this, K, breaks the energy balance.
 ENERGY_BALANCE_TOLERANCE_K = 0.5
+#: Half-width of the windows over which a lone sensor's step is read, s (as
+#: :data:`~genthermal.diagnose.onset_signatures.JUMP_WINDOW_S`: about the fastest winding mode of
+#: the thesis model, over which the heat of a load step bends a node's curve smoothly).
+STEP_WINDOW_S = 300.0
+#: Samples needed in each window (the median of fewer is no level).
+STEP_MIN_SAMPLES = 3
+#: What a noise growth of :data:`MIN_NOISE_FACTOR` on one of two equally noisy sensors does to the
+#: roughness of their difference: :math:`\sqrt{(F^2 + 1)/2}` (the partner's noise unchanged).
+PARTNER_NOISE_FACTOR = float(np.sqrt((MIN_NOISE_FACTOR ** 2 + 1.0) / 2.0))
+
+
+def robust_scale(values) -> float:
+    """Standard deviation of ``values`` from their median absolute deviation (× 1.4826: exact for
+    Gaussian samples), in their unit; NaN when there are none."""
+    values = np.asarray(values, float)
+    if values.size == 0:
+        return float("nan")
+    return float(1.4826 * np.median(np.abs(values - np.median(values))))
+
+
+def window_steps(signal: np.ndarray, elapsed_s: np.ndarray) -> np.ndarray:
+    """At each sample, the step of ``signal`` there over a smooth local curve (K): least squares on
+    the samples within :data:`STEP_WINDOW_S` before and after it of an offset, a slope, a change of
+    slope at the sample (what heat switched on or off does to a node with inertia) and a step
+    there; NaN where either side has fewer than :data:`STEP_MIN_SAMPLES` finite samples."""
+    signal, elapsed_s = np.asarray(signal, float), np.asarray(elapsed_s, float)
+    steps = np.full(signal.size, np.nan)
+    starts = np.searchsorted(elapsed_s, elapsed_s - STEP_WINDOW_S, side="left")
+    ends = np.searchsorted(elapsed_s, elapsed_s + STEP_WINDOW_S, side="left")
+    for k in range(signal.size):
+        window = slice(starts[k], ends[k])
+        values, local = signal[window], (elapsed_s[window] - elapsed_s[k]) / STEP_WINDOW_S
+        ok = np.isfinite(values)
+        after = local >= 0
+        if (ok & ~after).sum() < STEP_MIN_SAMPLES or (ok & after).sum() < STEP_MIN_SAMPLES:
+            continue
+        design = np.column_stack([np.ones(local.size), local, local * after, after.astype(float)])
+        coefficients, *_ = np.linalg.lstsq(design[ok], values[ok], rcond=None)
+        steps[k] = coefficients[-1]
+    return steps
+
+
+def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: int) -> str | None:
+    """Why a bias of a sensor with no redundant reading is no finding, or None when its reading
+    shows it without the model.
+
+    Against the model alone, an offset of a lone sensor from ``onset`` and the model's own error
+    on that node from then (a misfit that a load change starts) are the same residual. The reading
+    itself tells them apart only by a step at the onset over its smooth local curve
+    (:func:`window_steps`: heat switched on changes the slope of a node with thermal inertia, an
+    offset its level at once) that agrees with the fitted value within :data:`AGREEMENT` and is
+    larger than every such step the reading makes elsewhere in the record (at least one window
+    from the onset). A bias from the record's start has no window before it and is never shown.
+
+    Parameters
+    ----------
+    fault : SensorFault
+        The fitted bias (K).
+    reading : numpy.ndarray
+        The sensor's reading on the diagnosis grid, °C.
+    elapsed_s : numpy.ndarray
+        Time of each sample from the start, s.
+    onset : int
+        Sample of the onset.
+    """
+    steps = window_steps(reading, elapsed_s)
+    step = steps[onset]
+    away = np.abs(elapsed_s - elapsed_s[onset]) >= STEP_WINDOW_S
+    elsewhere = float(np.nanmax(np.abs(steps[away]))) if np.isfinite(steps[away]).any() else 0.0
+    if np.isfinite(step) and abs(step - fault.value) <= AGREEMENT * abs(fault.value) and abs(step) > elsewhere:
+        return None
+    shown = (f"its reading steps by {step:+.2f} K there over its local curve, against up to {elsewhere:.2f} K "
+             "elsewhere" if np.isfinite(step) else
+             f"no {STEP_WINDOW_S / 60:.0f}-min window of its reading lies before the onset")
+    return (f"model error or sensor offset: not distinguishable: {fault.describe()} is fitted against the "
+            f"model on a sensor with no redundant reading, and {shown}")
+
+
+def roughness_change(signal: np.ndarray, onset: int) -> float:
+    """Robust scale of the second differences of ``signal`` after sample ``onset`` over the one
+    before (:func:`robust_scale`); NaN when either side has
+    fewer than 10 of them or no roughness before."""
+    signal = np.asarray(signal, float)
+    d2 = signal[2:] - 2 * signal[1:-1] + signal[:-2]
+    before, after = d2[:max(onset - 1, 0)], d2[max(onset - 1, 0):]
+    before, after = before[np.isfinite(before)], after[np.isfinite(after)]
+    if before.size < 10 or after.size < 10:
+        return float("nan")
+    scale = robust_scale(before)
+    return robust_scale(after) / scale if scale > 0 else float("nan")
+
+
+def noise_refusal(hypothesis, readings: dict, groups: dict) -> str | None:
+    """Why a noise increase of a sensor is no claim, or None: the reading must roughen where no
+    shared temperature can make it.
+
+    On a coarse grid a load change roughens the second differences of every reading near the heat
+    (:func:`roughness_change`); a sensor's own noise is its own. So the reading must roughen
+    :data:`MIN_NOISE_FACTOR` times more than the median of the record's other sensors, and, with
+    partners (other distinct sensors of its output), its difference to their mean must roughen by
+    :data:`PARTNER_NOISE_FACTOR`. A record with no other sensor cannot check it (None).
+
+    Parameters
+    ----------
+    hypothesis : SensorHypothesis
+        A ``noise`` fault.
+    readings : dict
+        Sensor column → reading on the diagnosis grid, °C.
+    groups : dict
+        Output → its distinct sensors
+        (:func:`~genthermal.diagnose.sensor_faults.sensor_groups`).
+    """
+    fault, onset = hypothesis.fault, int(hypothesis.onset_index)
+    group = next((names for names in groups.values() if fault.sensor in names), [fault.sensor])
+    partners = [name for name in group if name != fault.sensor and name in readings]
+    if partners:
+        difference = readings[fault.sensor] - np.mean([readings[name] for name in partners], axis=0)
+        shown = roughness_change(difference, onset)
+        if not (np.isfinite(shown) and shown >= PARTNER_NOISE_FACTOR):
+            return (f"{fault.describe()}: but its difference to {', '.join(partners)} on the same node roughens "
+                    f"only {shown:.2f}× there (a noise growth of {MIN_NOISE_FACTOR:g}× would give "
+                    f"{PARTNER_NOISE_FACTOR:.2f}×): the temperature both read changed faster, not the sensor")
+    others = [name for names in groups.values() for name in names if name != fault.sensor and name in readings]
+    changes = [roughness_change(readings[name], onset) for name in others]
+    changes = [c for c in changes if np.isfinite(c)]
+    if not changes:
+        return None
+    own, common = roughness_change(readings[fault.sensor], onset), float(np.median(changes))
+    if np.isfinite(own) and own >= MIN_NOISE_FACTOR * max(common, 1.0):
+        return None
+    return (f"{fault.describe()}: but the record's other sensors roughen {common:.2f}× there too (median; "
+            f"its own reading {own:.2f}×): the temperatures changed faster, not its noise")
 
 
 def shown_change(signal: np.ndarray, elapsed_s: np.ndarray, kind: str, onset: int) -> float:
@@ -92,6 +229,13 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
     if fault.kind not in ("bias", "drift"):
         return None
     sensor = fault.sensor
+    lone = sensor not in (coolant, ambient) and not ({sensor, *hypothesis.columns} & set(phase_columns))
+    if fault.kind == "bias" and hypothesis.evidence in FITTED_AGAINST_MODEL and lone:
+        present = [c for c in hypothesis.columns if c in readings]
+        reading = np.mean([readings[c] for c in present], axis=0) if present else np.full(elapsed_s.size, np.nan)
+        reason = lone_bias_refusal(fault, reading, elapsed_s, onset)
+        if reason:
+            return reason
     if sensor in (coolant, ambient) and coolant in readings and ambient in readings:
         other = ambient if sensor == coolant else coolant
         difference = readings[sensor] - readings[other]

@@ -19,7 +19,7 @@ from .compare import MeasuredSeries, as_measurements
 from .calibrated_screen import (CalibratedFrame, best_physical, calibration_sensitivities, input_hypotheses,
                                 misfit_from_start, on_series_grid, sensor_hypotheses)
 from .input_readings import screen_input_readings
-from .sensor_plausibility import refusal
+from .sensor_plausibility import noise_refusal, refusal
 from .input_sensors import corrected_inputs, input_sensors, input_step_response, screen_inputs
 from .onset_signatures import inertial_outputs, screen_frozen, screen_input_jumps, screen_jumps
 from .shared_air import minimal_detectable_error, screen_ambient_against_inlet
@@ -121,9 +121,16 @@ class SensorScreen:
         self.refused: list = []
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
         self.found += screen_redundant(self.readings, series.inputs, self.elapsed_s, series.dt_s, self.columns, phases)
-        noisy = screen_noise(corrected_readings(self.readings, self.found[len(self.prior):]), self.elapsed_s,
-                             self.columns)
-        self.found += [h for h in noisy if h.fault.sensor not in {f.fault.sensor for f in self.found}]
+        corrected = corrected_readings(self.readings, self.found[len(self.prior):])
+        groups = sensor_groups(corrected, self.columns)
+        for noisy in screen_noise(corrected, self.elapsed_s, self.columns):
+            if noisy.fault.sensor in {f.fault.sensor for f in self.found}:
+                continue
+            reason = noise_refusal(noisy, corrected, groups)
+            if reason:
+                self.refused.append((noisy, reason))
+            else:
+                self.found.append(noisy)
         self.found += screen_input_readings(series.inputs, input_sensors(interface), self.elapsed_s)
 
     def use_error_model(self, error_model, criterion) -> None:
