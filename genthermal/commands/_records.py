@@ -160,7 +160,7 @@ def compare_record_set(model, args) -> int:
 
 def calibrate_record_set(model, names, args) -> int:
     """``calibrate`` over several records: one parameter set, per-record initial states."""
-    from ..diagnose.multi_record import fit_records, records_fisher
+    from ..diagnose.multi_record import fit_records
     from ..model_file import save_model
 
     from ._common import parse_assignments
@@ -178,7 +178,7 @@ def calibrate_record_set(model, names, args) -> int:
     with working("calibrate"):
         fit = fit_records(model, records, names, output_weights=[weights.get(n, 1.0) for n in model.output_names],
                           prior_weight=prior)
-    fisher = records_fisher(fit)
+    fisher = fit.fisher
     after = score_records(fit.model, records)
     print(f"{model.name}: {len(names)} parameter(s) fitted to {len(records)} record(s) in {fit.fit_time_s:.0f} s "
           f"({'converged' if fit.converged else 'NOT converged'}); RMSE {_pooled_rmse(before):.3f} K -> "
