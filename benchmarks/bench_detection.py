@@ -8,7 +8,7 @@ plans on the nominal model and is not told the faults):
 * ``--faulty`` flights with one fault at a random onset on a random generator, cycling through
   the four types the manager watches for: coolant blockage (flow factor 0.3-0.6 with the effect's
   default convection exponent, inlet rise 0-15 K), shorted turn (R_short 0.1-0.5 Ω), end-winding
-  stray loss (R_stray 0.1-0.4 Ω), excitation iron loss (k_exc 30-150). The blockage range is the
+  stray loss (R_stray 0.1-0.4 Ω), excitation iron loss (k_exc 30-100). The blockage range is the
   milder part of the robustness grid's (0.15-0.6, 0-31 K): a plant that stays above θmax even at
   rest sends the closed loop into a minimum-peak re-plan every cycle, minutes per flight, which a
   detection benchmark does not need to measure.
@@ -71,13 +71,13 @@ from genthermal.schedule.flight.manager_settings import SCHEDULERS, ManagerSetti
 from genthermal.schedule.monitoring.innovation_detector import innovation_cusum_alarms
 from genthermal.schedule.power_system import PowerSystem
 from genthermal.schedule.report import flight_summary
-from genthermal.schedule.sweeps.sweep import MISMATCH_PARAMETERS, random_actions
+from genthermal.schedule.sweeps.sweep import K_EXC_MAX, MISMATCH_PARAMETERS, random_actions
 
 FAULT_TYPES = ("coolant_blockage", "phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss")
 #: Fault parameter ranges: the robustness grid's (``genthermal.schedule.sweeps.sweep.robustness_case``).
 FAULT_RANGES = {"phase_short_circuit": ("R_short", 0.1, 0.5),
                 "end_winding_stray_loss": ("R_stray", 0.1, 0.4),
-                "excitation_iron_loss": ("k_exc", 30.0, 150.0)}
+                "excitation_iron_loss": ("k_exc", 30.0, K_EXC_MAX)}
 
 
 def detection_case(index: int, kind: str | None, seed: int = 0) -> dict:

@@ -337,6 +337,10 @@ for _effect in (
            (EffectParameter("R_short", 0.0, "ohm", 0.0, 5.0, 0.3, (0.0, 2.0)),), _phase_short,
            "winding runs hot after an onset, in proportion to I^2, iron follows: an extra winding loss",
            needs=(Role.SLOT_WINDING, Role.PHASE_CURRENTS)),
+    # k_exc plausible 0..100 W/A^2: at the rated field current (1.02 A, genthermal.exciter at 7 A,
+    # pf 0.8) 100 W/A^2 adds 104 W, 2.6 times the generator's whole iron loss (P_iron 40 W) and
+    # 0.4 times its rated copper loss, already a severe core fault (shorted laminations); the
+    # independent records' excitation faults are 25 and 48 W/A^2. The robustness grid draws within it.
     Effect("excitation_iron_loss", "iron loss grows with the excitation current squared",
            r"q_{iron} \mathrel{+}= k_{exc} I_{exc}^2",
            (EffectParameter("k_exc", 0.0, "W/A^2", 0.0, 200.0, 20.0, (0.0, 100.0)),), _excitation_iron,

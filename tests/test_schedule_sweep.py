@@ -388,3 +388,17 @@ def test_robustness_report_adds_another_schedulers_flights(tmp_path, capsys, ben
     stranger.write_text(json.dumps({**summarise(stranger_cases, ("milp",)), "cases": stranger_cases}))
     assert report_module.main([str(whole), "--add", str(stranger), "--png", str(tmp_path / "g.png")]) == 2
     assert "differ in their cases" in capsys.readouterr().err
+
+
+def test_every_fault_the_grid_draws_lies_in_the_catalogue_plausible_range():
+    """A fault drawn outside the range the diagnosis calls plausible is refused in flight (case 13
+    once drew k_exc 147 against the catalogue's 100): the grid's faults must be nameable."""
+    from genthermal.effects import CATALOGUE
+    drawn = [(f["effect"], name, value) for i in range(60) for f in robustness_case(i)["faults"]
+             if f["kind"] == "effect" for name, value in f["values"].items()]
+    assert {effect for effect, _, _ in drawn} == {"phase_short_circuit", "end_winding_stray_loss", "excitation_iron_loss"}
+    for effect, name, value in drawn:
+        parameter = next(p for p in CATALOGUE[effect].parameters if p.name == name)
+        assert parameter.is_plausible(value), (effect, name, value)
+    k_exc = [value for effect, _, value in drawn if effect == "excitation_iron_loss"]
+    assert max(k_exc) > 90.0  # the draw still reaches the severe end of the range
