@@ -25,7 +25,7 @@ from ..model import ThermalModel
 #: tuned: a model error of a few tenths of a kelvin per 10-s step).
 DEFAULT_PROCESS_STD_K = 0.2
 #: Random-walk step of each sensor's offset state, K per step (assumed: an offset that drifts by
-#: about 0.4 K over an hour of 10-s steps; the real bench motor's folds choose 0.3-1 K, see the real-motor results page).
+#: about 0.4 K over an hour of 10-s steps; the real bench motor's folds choose 0.3-1 K, real-motor results page).
 DEFAULT_OFFSET_STEP_K = 0.02
 
 
