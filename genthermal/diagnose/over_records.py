@@ -24,8 +24,6 @@ from .criterion import BIC
 from .multi_record import Record, RecordsFit, fit_records, simulate_record
 from .search import noise_std
 
-#: A positive effect parameter is fitted within this factor of its typical value (as ``calibrate``).
-FIT_FACTOR = 30.0
 #: Fewest samples of each record (as ``diagnose``: an effect's size needs a record of some length).
 MIN_RECORD_SAMPLES = 30
 
@@ -119,7 +117,7 @@ def check_records(model: ThermalModel, records: Sequence[Record]) -> None:
 
 
 def fit_effect_over_records(model: ThermalModel, records: Sequence[Record], effect: str, criterion=None,
-                            noise_K: float | None = None) -> EffectOverRecords:
+                            noise_K: float | None = None, before=None) -> EffectOverRecords:
     """Fit ``effect`` from the start of every record with one set of values (module docstring).
 
     Parameters
@@ -138,6 +136,9 @@ def fit_effect_over_records(model: ThermalModel, records: Sequence[Record], effe
     noise_K : float, optional
         The error level of the tests, K (default: the sensor noise of the records,
         :func:`~genthermal.diagnose.search.noise_std` pooled as root mean variance).
+    before : list of (float, int), optional
+        Each record's sum of squared errors without the effect and its valid samples, when the
+        caller has them (:func:`diagnose_over_records` runs the model once for every effect).
 
     Returns
     -------
@@ -157,8 +158,8 @@ def fit_effect_over_records(model: ThermalModel, records: Sequence[Record], effe
     # switched off where the neutral value is 0 (the fit may leave the effect off), else typical
     start = {p.name: p.neutral if p.neutral == 0 or p.typical is None else p.typical for p in entry.parameters}
     extended = model.with_effect(entry, **start)
-    fit = fit_records(extended, records, list(start), factor=FIT_FACTOR)
-    before = [_rss(model, r) for r in records]
+    fit = fit_records(extended, records, list(start))  # positive values within fit_records' factor of the start
+    before = [_rss(model, r) for r in records] if before is None else before
     after = [_rss(fit.model, r) for r in records]
     samples = [n for _, n in before]
     delta = sum(criterion.delta(max(a, 1e-300), max(b, 1e-300), n, 0) for (b, n), (a, _) in zip(before, after))
@@ -239,9 +240,10 @@ def diagnose_over_records(model: ThermalModel, records: Sequence[Record], effect
             raise InputError("records", ", ".join(r.name for r in records),
                              f"different sample periods ({', '.join(f'{s:g}' for s in steps)} s) under one error model")
         criterion, noise = error_model.criterion(steps[0]), error_model.floor_K
+    before = [_rss(model, r) for r in records]  # the model without any effect: one run for every effect
     ranked = []
     for name in names:
-        ranked.append(fit_effect_over_records(model, records, name, criterion, noise))
+        ranked.append(fit_effect_over_records(model, records, name, criterion, noise, before))
         if progress:
             progress(f"{name}: ΔIC {ranked[-1].delta_ic:.1f}, RMSE {ranked[-1].rmse_before:.3f} -> "
                      f"{ranked[-1].rmse_after:.3f} K")
