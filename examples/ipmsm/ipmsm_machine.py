@@ -83,7 +83,7 @@ ROLES = {
 }
 INTERFACE = MachineInterface(
     INPUTS, SENSORS, {"water": "T_water", "ambient": "T_ambient"}, RATED_CURRENT_A,
-    ambient_input="T_ambient", coolant_input="T_water", roles=ROLES,
+    ambient_input="T_ambient", coolant_input="T_water", coolant_medium="water", roles=ROLES,
     rated_inputs={"motor_speed": 3000.0, "i_d": -120.0, "i_q": 200.0, "T_water": 25.0},
     linearisation_inputs={"motor_speed": LINEARISATION_SPEED_RPM})
 

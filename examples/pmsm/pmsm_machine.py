@@ -85,7 +85,7 @@ ROLES = {
 }
 INTERFACE = MachineInterface(
     INPUTS, SENSORS, {"coolant": "T_coolant", "ambient": "T_ambient"}, RATED_CURRENT_A,
-    ambient_input="T_ambient", coolant_input="T_coolant", roles=ROLES,
+    ambient_input="T_ambient", coolant_input="T_coolant", coolant_medium="water", roles=ROLES,
     rated_inputs={"motor_speed": 6000.0, "i_d": -90.0, "i_q": 120.0})
 
 

@@ -190,7 +190,7 @@ def _shows(signal, elapsed_s, kind, onset, value) -> bool:
 
 def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, pooled_floor: float | None,
             coolant: str | None = None, ambient: str | None = None, outlet: str | None = "T_outlet",
-            phase_columns: tuple = (), residuals: dict | None = None) -> str | None:
+            phase_columns: tuple = (), residuals: dict | None = None, same_air: bool = True) -> str | None:
     """Why ``hypothesis`` (a SensorHypothesis) is no claim (module docstring), or None.
 
     Parameters
@@ -211,6 +211,11 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
     residuals : dict, optional
         Output name → measured minus model (K) before the fault: a fault of one output's sensor
         must not come with the same change in the other outputs' residuals.
+    same_air : bool
+        The coolant inlet and the ambient read the same air (the machine's ``coolant_medium`` is
+        ``"room_air"``): each is the other's redundant reading. Otherwise (a water circuit) each
+        is a lone reading, and a bias fitted through the model (``"input"`` evidence too) needs
+        its reading's own step (:func:`lone_bias_refusal`).
     """
     fault = hypothesis.fault
     reason = fault_bound_reason(fault)
@@ -229,14 +234,17 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
     if fault.kind not in ("bias", "drift"):
         return None
     sensor = fault.sensor
-    lone = sensor not in (coolant, ambient) and not ({sensor, *hypothesis.columns} & set(phase_columns))
-    if fault.kind == "bias" and hypothesis.evidence in FITTED_AGAINST_MODEL and lone:
+    paired_input = same_air and sensor in (coolant, ambient)
+    lone = not paired_input and not ({sensor, *hypothesis.columns} & set(phase_columns))
+    through_model = hypothesis.evidence in FITTED_AGAINST_MODEL or \
+        (hypothesis.evidence == "input" and sensor in (coolant, ambient))
+    if fault.kind == "bias" and through_model and lone:
         present = [c for c in hypothesis.columns if c in readings]
         reading = np.mean([readings[c] for c in present], axis=0) if present else np.full(elapsed_s.size, np.nan)
         reason = lone_bias_refusal(fault, reading, elapsed_s, onset)
         if reason:
             return reason
-    if sensor in (coolant, ambient) and coolant in readings and ambient in readings:
+    if paired_input and coolant in readings and ambient in readings:
         other = ambient if sensor == coolant else coolant
         difference = readings[sensor] - readings[other]
         if not _shows(difference, elapsed_s, fault.kind, onset, fault.value):

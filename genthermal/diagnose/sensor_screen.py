@@ -163,7 +163,8 @@ class SensorScreen:
                          # other outputs leaving the model at the onset tell a machine change from one
                          # sensor only against the floors of an error model: without one, a plant's
                          # slowly moving misfit reads as such a change
-                         self._residuals if self.error_model is not None else None)
+                         self._residuals if self.error_model is not None else None,
+                         getattr(self.interface, "coolant_medium", "room_air") == "room_air")
         if reason:
             self.refused.append((hypothesis, reason))
         return reason is None
@@ -267,7 +268,9 @@ class SensorScreen:
         claimed += [through_input] if through_input is not None else []
         interface = model.spec.interface
         ambient = getattr(interface, "ambient_input", None)
-        if ambient in responses and coolant in responses and ambient not in {h.fault.sensor for h in claimed}:
+        # the inlet is the ambient's redundant reading only where both read the room's air
+        if interface.coolant_medium == "room_air" and ambient in responses and coolant in responses and \
+                ambient not in {h.fault.sensor for h in claimed}:
             left_inlet = screen_ambient_against_inlet(inputs, ambient, coolant, self.elapsed_s, search.series.dt_s,
                                                       lambda: self._calibrated_frame(search, ranked, responses)[0],
                                                       responses[ambient], noise)

@@ -76,7 +76,8 @@ RATED_INPUTS = {**{phase: RATED_CURRENT_A for phase in PHASE_CURRENTS},
                 "I_exc": exciter_current(RATED_CURRENT_A, rated_current_A=RATED_CURRENT_A)}
 INTERFACE = MachineInterface(INPUTS, SENSORS, BOUNDARY_INPUTS, RATED_CURRENT_A, ambient_input="T_ambient",
                              coolant_input="T_inlet", roles=ROLES, rated_inputs=RATED_INPUTS,
-                             outlet_sensor=OUTLET_SENSOR)
+                             outlet_sensor=OUTLET_SENSOR,
+                             coolant_medium="room_air")  # thesis rig: the fan draws the room's air
 
 
 def _p(name, value, unit, provenance, source, **bounds):

@@ -164,6 +164,10 @@ class GeneratorRole:
     limited_sensor: str
 
 
+#: The coolant media a machine declares (:attr:`MachineInterface.coolant_medium`).
+COOLANT_MEDIA = ("room_air", "water")
+
+
 @dataclasses.dataclass(frozen=True)
 class MachineInterface:
     """Everything consumers read from a machine besides its network and parameters.
@@ -196,6 +200,11 @@ class MachineInterface:
     outlet_sensor : Sensor or None
         The coolant leaving the machine (its node reported as an extra simulation column, its CSV
         column read when present); not a model output. None: not reported.
+    coolant_medium : str
+        What the coolant input reads (:data:`COOLANT_MEDIA`): ``"room_air"`` when the cooling air
+        is drawn from the room the ambient sensor is in (then the two read the same air, and the
+        diagnosis checks one against the other), ``"water"`` for a liquid circuit with its own
+        temperature (water or water-glycol; each reading is judged on its own evidence).
     """
 
     inputs: tuple
@@ -208,6 +217,7 @@ class MachineInterface:
     rated_inputs: dict = dataclasses.field(default_factory=dict)
     linearisation_inputs: dict = dataclasses.field(default_factory=dict)
     outlet_sensor: Sensor | None = None
+    coolant_medium: str = "room_air"
 
     def __post_init__(self):
         names = [i.name for i in self.inputs]
@@ -216,6 +226,9 @@ class MachineInterface:
         for field in ("ambient_input", "coolant_input"):
             if getattr(self, field) not in names:
                 raise InputError(f"interface.{field}", getattr(self, field), f"not an input ({', '.join(names)})")
+        if self.coolant_medium not in COOLANT_MEDIA:
+            raise InputError("interface.coolant_medium", self.coolant_medium,
+                             f"must be one of {', '.join(COOLANT_MEDIA)}")
         if not (isinstance(self.rated_current_A, (int, float)) and self.rated_current_A > 0):
             raise InputError("interface.rated_current_A", self.rated_current_A, "must be a current > 0 A")
         for role in self.roles:
