@@ -164,7 +164,7 @@ class SensorScreen:
                          # sensor only against the floors of an error model: without one, a plant's
                          # slowly moving misfit reads as such a change
                          self._residuals if self.error_model is not None else None,
-                         getattr(self.interface, "coolant_medium", "room_air") == "room_air")
+                         self.interface.coolant_medium == "room_air")
         if reason:
             self.refused.append((hypothesis, reason))
         return reason is None
