@@ -2,8 +2,9 @@
 
 The transforms behind the speed-dependent catalogue effects (:mod:`genthermal.effects`): iron loss
 as a power law of speed or as hysteresis plus eddy currents, magnet eddy loss, AC copper loss,
-bearing friction, and air-gap and end-space convection rising with speed. Each reads the machine's roles (``Role.SPEED`` gives the
-speed input and the reference speed the sizes refer to) and applies to any machine declaring them.
+bearing friction, and air-gap and end-space convection rising with speed. Each reads the machine's
+roles (``Role.SPEED`` gives the speed input and the reference speed the sizes refer to) and applies
+to any machine declaring them.
 """
 
 from __future__ import annotations

@@ -94,9 +94,8 @@ def plan_with(scheduler: str, problem: PlanningProblem, settings: PlannerSetting
     lowest = result = None
     if shedding and response_mode == "shed" and problem.flown is not None:
         # shedding on the flown model, the lowest reachable peak first: above the planning limit no
-        # plan of the scheduler keeps it (none peaks below the min-max), and its NLP is not solved.
-        # Measured on the grid's case 40 (4 generators, 5.8 h, shedding from 100 min): 206 of the
-        # 431 s of its first six re-plans went to that NLP, 166 s to the min-max, 58 s to the shed plan
+        # plan of the scheduler keeps it (none peaks below the min-max), so its NLP is not solved
+        # (on long missions that NLP is the costliest part of a re-plan; docs/results/robustness-grid.md)
         lowest = _within_budget(problem, lowest_reachable_peak(problem, settings.optimal))
     if lowest is None or lowest.peak_C <= problem.limit_C + FEASIBLE_TOLERANCE_K:
         result = _within_budget(problem, run(problem))
