@@ -105,3 +105,39 @@ def test_a_noise_claim_needs_a_roughness_the_other_sensors_do_not_share(plain_on
     everywhere["endcap"] = noisy["endcap"]
     reason = noise_refusal(claim, everywhere, groups)
     assert reason is not None and "other sensors" in reason
+
+
+def test_a_lone_winding_offset_is_read_against_the_models_own_load_steps():
+    """A winding sampled once a minute steps at every load step (its fast mode, about a minute):
+    the reading alone makes larger steps there than a 4-K offset, so the offset is not shown by the
+    reading alone; against a model that knows the load (10 % off in its gains) the load steps
+    cancel and the offset is the one step left. The untouched reading with the same claim stays
+    refused, and so does a misfit the load change starts and that grows with the node's inertia."""
+    elapsed = np.arange(0.0, 4 * 3600.0 + 1, 60.0)
+    load_steps = (1800.0, 5400.0, 9000.0, 12600.0)
+    rises = (6.0, -5.0, 7.0, -6.0)  # K: the fast winding mode's share of each load step
+
+    def node(gain, fast_s=60.0, slow_s=1800.0):
+        curve = np.full(elapsed.size, 40.0)
+        for t0, rise in zip(load_steps, rises):
+            after = np.clip(elapsed - t0, 0.0, None)
+            curve += gain * (elapsed >= t0) * (rise * (1 - np.exp(-after / fast_s))
+                                               + 0.5 * rise * (1 - np.exp(-after / slow_s)))
+        return curve
+
+    truth, predicted = node(1.0), node(0.9)
+    onset = int(np.searchsorted(elapsed, 3600.0))
+    signal = np.where(np.arange(elapsed.size) >= onset, 4.0, 0.0)
+    claim = SensorHypothesis(SensorFault("T_winding", "bias", 4.0, 3600.0), onset, 1.0, 0.5, -100.0, "model",
+                             signal, output="T_winding")
+    faulty = {"T_winding": truth + signal}
+    healthy = {"T_winding": truth}
+    model = {"T_winding": predicted}
+    alone = refusal(claim, faulty, elapsed, {}, None)
+    assert alone is not None and "its reading steps" in alone, alone
+    assert refusal(claim, faulty, elapsed, {}, None, predicted=model) is None
+    refused = refusal(claim, healthy, elapsed, {}, None, predicted=model)
+    assert refused is not None and "reading minus the model" in refused, refused
+    # a misfit from the onset that grows with the node's slow mode (a heat the model lacks)
+    misfit = {"T_winding": truth + (elapsed >= 3600.0) * 4.0 * (1 - np.exp(-np.clip(elapsed - 3600.0, 0, None) / 900.0))}
+    assert refusal(claim, misfit, elapsed, {}, None, predicted=model) is not None

@@ -70,17 +70,21 @@ def window_steps(signal: np.ndarray, elapsed_s: np.ndarray) -> np.ndarray:
     return steps
 
 
-def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: int) -> str | None:
+def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: int,
+                      predicted: np.ndarray | None = None) -> str | None:
     """Why a bias of a sensor with no redundant reading is no finding, or None when its reading
-    shows it without the model.
+    shows it as a step.
 
     Against the model alone, an offset of a lone sensor from ``onset`` and the model's own error
     on that node from then (a misfit that a load change starts) are the same residual. The reading
-    itself tells them apart only by a step at the onset over its smooth local curve
+    tells them apart only by a step at the onset over its smooth local curve
     (:func:`window_steps`: heat switched on changes the slope of a node with thermal inertia, an
     offset its level at once) that agrees with the fitted value within :data:`AGREEMENT` and is
-    larger than every such step the reading makes elsewhere in the record (at least one window
-    from the onset). A bias from the record's start has no window before it and is never shown.
+    larger than every such step elsewhere in the record (at least one window from the onset). With
+    the model's prediction of the node, the steps are read on the reading minus it: a node with a
+    fast mode (a winding sampled once a minute) steps at a load step too, and the model, which
+    knows the load, steps with it; a misfit the load change starts grows with the node's inertia
+    and is no step. A bias from the record's start has no window before it and is never shown.
 
     Parameters
     ----------
@@ -92,14 +96,18 @@ def lone_bias_refusal(fault, reading: np.ndarray, elapsed_s: np.ndarray, onset: 
         Time of each sample from the start, s.
     onset : int
         Sample of the onset.
+    predicted : numpy.ndarray, optional
+        The model's prediction of the sensor's node on the same grid, °C (None: the reading's own
+        steps).
     """
-    steps = window_steps(reading, elapsed_s)
+    steps = window_steps(reading if predicted is None else reading - predicted, elapsed_s)
     step = steps[onset]
     away = np.abs(elapsed_s - elapsed_s[onset]) >= STEP_WINDOW_S
     elsewhere = float(np.nanmax(np.abs(steps[away]))) if np.isfinite(steps[away]).any() else 0.0
     if np.isfinite(step) and abs(step - fault.value) <= AGREEMENT * abs(fault.value) and abs(step) > elsewhere:
         return None
-    shown = (f"its reading steps by {step:+.2f} K there over its local curve, against up to {elsewhere:.2f} K "
+    what = "its reading" if predicted is None else "its reading minus the model"
+    shown = (f"{what} steps by {step:+.2f} K there over its local curve, against up to {elsewhere:.2f} K "
              "elsewhere" if np.isfinite(step) else
              f"no {STEP_WINDOW_S / 60:.0f}-min window of its reading lies before the onset")
     return (f"model error or sensor offset: not distinguishable: {fault.describe()} is fitted against the "
@@ -190,7 +198,8 @@ def _shows(signal, elapsed_s, kind, onset, value) -> bool:
 
 def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, pooled_floor: float | None,
             coolant: str | None = None, ambient: str | None = None, outlet: str | None = "T_outlet",
-            phase_columns: tuple = (), residuals: dict | None = None, same_air: bool = True) -> str | None:
+            phase_columns: tuple = (), residuals: dict | None = None, same_air: bool = True,
+            predicted: dict | None = None) -> str | None:
     """Why ``hypothesis`` (a SensorHypothesis) is no claim (module docstring), or None.
 
     Parameters
@@ -216,6 +225,9 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
         ``"room_air"``): each is the other's redundant reading. Otherwise (a water circuit) each
         is a lone reading, and a bias fitted through the model (``"input"`` evidence too) needs
         its reading's own step (:func:`lone_bias_refusal`).
+    predicted : dict, optional
+        Output name → the model's prediction of it on the grid, °C, against which a lone sensor's
+        step is read (:func:`lone_bias_refusal`).
     """
     fault = hypothesis.fault
     reason = fault_bound_reason(fault)
@@ -241,7 +253,8 @@ def refusal(hypothesis, readings: dict, elapsed_s: np.ndarray, floors: dict, poo
     if fault.kind == "bias" and through_model and lone:
         present = [c for c in hypothesis.columns if c in readings]
         reading = np.mean([readings[c] for c in present], axis=0) if present else np.full(elapsed_s.size, np.nan)
-        reason = lone_bias_refusal(fault, reading, elapsed_s, onset)
+        curve = (predicted or {}).get(hypothesis.output) if present else None
+        reason = lone_bias_refusal(fault, reading, elapsed_s, onset, curve)
         if reason:
             return reason
     if paired_input and coolant in readings and ambient in readings:

@@ -117,6 +117,7 @@ class SensorScreen:
         #: Error model of the calibrated model and its criterion (:meth:`use_error_model`).
         self.error_model, self.criterion = None, None
         self._residuals = None  # output -> measured minus model of the search the faults are fitted on
+        self._predicted = None  # output -> the model's prediction of that search
         #: (SensorHypothesis, reason) of the faults fitted but refused as implausible.
         self.refused: list = []
         phases = interface.generator.phase_inputs if interface.has_role(Role.GENERATOR) else ()
@@ -164,7 +165,7 @@ class SensorScreen:
                          # sensor only against the floors of an error model: without one, a plant's
                          # slowly moving misfit reads as such a change
                          self._residuals if self.error_model is not None else None,
-                         self.interface.coolant_medium == "room_air")
+                         self.interface.coolant_medium == "room_air", self._predicted)
         if reason:
             self.refused.append((hypothesis, reason))
         return reason is None
@@ -206,6 +207,7 @@ class SensorScreen:
 
         self.model_round_done = True
         self._residuals = dict(zip(search.output_names, search.series.outputs - search.predicted_before))
+        self._predicted = dict(zip(search.output_names, search.predicted_before))
         exclude = {h.fault.sensor for h in self.found}
         candidate = screen_against_model(search.series.outputs, search.predicted_before, self.readings,
                                          self.elapsed_s, self.output_names, self.columns, exclude,
