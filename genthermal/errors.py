@@ -34,6 +34,10 @@ class InputError(GenthermalError, ValueError):
         self.reason = reason
         super().__init__(f"{field} = {shown_value(value)}: {reason}")
 
+    def __reduce__(self):
+        # rebuilt from its three fields (an error raised in a worker process comes back as itself)
+        return type(self), (self.field, self.value, self.reason)
+
 
 def shown_value(value) -> str:
     """``repr(value)`` cut to :data:`SHOWN_VALUE_CHARS` characters, built without rendering more.

@@ -1,7 +1,8 @@
 """Independent fits in worker processes: the candidates of a search, the pairs of a joint search.
 
 :func:`map_in_workers` runs items in forked workers that inherit the compiled CasADi functions and
-send back only their results; without ``fork``, or with one worker, it runs them in this process,
+send back only their results (an item's exception comes back as the parent's, :class:`WorkerError`
+where it does not pickle); without ``fork``, or with one worker, it runs them in this process,
 in order, so the results do not depend on the number of workers. :data:`WORKER_CPU` and
 :func:`cpu_clock` account for the workers' CPU time.
 """
@@ -11,7 +12,9 @@ from __future__ import annotations
 import dataclasses
 import multiprocessing
 import os
+import pickle
 import time
+import traceback
 from typing import Callable, Sequence
 
 from ..errors import InputError
@@ -79,10 +82,37 @@ def cpu_clock() -> CPUReading:
     return CPUReading(own, WORKER_CPU.total_s, own + WORKER_CPU.busiest_s)
 
 
+class WorkerError(RuntimeError):
+    """An item failed in a worker with an exception that does not pickle back: its type, message
+    and the worker's traceback, as text."""
+
+
+@dataclasses.dataclass(frozen=True)
+class _Failure:
+    """What a worker returns instead of a result when its item raised (re-raised in the parent)."""
+
+    error: BaseException
+
+
+def _sendable(error: Exception, item) -> BaseException:
+    """``error`` itself when it survives a pickle round trip (an InputError keeps its type), else a
+    :class:`WorkerError` with its text: an exception the parent cannot unpickle kills the pool's
+    result thread and leaves the map waiting for ever."""
+    try:
+        pickle.loads(pickle.dumps(error))
+        return error
+    except Exception:
+        return WorkerError(f"{type(error).__name__} on item {item!r}: {error}\n"
+                           f"worker traceback:\n{traceback.format_exc()}")
+
+
 def _run(index: int):
     function, items = _TASK
     started = time.process_time()
-    result = function(items[index])
+    try:
+        result = function(items[index])
+    except Exception as error:
+        result = _Failure(_sendable(error, items[index]))
     return index, result, os.getpid(), time.process_time() - started
 
 
@@ -114,6 +144,13 @@ def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
     -------
     list
         Results in the order of ``items``.
+
+    Raises
+    ------
+    Exception
+        The first exception an item raised, as it was raised where it pickles back (an
+        :class:`~genthermal.errors.InputError` stays one), else a :class:`WorkerError` with its text
+        and the worker's traceback; the other workers are stopped.
     """
     global _TASK
     if int(workers) != workers or workers < 1:
@@ -137,13 +174,18 @@ def map_in_workers(function: Callable, items: Sequence, workers: int = 1,
         try:
             for done, (index, result, pid, cpu_s) in enumerate(pool.imap_unordered(_run, range(len(items))),
                                                                 start=1):
+                if isinstance(result, _Failure):
+                    raise result.error
                 results[index] = result
                 per_worker[pid] = per_worker.get(pid, 0.0) + cpu_s
                 WORKER_CPU.total_s += cpu_s
                 WORKER_CPU.busiest_s = busiest_before + max(per_worker.values())
                 report(done, len(items), items[index])
         except BaseException:
-            pool.terminate()
+            try:
+                pool.terminate()
+            except AssertionError:  # the pool's result thread already gone: the first error tells why
+                pass
             raise
         # Every result is in: the workers end on the pool's own sentinels. Terminating them instead
         # (the pool's context manager) sends SIGTERM; a worker that did not act on it left the
