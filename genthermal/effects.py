@@ -190,6 +190,19 @@ def applicable_effects(model, catalogue=None) -> list[Effect]:
     return [effect for effect in catalogue.values() if effect.unavailable_reason(model) is None]
 
 
+def combination_reason(model, effects) -> str | None:
+    """Why ``effects`` (Effect objects) cannot all be added to ``model`` in that order, or None when
+    they can: each must still be available on the model with the ones before it (two forms of
+    one loss, such as two speed-dependent iron losses, exclude each other)."""
+    for k, effect in enumerate(effects):
+        reason = effect.unavailable_reason(model)
+        if reason:
+            return f"{effect.name} after {', '.join(e.name for e in effects[:k]) or 'nothing'}: {reason}"
+        if k + 1 < len(effects):
+            model = model.with_effect(effect)
+    return None
+
+
 def apply_effect(model, effect, provenance: str = "assumed", source: str = "", **values):
     """Return ``model`` with ``effect`` applied at parameter ``values`` (neutral by default).
 

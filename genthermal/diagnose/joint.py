@@ -17,6 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..effects import combination_reason
 from ..errors import InputError
 from .search import (Candidate, EffectSearch, _indicator, _Problem, _regimes, _Structure,
                      parameter_scaling)
@@ -351,6 +352,13 @@ class PairSearch:
             changes[effect] = both - simulator.outputs(np.array(without), search.x0_coefficients, indicator)
         return changes
 
+    def _combinable(self, pairs: Sequence[tuple]) -> list:
+        """The ``pairs`` of single candidates whose effects can be added to the model together (two
+        forms of one loss cannot: :func:`~genthermal.effects.combination_reason`)."""
+        search = self.search
+        return [(a, b) for a, b in pairs
+                if combination_reason(search.model, (search.effect(a.effect), search.effect(b.effect))) is None]
+
     def swaps(self, pair: JointCandidate, singles: Sequence[Candidate], count: int = SWAPS_PER_MEMBER) -> list:
         """Pairs with one member of ``pair`` replaced: for each member, the ``count`` other effects
         that best explain what it explained plus what the pair leaves (:func:`screen`, orthogonal to
@@ -440,14 +448,14 @@ class PairSearch:
         pairs = list(itertools.combinations(ranked_singles[:pool], 2))
         partners = residual_partners(self.search, ranked_singles[0], ranked_singles[pool:],
                                      max(PARTNER_RANKS - pool, 0))
-        pairs += [(ranked_singles[0], other) for other in partners]
-        ranked = sorted(self._fit(pairs, workers, progress), key=lambda c: c.delta_bic)
+        pairs = self._combinable(pairs + [(ranked_singles[0], other) for other in partners])
+        ranked = sorted(self._fit(pairs, workers, progress), key=lambda c: c.delta_bic) if pairs else []
         noise = self.search.noise
         if ranked and STRUCTURE_LEVEL_FACTOR * noise < ranked[0].rmse_after <= LEVEL_FACTOR * noise:
             tried = {frozenset((a.effect, b.effect)) for a, b in pairs}
             swapped = [p for p in self.swaps(ranked[0], ranked_singles)
                        if frozenset((p[0].effect, p[1].effect)) not in tried]
-            swapped = list({frozenset((a.effect, b.effect)): (a, b) for a, b in swapped}.values())
+            swapped = self._combinable(list({frozenset((a.effect, b.effect)): (a, b) for a, b in swapped}.values()))
             if swapped:
                 ranked = sorted(ranked + self._fit(swapped, workers, progress, "swap: "), key=lambda c: c.delta_bic)
         return ranked
