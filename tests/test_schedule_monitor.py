@@ -196,6 +196,28 @@ def test_the_believed_value_of_a_loss_is_the_high_end_of_its_interval():
     assert entry["confidence"]["intervals"]["R_short"]["low"] == 0.2
 
 
+def test_the_believed_end_lies_on_the_estimates_side_and_a_bound_is_no_size():
+    """A blockage sized k_flow 0.24 in 0.05-2.0 (both ends the parameter's bounds: the grid's
+    excitation iron losses identified as blockages): its end farthest from the neutral 1 is 2.0, a
+    flow doubled, the opposite of the fault. The manager believes the far end on the estimate's
+    side, or the estimate where that end is the parameter's bound (0.05: the record allows any
+    blockage); the shape parameter keeps its estimate."""
+    from genthermal.diagnose.interval import ParameterInterval
+    from genthermal.schedule.monitoring.fault_identification import Identification
+
+    def blockage(low, high, estimate=0.24):
+        intervals = {"k_flow": ParameterInterval("k_flow", estimate, low, high, 0.95, 5.0, low <= 0.05, high >= 2.0)}
+        return Identification(0, 4800.0, "coolant_flow_reduction", {"k_flow": estimate, "n_flow": 0.0}, 2580.0,
+                              -83.0, 4.76, 3.27, None, 1.4, intervals=intervals)
+
+    assert blockage(0.05, 2.0).believed_values == {"k_flow": 0.24, "n_flow": 0.0}  # both ends bounds
+    assert blockage(0.12, 2.0).believed_values == {"k_flow": 0.12, "n_flow": 0.0}  # the blocked end bounds it
+    assert blockage(0.12, 1.02).believed_values == {"k_flow": 0.12, "n_flow": 0.0}
+    assert blockage(0.12, 0.4).believed_values == {"k_flow": 0.12, "n_flow": 0.0}
+    assert blockage(0.05, 0.4).believed_values == {"k_flow": 0.24, "n_flow": 0.0}  # no bound on that side
+    assert blockage(0.8, 1.3, estimate=1.1).believed_values == {"k_flow": 1.3, "n_flow": 0.0}
+
+
 def test_the_interval_coverage_must_be_a_probability():
     from genthermal.errors import InputError
     from genthermal.schedule.monitoring.monitor import DetectionSettings

@@ -59,6 +59,18 @@ def registered_effect_name(candidate: str) -> str:
     return candidate[:-len(FREE_SHAPE_SUFFIX)] if candidate.endswith(FREE_SHAPE_SUFFIX) else candidate
 
 
+def severe_end(interval, neutral: float) -> float:
+    """The end of ``interval`` (a ParameterInterval) farthest from ``neutral`` on the side of its
+    estimate, or the estimate where that end is the parameter's bound or no end lies on that side."""
+    direction = np.sign(interval.estimate - neutral)
+    ends = [(end, bound) for end, bound in ((interval.low, interval.at_lower), (interval.high, interval.at_upper))
+            if direction and np.sign(end - neutral) == direction]
+    if not ends:
+        return interval.estimate
+    end, bound = max(ends, key=lambda item: abs(item[0] - neutral))
+    return interval.estimate if bound else end
+
+
 @dataclasses.dataclass
 class Identification:
     """An effect identified in flight.
@@ -104,10 +116,14 @@ class Identification:
 
     @property
     def believed_values(self) -> dict:
-        """The values the manager believes (module docstring, "Uncertainty"): each switching
-        parameter of the registered effect at the end of its interval farthest from its neutral
-        value, the shape parameters (``n_flow``, fitted by the ``+shape`` variant: lower is not
-        milder or more severe by itself) at their estimate."""
+        """The values the manager believes (docs/guide/flight-methods.md, "Uncertainty"): each
+        switching parameter of the registered effect at the end of its interval farthest from its
+        neutral value on the side of its estimate (the most severe fault of that direction the
+        record allows), or at its estimate where that end is the parameter's bound (the record
+        does not bound the fault: a blockage sized k_flow 0.24 in 0.05-2.0, both ends bounds, whose
+        end farthest from the neutral 1 is a flow doubled); the shape parameters (``n_flow``,
+        fitted by the ``+shape`` variant: lower is not milder or more severe by itself) at their
+        estimate."""
         from ...effects import get_effect
 
         if not self.effect:
@@ -116,8 +132,7 @@ class Identification:
         for parameter in get_effect(self.effect).parameters:  # the registered effect's: not its shape
             interval = self.intervals.get(parameter.name)
             if interval is not None:
-                believed[parameter.name] = max((interval.low, interval.high),
-                                               key=lambda end: abs(end - parameter.neutral))
+                believed[parameter.name] = severe_end(interval, parameter.neutral)
         return believed
 
     @property
