@@ -83,14 +83,14 @@ def run(args) -> int:
         if value is not None and not (math.isfinite(value) and value > 0):
             raise InputError(option, value, "must be a number of seconds > 0")
     documents = [robustness_case(i, args.seed) for i in case_indices(args.only, args.cases)]
-    started = time.perf_counter()
+    started, commit = time.perf_counter(), source_commit()  # the code flown, read before the flights
     schedulers = [library_value(s) for s in schedulers]
     records = run_sweep(documents, schedulers, args.cluster, args.workers, progress_enabled(),
                         args.flight_limit_s, args.timeout_s, args.planner_model, not args.no_hindsight,
                         dashboard=args.dashboard)
     report = {**summarise(records, schedulers),
               "provenance": {"command": equivalent_command(args),
-                             "commit": source_commit(), "workers": None if args.cluster else args.workers,
+                             "commit": commit, "workers": None if args.cluster else args.workers,
                              "cluster": args.cluster, "dashboard": args.dashboard, "seed": args.seed, "only": args.only,
                              "optimal_planner_model": args.planner_model, "hindsight": not args.no_hindsight,
                              "sweep_wall_s": time.perf_counter() - started},
